@@ -1,0 +1,24 @@
+//! murk's data model.
+//!
+//! A [`Capture`] holds the impulse responses H(x_l → x_s, t) of a hidden scene measured through a relay
+//! surface (a reflective wall or a transmissive diffuser) at z = 0, with the hidden volume at z > 0.
+//! Time is stored as optical path length in metres (as in y-tal): bin `n` covers paths
+//! `[start_m + n·bin_width_m, start_m + (n+1)·bin_width_m)`.
+//!
+//! Both sides are symmetric (Helmholtz reciprocity): illumination points and sensor points are two
+//! [`PointSet`]s, and [`Pairing`] says whether H is measured for every (illumination, sensor) pair
+//! or for the i-th illumination point with the i-th sensor point (confocal scans).
+
+mod capture;
+mod error;
+mod points;
+mod volume;
+
+pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
+pub use error::{Error, Result};
+pub use glam::DVec3;
+pub use points::{PointLayout, PointSet, RegularGrid};
+pub use volume::{Axis, Volume};
+
+/// Speed of light in vacuum (m/s), the constant y-tal uses to convert paths to seconds.
+pub const SPEED_OF_LIGHT_M_PER_S: f64 = 299_792_458.0;
