@@ -1,1 +1,18 @@
+//! murk's file formats.
+//!
+//! * y-tal HDF5 captures ([`read_capture`], [`write_capture`]), murk's native capture format;
+//! * reconstructed volumes as HDF5 ([`write_volume_h5`]) and `.npy` ([`write_npy_f32`], [`read_npy_f32`]);
+//! * MATLAB imports of real captures ([`read_mat_v73_array`], [`read_mat_v5_array`]).
+//!
+//! Everything is pure Rust (hdf5-pure, matfile): no system HDF5 library. Every error is a
+//! [`murk_core::Error`] whose message is one line naming the file and the problem; declared sizes
+//! are checked before allocating, and writes are atomic (temporary file + rename).
 
+mod atomic;
+mod h5;
+mod tal;
+
+pub use tal::{
+    read_capture, read_capture_with_limit, write_capture, write_capture_compressed,
+    DEFAULT_READ_LIMIT_BYTES, TAL_FIELDS,
+};
