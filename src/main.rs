@@ -1,1 +1,51 @@
-fn main() {}
+//! `murk`: simulate and reconstruct hidden scenes behind a diffuser or relay wall, inside fog, smoke or
+//! turbid water. Run `murk --help` for the commands, `murk <command> --help` for each one.
+
+use clap::{Parser, Subcommand};
+
+mod cmd;
+
+#[derive(Parser)]
+#[command(
+    name = "murk",
+    version,
+    about = "Non-line-of-sight imaging through scattering media: simulate, reconstruct, study",
+    long_about = "murk simulates time-resolved captures of scenes hidden behind a relay wall or a diffuser, \
+optionally inside a scattering medium (fog, smoke, turbid water), and reconstructs them with Phasor Fields \
+and classic baselines. Captures are y-tal HDF5 files (time as optical path in metres).\n\n\
+Start with `murk demo`, then `murk synth --help` and `murk reconstruct --help`.",
+    propagate_version = true
+)]
+struct Cli {
+    /// Print nothing but errors (no progress bars, no summaries).
+    #[arg(long, short, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file (scenes/*.toml) into a capture by time-resolved volumetric path tracing.
+    Render(cmd::render::RenderArgs),
+    /// Sum the parts of a sharded render (`murk render --shard i/N`) into one capture.
+    Merge(cmd::render::MergeArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result: anyhow::Result<()> = match cli.command {
+        Command::Render(a) => cmd::render::run(a, cli.quiet),
+        Command::Merge(a) => cmd::render::run_merge(a, cli.quiet),
+    };
+    if let Err(e) = result {
+        // One line, no backtrace: the chain of causes joined, outermost first.
+        let msg = e
+            .chain()
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join(": ");
+        eprintln!("murk: error: {msg}");
+        std::process::exit(1);
+    }
+}

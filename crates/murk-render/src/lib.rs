@@ -1,1 +1,25 @@
+//! murk's transient renderer: time-resolved volumetric path tracing of hidden scenes behind a relay wall
+//! or a diffuser, optionally inside a homogeneous scattering medium.
+//!
+//! Sampling (see `integrator`): deterministic connections from every hidden vertex to the wall points of
+//! the other side (the laser spot is a point emitter, the SPAD point a point sensor), hidden-geometry
+//! sampling of the first direction mixed with cosine sampling (one-sample MIS with the exact mixture pdf),
+//! free-flight and Henyey–Greenstein sampling, equiangular sampling toward the wall points on every
+//! medium segment combined with free flight by the balance heuristic, Russian roulette and a depth cap.
+//! For many laser points and one SPAD point paths start at the laser points (reciprocity), so every
+//! vertex makes one connection instead of one per laser point.
 
+mod geometry;
+mod integrator;
+mod medium;
+mod render;
+mod scene;
+
+pub use geometry::{Aabb, Geometry, Object, Shape};
+pub use integrator::{Endpoint, Sampler, Tracer};
+pub use medium::{Medium, Phase};
+pub use render::{merge, scene_info, Plan, RenderOptions};
+pub use scene::{
+    CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, ObjectDef, Overrides, Relay, RelayDef,
+    RelayKind, RenderDef, Scene, SceneFile, TraceFrom,
+};

@@ -1,0 +1,341 @@
+//! Hidden-scene geometry: rectangles and triangles behind a brute-force per-object bounding-box test.
+//! Surfaces are two-sided Lambertian reflectors.
+
+use murk_core::DVec3;
+
+/// Rays do not re-hit a surface closer than this (metres).
+pub const EPS: f64 = 1e-7;
+
+/// A closed set of primitive kinds, dispatched statically (no trait objects in the inner loop).
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// `p0 + u·e1 + v·e2`, u, v ∈ [0, 1], with e1 ⟂ e2.
+    Rect {
+        p0: DVec3,
+        e1: DVec3,
+        e2: DVec3,
+    },
+    Triangle {
+        p0: DVec3,
+        e1: DVec3,
+        e2: DVec3,
+    },
+}
+
+impl Shape {
+    pub fn area(&self) -> f64 {
+        match self {
+            Shape::Rect { e1, e2, .. } => e1.cross(*e2).length(),
+            Shape::Triangle { e1, e2, .. } => 0.5 * e1.cross(*e2).length(),
+        }
+    }
+
+    /// Unit geometric normal (e1 × e2); surfaces are two-sided, so its sign only matters for meshes' users.
+    pub fn normal(&self) -> DVec3 {
+        match self {
+            Shape::Rect { e1, e2, .. } | Shape::Triangle { e1, e2, .. } => {
+                e1.cross(*e2).normalize()
+            }
+        }
+    }
+
+    /// Ray parameter of the hit in (`EPS`, `t_max`), if any.
+    pub fn intersect(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
+        match self {
+            Shape::Rect { p0, e1, e2 } => {
+                let n = e1.cross(*e2);
+                let denom = n.dot(d);
+                if denom.abs() < 1e-300 {
+                    return None;
+                }
+                let t = n.dot(*p0 - o) / denom;
+                if !(t > EPS && t < t_max) {
+                    return None;
+                }
+                let q = o + d * t - *p0;
+                let u = q.dot(*e1) / e1.length_squared();
+                let v = q.dot(*e2) / e2.length_squared();
+                ((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)).then_some(t)
+            }
+            Shape::Triangle { p0, e1, e2 } => {
+                // Möller–Trumbore.
+                let p = d.cross(*e2);
+                let det = e1.dot(p);
+                if det.abs() < 1e-300 {
+                    return None;
+                }
+                let inv = 1.0 / det;
+                let s = o - *p0;
+                let u = s.dot(p) * inv;
+                if !(0.0..=1.0).contains(&u) {
+                    return None;
+                }
+                let q = s.cross(*e1);
+                let v = d.dot(q) * inv;
+                if v < 0.0 || u + v > 1.0 {
+                    return None;
+                }
+                let t = e2.dot(q) * inv;
+                (t > EPS && t < t_max).then_some(t)
+            }
+        }
+    }
+
+    /// A uniformly distributed point for `(u1, u2)` uniform in [0, 1)².
+    pub fn sample(&self, u1: f64, u2: f64) -> DVec3 {
+        match self {
+            Shape::Rect { p0, e1, e2 } => *p0 + *e1 * u1 + *e2 * u2,
+            Shape::Triangle { p0, e1, e2 } => {
+                let su = u1.sqrt();
+                *p0 + *e1 * (1.0 - su) + *e2 * (u2 * su)
+            }
+        }
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        let (p0, e1, e2, far) = match self {
+            Shape::Rect { p0, e1, e2 } => (*p0, *e1, *e2, *p0 + *e1 + *e2),
+            Shape::Triangle { p0, e1, e2 } => (*p0, *e1, *e2, *p0),
+        };
+        Aabb::empty().grow(p0).grow(p0 + e1).grow(p0 + e2).grow(far)
+    }
+}
+
+/// Axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Aabb {
+    pub fn empty() -> Self {
+        Aabb {
+            min: DVec3::INFINITY,
+            max: DVec3::NEG_INFINITY,
+        }
+    }
+    pub fn grow(self, p: DVec3) -> Self {
+        Aabb {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
+    }
+    pub fn union(self, o: Aabb) -> Self {
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+    /// The part `[t0, t1]` of the ray inside the box, clipped to `[0, t_max]`; `None` if empty.
+    pub fn clip(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
+        let inv = d.recip();
+        let ta = (self.min - o) * inv;
+        let tb = (self.max - o) * inv;
+        let lo = ta.min(tb);
+        let hi = ta.max(tb);
+        // NaN (0·∞ for rays parallel to a face through it) is ignored by f64::max/min.
+        let t0 = lo.x.max(lo.y).max(lo.z).max(0.0);
+        let t1 = hi.x.min(hi.y).min(hi.z).min(t_max);
+        (t0 <= t1).then_some((t0, t1))
+    }
+    /// Distance from `p` to the nearest and to the farthest point of the box.
+    pub fn distance_range(&self, p: DVec3) -> (f64, f64) {
+        let near = p.clamp(self.min, self.max);
+        let far = DVec3::new(
+            if (p.x - self.min.x).abs() > (p.x - self.max.x).abs() {
+                self.min.x
+            } else {
+                self.max.x
+            },
+            if (p.y - self.min.y).abs() > (p.y - self.max.y).abs() {
+                self.min.y
+            } else {
+                self.max.y
+            },
+            if (p.z - self.min.z).abs() > (p.z - self.max.z).abs() {
+                self.min.z
+            } else {
+                self.max.z
+            },
+        );
+        ((p - near).length(), (p - far).length())
+    }
+}
+
+/// A group of primitives sharing an albedo and a bounding box.
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub albedo: f64,
+    pub bounds: Aabb,
+    pub prims: Vec<Shape>,
+}
+
+impl Object {
+    pub fn new(albedo: f64, prims: Vec<Shape>) -> Self {
+        let bounds = prims.iter().fold(Aabb::empty(), |b, p| b.union(p.bounds()));
+        Object {
+            albedo,
+            bounds,
+            prims,
+        }
+    }
+}
+
+/// A surface hit.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    pub t: f64,
+    /// Unit normal facing the incoming ray.
+    pub n: DVec3,
+    pub albedo: f64,
+}
+
+/// All hidden geometry (the relay surface is handled separately by the integrator).
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    pub objects: Vec<Object>,
+}
+
+impl Geometry {
+    pub fn is_empty(&self) -> bool {
+        self.objects.iter().all(|o| o.prims.is_empty())
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.objects
+            .iter()
+            .fold(Aabb::empty(), |b, o| b.union(o.bounds))
+    }
+
+    pub fn intersect(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut t_best = t_max;
+        for obj in &self.objects {
+            if obj.bounds.clip(o, d, t_best).is_none() {
+                continue;
+            }
+            for p in &obj.prims {
+                if let Some(t) = p.intersect(o, d, t_best) {
+                    t_best = t;
+                    let n = p.normal();
+                    best = Some(Hit {
+                        t,
+                        n: if n.dot(d) > 0.0 { -n } else { n },
+                        albedo: obj.albedo,
+                    });
+                }
+            }
+        }
+        best
+    }
+
+    /// Whether anything blocks the open segment `o + t·d`, t ∈ (EPS, t_max − EPS).
+    pub fn occluded(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
+        let t_max = t_max - EPS;
+        self.objects.iter().any(|obj| {
+            obj.bounds.clip(o, d, t_max).is_some()
+                && obj.prims.iter().any(|p| p.intersect(o, d, t_max).is_some())
+        })
+    }
+}
+
+/// Triangulates a simple polygon (either winding) by ear clipping; returns index triples.
+pub fn triangulate(poly: &[[f64; 2]]) -> Vec<[usize; 3]> {
+    let n = poly.len();
+    let signed_area: f64 = (0..n)
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum();
+    let ccw = signed_area > 0.0;
+    let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    let inside = |p: [f64; 2], a, b, c| {
+        cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
+    };
+    let mut idx: Vec<usize> = if ccw {
+        (0..n).collect()
+    } else {
+        (0..n).rev().collect()
+    };
+    let mut tris = Vec::with_capacity(n.saturating_sub(2));
+    while idx.len() > 3 {
+        let m = idx.len();
+        let ear = (0..m).find(|&i| {
+            let (ia, ib, ic) = (idx[(i + m - 1) % m], idx[i], idx[(i + 1) % m]);
+            let (a, b, c) = (poly[ia], poly[ib], poly[ic]);
+            cross(a, b, c) > 0.0
+                && idx
+                    .iter()
+                    .all(|&j| j == ia || j == ib || j == ic || !inside(poly[j], a, b, c))
+        });
+        // A degenerate outline has no ear left; stop rather than loop forever.
+        let Some(i) = ear else { break };
+        tris.push([idx[(i + m - 1) % m], idx[i], idx[(i + 1) % m]]);
+        idx.remove(i);
+    }
+    if idx.len() == 3 {
+        tris.push([idx[0], idx[1], idx[2]]);
+    }
+    tris
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn z_letter_triangulation_keeps_area() {
+        let z = murk_synth::z_letter_outline();
+        let tris = triangulate(&z);
+        assert_eq!(tris.len(), z.len() - 2);
+        let shoelace: f64 = 0.5
+            * (0..z.len())
+                .map(|i| {
+                    let (a, b) = (z[i], z[(i + 1) % z.len()]);
+                    a[0] * b[1] - b[0] * a[1]
+                })
+                .sum::<f64>()
+                .abs();
+        let sum: f64 = tris
+            .iter()
+            .map(|t| {
+                let p = |k: usize| DVec3::new(z[t[k]][0], z[t[k]][1], 0.0);
+                0.5 * (p(1) - p(0)).cross(p(2) - p(0)).length()
+            })
+            .sum();
+        // Exact up to rounding: the ears tile the polygon.
+        assert!((sum - shoelace).abs() < 1e-12, "{sum} vs {shoelace}");
+    }
+
+    #[test]
+    fn rect_and_triangle_hits() {
+        let r = Shape::Rect {
+            p0: DVec3::new(-0.5, -0.5, 1.0),
+            e1: DVec3::X,
+            e2: DVec3::Y,
+        };
+        assert_eq!(r.intersect(DVec3::ZERO, DVec3::Z, 10.0), Some(1.0));
+        assert_eq!(r.intersect(DVec3::new(0.6, 0.0, 0.0), DVec3::Z, 10.0), None);
+        let t = Shape::Triangle {
+            p0: DVec3::new(0.0, 0.0, 2.0),
+            e1: DVec3::X,
+            e2: DVec3::Y,
+        };
+        assert_eq!(
+            t.intersect(DVec3::new(0.2, 0.2, 0.0), DVec3::Z, 10.0),
+            Some(2.0)
+        );
+        assert_eq!(t.intersect(DVec3::new(0.6, 0.6, 0.0), DVec3::Z, 10.0), None);
+        let b = Aabb::empty()
+            .grow(DVec3::splat(-1.0))
+            .grow(DVec3::splat(1.0));
+        assert_eq!(
+            b.clip(DVec3::new(0.0, 0.0, -3.0), DVec3::Z, 100.0),
+            Some((2.0, 4.0))
+        );
+    }
+}

@@ -1,0 +1,377 @@
+//! Work units, parallel rendering, checkpoints, shards and merging.
+//!
+//! A work unit is one traced wall point (a laser point when tracing from lasers) with its own PCG stream
+//! (seed, unit index), rendered by one thread into histograms nobody else writes. So the result does not
+//! depend on the thread count, on how units are sharded, or on an interruption and `--resume`.
+
+use crate::integrator::{Endpoint, Sampler, Tracer};
+use crate::scene::{Scene, TraceFrom};
+use murk_core::{Capture, DVec3, Error, Pairing, Result};
+use rayon::prelude::*;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// How a render runs.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    pub spp: u64,
+    pub seed: u64,
+    /// `(i, n)`: render only the i-th of n contiguous slices of the work units.
+    pub shard: Option<(usize, usize)>,
+    /// Append finished units to this file every `checkpoint_every`; resume from it when it exists and matches.
+    pub checkpoint: Option<PathBuf>,
+    pub checkpoint_every: Duration,
+}
+
+/// The mapping from work units to wall points and histograms.
+pub struct Plan<'a> {
+    pub scene: &'a Scene,
+    tracer: Tracer<'a>,
+    from_laser: bool,
+}
+
+impl<'a> Plan<'a> {
+    pub fn new(scene: &'a Scene) -> Self {
+        let c = &scene.capture;
+        let from_laser = match scene.settings.trace_from {
+            TraceFrom::Laser => true,
+            TraceFrom::Sensor => false,
+            // Trace from the larger side: each vertex then connects to the few points of the other side.
+            TraceFrom::Auto => c.illum.len() >= c.sensor.len(),
+        };
+        Plan {
+            scene,
+            tracer: Tracer::new(scene),
+            from_laser,
+        }
+    }
+
+    pub fn n_units(&self) -> usize {
+        let c = &self.scene.capture;
+        if self.from_laser {
+            c.illum.len()
+        } else {
+            c.sensor.len()
+        }
+    }
+
+    fn endpoint(&self, laser: bool, i: usize) -> Endpoint {
+        let c = &self.scene.capture;
+        let (set, dev) = if laser {
+            (&c.illum, c.laser_xyz)
+        } else {
+            (&c.sensor, c.sensor_xyz)
+        };
+        let p = set.points[i];
+        let extra_m = match (c.account_first_and_last_bounces, dev) {
+            (true, Some(x)) => (p - x).length(),
+            _ => 0.0,
+        };
+        Endpoint {
+            p,
+            n: DVec3::Z,
+            extra_m,
+        }
+    }
+
+    /// The traced point of unit `u` and its targets with their histogram indices.
+    fn unit(&self, u: usize) -> (Endpoint, Vec<(Endpoint, usize)>) {
+        let c = &self.scene.capture;
+        let origin = self.endpoint(self.from_laser, u);
+        let targets = match c.pairing {
+            Pairing::Paired => vec![(self.endpoint(!self.from_laser, u), u)],
+            Pairing::Product if self.from_laser => (0..c.sensor.len())
+                .map(|s| (self.endpoint(false, s), u * c.sensor.len() + s))
+                .collect(),
+            Pairing::Product => (0..c.illum.len())
+                .map(|l| (self.endpoint(true, l), l * c.sensor.len() + u))
+                .collect(),
+        };
+        (origin, targets)
+    }
+
+    /// Renders unit `u`: one normalised histogram per target, in target order.
+    pub fn render_unit(&self, u: usize, spp: u64, seed: u64) -> Vec<f32> {
+        let (origin, targets) = self.unit(u);
+        let ends: Vec<Endpoint> = targets.iter().map(|t| t.0).collect();
+        let mut acc = vec![0.0f64; ends.len() * self.scene.capture.time.bins];
+        let mut s = Sampler::new(seed, u as u64);
+        self.tracer.trace(&origin, &ends, spp, &mut s, &mut acc);
+        let norm = 1.0 / spp as f64;
+        acc.iter().map(|v| (v * norm) as f32).collect()
+    }
+
+    fn store(&self, h: &mut [f32], u: usize, buf: &[f32]) {
+        let nt = self.scene.capture.time.bins;
+        for (k, (_, hist)) in self.unit(u).1.iter().enumerate() {
+            h[hist * nt..(hist + 1) * nt].copy_from_slice(&buf[k * nt..(k + 1) * nt]);
+        }
+    }
+
+    /// The units shard `(i, n)` renders.
+    pub fn shard_units(&self, shard: Option<(usize, usize)>) -> std::ops::Range<usize> {
+        let n = self.n_units();
+        match shard {
+            None => 0..n,
+            Some((i, k)) => i * n / k..(i + 1) * n / k,
+        }
+    }
+
+    /// An all-zero capture with this scene's layout.
+    pub fn empty_capture(&self, scene_info: String) -> Capture {
+        let c = &self.scene.capture;
+        let n_hist = match c.pairing {
+            Pairing::Paired => c.illum.len(),
+            Pairing::Product => c.illum.len() * c.sensor.len(),
+        };
+        Capture {
+            illum: c.illum.clone(),
+            sensor: c.sensor.clone(),
+            laser_xyz: c.laser_xyz,
+            sensor_xyz: c.sensor_xyz,
+            time: c.time,
+            t_accounts_first_and_last_bounces: c.account_first_and_last_bounces,
+            pairing: c.pairing,
+            h: vec![0.0; n_hist * c.time.bins],
+            scene_info,
+        }
+    }
+
+    /// Renders (this shard of) the capture. `progress(done, total)` is called after each batch of units.
+    pub fn render(
+        &self,
+        opt: &RenderOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<Capture> {
+        if opt.spp == 0 {
+            return Err(Error::param("spp must be at least 1"));
+        }
+        if let Some((i, n)) = opt.shard {
+            if n == 0 || i >= n {
+                return Err(Error::param(format!("shard {i}/{n}: need 0 ≤ i < N")));
+            }
+        }
+        let mut cap = self.empty_capture(scene_info(self.scene, opt.spp, opt.seed, opt.shard));
+        let units = self.shard_units(opt.shard);
+        let total = units.len();
+        let mut ckpt = match &opt.checkpoint {
+            Some(p) => Some(Checkpoint::open(
+                p,
+                fingerprint(self.scene, opt),
+                self.unit_len(),
+            )?),
+            None => None,
+        };
+        let mut done = vec![false; self.n_units()];
+        if let Some(c) = &ckpt {
+            for (u, buf) in &c.loaded {
+                if units.contains(u) {
+                    self.store(&mut cap.h, *u, buf);
+                    done[*u] = true;
+                }
+            }
+        }
+        let todo: Vec<usize> = units.clone().filter(|u| !done[*u]).collect();
+        let mut n_done = total - todo.len();
+        progress(n_done, total);
+        // Batches small enough to checkpoint regularly, large enough to keep every thread busy.
+        let batch = (rayon::current_num_threads() * 4).max(1);
+        let mut pending: Vec<(usize, Vec<f32>)> = Vec::new();
+        let mut last = Instant::now();
+        for chunk in todo.chunks(batch) {
+            let out: Vec<(usize, Vec<f32>)> = chunk
+                .par_iter()
+                .map(|&u| (u, self.render_unit(u, opt.spp, opt.seed)))
+                .collect();
+            for (u, buf) in &out {
+                self.store(&mut cap.h, *u, buf);
+            }
+            n_done += out.len();
+            progress(n_done, total);
+            if let Some(c) = ckpt.as_mut() {
+                pending.extend(out);
+                if last.elapsed() >= opt.checkpoint_every {
+                    c.append(&pending)?;
+                    pending.clear();
+                    last = Instant::now();
+                }
+            }
+        }
+        if let Some(c) = ckpt.as_mut() {
+            c.append(&pending)?;
+        }
+        Ok(cap)
+    }
+
+    fn unit_len(&self) -> usize {
+        let c = &self.scene.capture;
+        let targets = match c.pairing {
+            Pairing::Paired => 1,
+            Pairing::Product if self.from_laser => c.sensor.len(),
+            Pairing::Product => c.illum.len(),
+        };
+        targets * c.time.bins
+    }
+}
+
+/// YAML for the capture's `scene_info`: the scene file, spp, seed, murk version (and the shard of a part).
+pub fn scene_info(scene: &Scene, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> String {
+    let mut s = format!(
+        "generator: murk render\nmurk_version: {}\nscene_file: {:?}\nspp: {spp}\nseed: {seed}\nscene: |\n",
+        env!("CARGO_PKG_VERSION"),
+        scene.file_name
+    );
+    for line in scene.source.lines() {
+        s.push_str("  ");
+        s.push_str(line);
+        s.push('\n');
+    }
+    if let Some((i, n)) = shard {
+        s.push_str(&format!("{SHARD_KEY}{i}/{n}\n"));
+    }
+    s
+}
+
+const SHARD_KEY: &str = "shard: ";
+
+/// Sums shard parts into the capture an unsharded render gives, bit for bit: shards own disjoint
+/// histograms, so each sum adds exact zeros.
+pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
+    let Some((p0, first)) = parts.first() else {
+        return Err(Error::param("merge needs at least one part"));
+    };
+    let split = |path: &Path, c: &Capture| -> Result<(String, usize, usize)> {
+        let mut base = String::new();
+        let mut shard = None;
+        for line in c.scene_info.lines() {
+            match line.strip_prefix(SHARD_KEY).and_then(|r| r.split_once('/')) {
+                Some((i, n)) => shard = i.parse().ok().zip(n.parse().ok()),
+                None => {
+                    base.push_str(line);
+                    base.push('\n');
+                }
+            }
+        }
+        let (i, n) = shard.ok_or_else(|| {
+            Error::format(
+                path,
+                "not a shard of `murk render --shard` (no `shard: i/N` in scene_info)",
+            )
+        })?;
+        Ok((base, i, n))
+    };
+    let (base, _, n) = split(p0, first)?;
+    let mut seen = vec![false; n];
+    let mut out = first.clone();
+    out.h.iter_mut().for_each(|v| *v = 0.0);
+    out.scene_info = base.clone();
+    for (path, c) in parts {
+        let (b, i, k) = split(path, c)?;
+        if b != base
+            || k != n
+            || c.h.len() != out.h.len()
+            || c.time != out.time
+            || c.pairing != out.pairing
+        {
+            return Err(Error::format(path, "belongs to a different render (scene, spp, seed, shard count or layout differ from the first part)"));
+        }
+        if std::mem::replace(&mut seen[i], true) {
+            return Err(Error::format(path, format!("shard {i}/{n} given twice")));
+        }
+        out.h.iter_mut().zip(&c.h).for_each(|(o, v)| *o += v);
+    }
+    if let Some(missing) = seen.iter().position(|s| !s) {
+        return Err(Error::param(format!("shard {missing}/{n} is missing")));
+    }
+    Ok(out)
+}
+
+/// FNV-1a over everything that determines the rendered numbers.
+fn fingerprint(scene: &Scene, opt: &RenderOptions) -> u64 {
+    let key = format!(
+        "{}\n{}\n{}\n{:?}\n{}",
+        scene.source,
+        opt.spp,
+        opt.seed,
+        opt.shard,
+        env!("CARGO_PKG_VERSION")
+    );
+    key.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// An append-only file of finished units: a header (magic, fingerprint, unit length), then records of
+/// (unit index: u64, values: f32 × unit length), little-endian. A record cut short by a kill is ignored.
+struct Checkpoint {
+    file: std::fs::File,
+    path: PathBuf,
+    unit_len: usize,
+    loaded: Vec<(usize, Vec<f32>)>,
+}
+
+const MAGIC: &[u8; 8] = b"MURKCKP1";
+
+impl Checkpoint {
+    fn open(path: &Path, fp: u64, unit_len: usize) -> Result<Self> {
+        let io = |e| Error::io(path, e);
+        let mut header = Vec::with_capacity(24);
+        header.extend_from_slice(MAGIC);
+        header.extend_from_slice(&fp.to_le_bytes());
+        header.extend_from_slice(&(unit_len as u64).to_le_bytes());
+        let mut loaded = Vec::new();
+        let mut valid_len = 0u64;
+        if let Ok(mut f) = std::fs::File::open(path) {
+            let mut bytes = Vec::new();
+            f.read_to_end(&mut bytes).map_err(io)?;
+            if bytes.len() >= 24 && bytes[..24] == header[..] {
+                let rec = 8 + 4 * unit_len;
+                let mut off = 24;
+                while off + rec <= bytes.len() {
+                    let u = u64::from_le_bytes(bytes[off..off + 8].try_into().expect("8 bytes"))
+                        as usize;
+                    let vals = bytes[off + 8..off + rec]
+                        .chunks_exact(4)
+                        .map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes")))
+                        .collect();
+                    loaded.push((u, vals));
+                    off += rec;
+                }
+                valid_len = off as u64;
+            } else if !bytes.is_empty() {
+                return Err(Error::format(path, "checkpoint of a different render (scene, spp, seed or shard changed); delete it or drop --resume"));
+            }
+        }
+        let mut file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(io)?;
+        if valid_len == 0 {
+            file.set_len(0).map_err(io)?;
+            file.write_all(&header).map_err(io)?;
+        } else {
+            // Drop a torn trailing record so appends stay aligned.
+            file.set_len(valid_len).map_err(io)?;
+        }
+        Ok(Checkpoint {
+            file,
+            path: path.to_path_buf(),
+            unit_len,
+            loaded,
+        })
+    }
+
+    fn append(&mut self, recs: &[(usize, Vec<f32>)]) -> Result<()> {
+        let mut buf = Vec::with_capacity(recs.len() * (8 + 4 * self.unit_len));
+        for (u, vals) in recs {
+            buf.extend_from_slice(&(*u as u64).to_le_bytes());
+            vals.iter()
+                .for_each(|v| buf.extend_from_slice(&v.to_le_bytes()));
+        }
+        let io = |e| Error::io(&self.path, e);
+        self.file.write_all(&buf).map_err(io)?;
+        self.file.sync_data().map_err(io)
+    }
+}

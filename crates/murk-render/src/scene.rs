@@ -1,0 +1,724 @@
+//! Scene files (TOML). See `scenes/*.toml` for commented examples; every field is listed on
+//! [`SceneFile`] and its parts. Errors name the file and the field and fit on one line.
+
+use crate::geometry::{triangulate, Aabb, Geometry, Object, Shape};
+use crate::medium::{Medium, Phase};
+use murk_core::{DVec3, Error, Pairing, PointSet, Result, TimeAxis};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub relay: RelayDef,
+    pub capture: CaptureDef,
+    #[serde(default)]
+    pub render: RenderDef,
+    pub medium: Option<MediumDef>,
+    #[serde(default, rename = "object")]
+    pub objects: Vec<ObjectDef>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum RelayKind {
+    /// A reflective relay wall: laser and SPAD on the hidden side.
+    Wall,
+    /// A transmissive diffuser: laser and SPAD outside (z < 0), light crosses it both ways.
+    Diffuser,
+}
+
+/// The relay surface: a `size[0] × size[1]` rectangle centred at the origin in the plane z = 0; the
+/// hidden scene is at z > 0.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RelayDef {
+    pub kind: RelayKind,
+    pub size: [f64; 2],
+    /// Lambertian albedo that hidden light meets when it returns to the relay (default: wall 1, diffuser 0,
+    /// i.e. light reaching a diffuser leaves the scene).
+    pub albedo: Option<f64>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum CaptureKindDef {
+    /// Laser grid + one SPAD point (the paper's synthetic data).
+    LaserGrid,
+    Confocal,
+    /// One laser point + a sensor grid (y-tal's "single").
+    Single,
+    /// Every grid point as laser × every grid point as sensor.
+    Exhaustive,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaptureDef {
+    pub kind: CaptureKindDef,
+    /// Points along x and y.
+    pub grid: [usize; 2],
+    /// Grid extent (m); default: the whole relay. Points are pixel centres, as `tal render` places them.
+    pub extent: Option<[f64; 2]>,
+    #[serde(default)]
+    pub center: [f64; 2],
+    /// The one laser point of a `single` capture (default: the relay centre).
+    pub laser_point: Option<[f64; 2]>,
+    /// The one SPAD point of a `laser-grid` capture (default: the relay centre).
+    pub spad_point: Option<[f64; 2]>,
+    pub bins: usize,
+    /// Bin width in metres of optical path.
+    pub bin_width: f64,
+    /// Optical path at the start of bin 0 (m).
+    #[serde(default)]
+    pub start: f64,
+    /// Whether times include laser device → laser point and SPAD point → SPAD device.
+    #[serde(default)]
+    pub account_first_and_last_bounces: bool,
+    pub laser_position: Option<[f64; 3]>,
+    pub spad_position: Option<[f64; 3]>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum TraceFrom {
+    /// From whichever side has more points, connecting every vertex to the other side (reciprocity).
+    #[default]
+    Auto,
+    Laser,
+    Sensor,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderDef {
+    /// Paths per traced point (per laser point for a laser grid); `--spp` overrides it.
+    pub spp: u64,
+    /// Most hidden vertices (surface or medium) on a path; 1 = third-bounce NLOS only.
+    pub max_depth: u32,
+    /// Russian roulette from this many hidden vertices on.
+    pub rr_depth: u32,
+    /// Standard deviation (m of path) of a Gaussian SPAD timing jitter added before binning; 0 = box.
+    pub time_jitter: f64,
+    /// Probability of sampling the first direction toward the hidden geometry (mixed with cosine sampling).
+    pub hidden_geometry_sampling: f64,
+    /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight.
+    pub equiangular: bool,
+    pub trace_from: TraceFrom,
+}
+
+impl Default for RenderDef {
+    fn default() -> Self {
+        RenderDef {
+            spp: 256,
+            max_depth: 8,
+            rr_depth: 5,
+            time_jitter: 0.0,
+            hidden_geometry_sampling: 0.5,
+            equiangular: true,
+            trace_from: TraceFrom::Auto,
+        }
+    }
+}
+
+/// A homogeneous medium filling the box `min`..`max` (e.g. the half-space behind the diffuser clipped to a
+/// box, or the inside of a room).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MediumDef {
+    /// Extinction coefficient μt (1/m).
+    pub mu_t: f64,
+    /// Single-scattering albedo α = μs/μt.
+    pub albedo: f64,
+    /// Henyey–Greenstein anisotropy.
+    #[serde(default)]
+    pub g: f64,
+    /// Refractive index: optical path = ior × geometric path inside the medium (no refraction at its boundary).
+    #[serde(default = "one")]
+    pub ior: f64,
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(tag = "shape", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum ObjectDef {
+    /// A rectangle `size` centred at `center` with normal `normal` (default: facing the relay) and `up`.
+    Quad {
+        center: [f64; 3],
+        size: [f64; 2],
+        #[serde(default = "toward_relay")]
+        normal: [f64; 3],
+        #[serde(default = "y_up")]
+        up: [f64; 3],
+        #[serde(default = "one")]
+        albedo: f64,
+    },
+    /// An axis-aligned box; `omit` drops faces ("-x", "+x", "-y", "+y", "-z", "+z"), e.g. a room's relay side.
+    Box {
+        min: [f64; 3],
+        max: [f64; 3],
+        #[serde(default)]
+        omit: Vec<String>,
+        #[serde(default = "one")]
+        albedo: f64,
+    },
+    /// y-tal's planar Z letter (0.8 m × 0.8 m at `scale` 1) in the plane z = center.z.
+    ZLetter {
+        center: [f64; 3],
+        #[serde(default = "one")]
+        scale: f64,
+        #[serde(default = "one")]
+        albedo: f64,
+    },
+    /// A Wavefront OBJ mesh (path relative to the scene file), scaled then translated.
+    Mesh {
+        file: PathBuf,
+        #[serde(default = "one")]
+        scale: f64,
+        #[serde(default)]
+        translate: [f64; 3],
+        #[serde(default = "one")]
+        albedo: f64,
+    },
+}
+
+fn toward_relay() -> [f64; 3] {
+    [0.0, 0.0, -1.0]
+}
+fn y_up() -> [f64; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+/// The relay surface as the integrator sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct Relay {
+    pub kind: RelayKind,
+    pub half: [f64; 2],
+    pub albedo: f64,
+}
+
+/// What a render produces: the wall points, the pairing and the time axis.
+#[derive(Clone, Debug)]
+pub struct CaptureSpec {
+    pub illum: PointSet,
+    pub sensor: PointSet,
+    pub pairing: Pairing,
+    pub time: TimeAxis,
+    pub account_first_and_last_bounces: bool,
+    pub laser_xyz: Option<DVec3>,
+    pub sensor_xyz: Option<DVec3>,
+}
+
+/// A validated scene, ready to render.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub relay: Relay,
+    pub geometry: Geometry,
+    pub medium: Option<Medium>,
+    pub capture: CaptureSpec,
+    pub settings: RenderDef,
+    /// The scene file's text, recorded in the capture's `scene_info`.
+    pub source: String,
+    pub file_name: String,
+}
+
+/// Command-line overrides applied on top of the file.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Overrides {
+    pub grid: Option<usize>,
+    pub bins: Option<usize>,
+}
+
+fn v3(a: [f64; 3]) -> DVec3 {
+    DVec3::from_array(a)
+}
+
+impl Scene {
+    pub fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Scene::from_str(&text, path, ov)
+    }
+
+    /// Parses and validates `text`; `path` names the file in errors and anchors relative mesh paths.
+    pub fn from_str(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
+        let mut f: SceneFile = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|s| 1 + text[..s.start.min(text.len())].matches('\n').count());
+            let msg = e.message().trim().replace('\n', " ");
+            match line {
+                Some(l) => Error::format(path, format!("line {l}: {msg}")),
+                None => Error::format(path, msg),
+            }
+        })?;
+        if let Some(n) = ov.grid {
+            f.capture.grid = [n, n];
+        }
+        if let Some(b) = ov.bins {
+            f.capture.bins = b;
+        }
+        let bad = |field: &str, msg: String| Error::format(path, format!("{field}: {msg}"));
+        let dir = path.parent().unwrap_or(Path::new("."));
+
+        // Relay.
+        let r = &f.relay;
+        if !r.size.iter().all(|s| s.is_finite() && *s > 0.0) {
+            return Err(bad(
+                "relay.size",
+                format!("must be two positive lengths in metres, got {:?}", r.size),
+            ));
+        }
+        let relay_albedo = r.albedo.unwrap_or(match r.kind {
+            RelayKind::Wall => 1.0,
+            RelayKind::Diffuser => 0.0,
+        });
+        check_albedo(relay_albedo, "relay.albedo", &bad)?;
+        let relay = Relay {
+            kind: r.kind,
+            half: [r.size[0] / 2.0, r.size[1] / 2.0],
+            albedo: relay_albedo,
+        };
+
+        // Capture.
+        let c = &f.capture;
+        let on_relay = |p: [f64; 2], field: &str| -> Result<()> {
+            let tol = 1e-9;
+            if !(p[0].abs() <= relay.half[0] + tol && p[1].abs() <= relay.half[1] + tol) {
+                return Err(bad(
+                    field,
+                    format!(
+                        "({}, {}) lies outside the {} m × {} m relay surface",
+                        p[0], p[1], r.size[0], r.size[1]
+                    ),
+                ));
+            }
+            Ok(())
+        };
+        if c.grid[0] == 0 || c.grid[1] == 0 {
+            return Err(bad(
+                "capture.grid",
+                format!("needs at least one point per axis, got {:?}", c.grid),
+            ));
+        }
+        let extent = c.extent.unwrap_or(r.size);
+        if !extent.iter().all(|e| e.is_finite() && *e > 0.0) {
+            return Err(bad(
+                "capture.extent",
+                format!("must be two positive lengths, got {extent:?}"),
+            ));
+        }
+        for (sx, sy) in [(-1.0, -1.0), (1.0, 1.0)] {
+            on_relay(
+                [
+                    c.center[0] + sx * extent[0] / 2.0,
+                    c.center[1] + sy * extent[1] / 2.0,
+                ],
+                "capture.grid (center ± extent/2)",
+            )?;
+        }
+        let grid = PointSet::wall_grid(
+            DVec3::new(c.center[0], c.center[1], 0.0),
+            extent[0],
+            extent[1],
+            c.grid[0],
+            c.grid[1],
+        );
+        let point = |p: Option<[f64; 2]>, field: &str| -> Result<PointSet> {
+            let p = p.unwrap_or([0.0, 0.0]);
+            on_relay(p, field)?;
+            Ok(PointSet::single(DVec3::new(p[0], p[1], 0.0)))
+        };
+        let (illum, sensor, pairing) = match c.kind {
+            CaptureKindDef::Confocal => (grid.clone(), grid, Pairing::Paired),
+            CaptureKindDef::LaserGrid => (
+                grid,
+                point(c.spad_point, "capture.spad_point")?,
+                Pairing::Product,
+            ),
+            CaptureKindDef::Single => (
+                point(c.laser_point, "capture.laser_point")?,
+                grid,
+                Pairing::Product,
+            ),
+            CaptureKindDef::Exhaustive => (grid.clone(), grid, Pairing::Product),
+        };
+        if c.bins == 0 {
+            return Err(bad("capture.bins", "must be at least 1".into()));
+        }
+        if !(c.bin_width.is_finite() && c.bin_width > 0.0) {
+            return Err(bad(
+                "capture.bin_width",
+                format!(
+                    "must be a positive path length in metres, got {}",
+                    c.bin_width
+                ),
+            ));
+        }
+        if !c.start.is_finite() {
+            return Err(bad(
+                "capture.start",
+                format!("must be finite, got {}", c.start),
+            ));
+        }
+        let time = TimeAxis {
+            start_m: c.start,
+            bin_width_m: c.bin_width,
+            bins: c.bins,
+        };
+        let device = |p: Option<[f64; 3]>, field: &str| -> Result<Option<DVec3>> {
+            match p {
+                None if c.account_first_and_last_bounces => Err(bad(
+                    field,
+                    "is required when account_first_and_last_bounces = true".into(),
+                )),
+                Some(p) if !p.iter().all(|v| v.is_finite()) => {
+                    Err(bad(field, format!("must be finite, got {p:?}")))
+                }
+                p => Ok(p.map(v3)),
+            }
+        };
+        let capture = CaptureSpec {
+            illum,
+            sensor,
+            pairing,
+            time,
+            account_first_and_last_bounces: c.account_first_and_last_bounces,
+            laser_xyz: device(c.laser_position, "capture.laser_position")?,
+            sensor_xyz: device(c.spad_position, "capture.spad_position")?,
+        };
+
+        // Render settings.
+        let s = &f.render;
+        if s.max_depth == 0 {
+            return Err(bad(
+                "render.max_depth",
+                "must be at least 1 (one hidden vertex)".into(),
+            ));
+        }
+        if !(s.time_jitter.is_finite() && s.time_jitter >= 0.0) {
+            return Err(bad(
+                "render.time_jitter",
+                format!("must be ≥ 0, got {}", s.time_jitter),
+            ));
+        }
+        if !(0.0..=1.0).contains(&s.hidden_geometry_sampling) {
+            return Err(bad(
+                "render.hidden_geometry_sampling",
+                format!("must be in [0, 1], got {}", s.hidden_geometry_sampling),
+            ));
+        }
+
+        // Medium.
+        let medium = match &f.medium {
+            None => None,
+            Some(m) => {
+                if !(m.mu_t.is_finite() && m.mu_t >= 0.0) {
+                    return Err(bad(
+                        "medium.mu_t",
+                        format!("must be ≥ 0 (1/m), got {}", m.mu_t),
+                    ));
+                }
+                check_albedo(m.albedo, "medium.albedo", &bad)?;
+                if !(m.g.abs() < 1.0) {
+                    return Err(bad(
+                        "medium.g",
+                        format!("must satisfy |g| < 1, got {}", m.g),
+                    ));
+                }
+                if !(m.ior.is_finite() && m.ior >= 1.0) {
+                    return Err(bad("medium.ior", format!("must be ≥ 1, got {}", m.ior)));
+                }
+                if !(0..3)
+                    .all(|i| m.min[i].is_finite() && m.max[i].is_finite() && m.min[i] < m.max[i])
+                {
+                    return Err(bad(
+                        "medium.min/max",
+                        format!("must bound a non-empty box, got {:?}..{:?}", m.min, m.max),
+                    ));
+                }
+                if m.min[2] < 0.0 {
+                    return Err(bad(
+                        "medium.min",
+                        format!("z = {} reaches behind the relay surface (z = 0)", m.min[2]),
+                    ));
+                }
+                (m.mu_t > 0.0).then(|| Medium {
+                    sigma_t: m.mu_t,
+                    albedo: m.albedo,
+                    phase: Phase::new(m.g),
+                    ior: m.ior,
+                    region: Aabb {
+                        min: v3(m.min),
+                        max: v3(m.max),
+                    },
+                })
+            }
+        };
+
+        // Hidden geometry.
+        let mut objects = Vec::new();
+        for (i, o) in f.objects.iter().enumerate() {
+            let field = |name: &str| format!("object[{i}].{name}");
+            let (albedo, prims) = match o {
+                ObjectDef::Quad {
+                    center,
+                    size,
+                    normal,
+                    up,
+                    albedo,
+                } => {
+                    let n = v3(*normal).normalize_or_zero();
+                    let u = v3(*up);
+                    let ex = u.cross(n).normalize_or_zero();
+                    if n == DVec3::ZERO || ex == DVec3::ZERO {
+                        return Err(bad(
+                            &field("normal"),
+                            "normal and up must be non-zero and not parallel".into(),
+                        ));
+                    }
+                    if !size.iter().all(|s| s.is_finite() && *s > 0.0) {
+                        return Err(bad(
+                            &field("size"),
+                            format!("must be positive, got {size:?}"),
+                        ));
+                    }
+                    let ey = n.cross(ex);
+                    let (e1, e2) = (ex * size[0], ey * size[1]);
+                    (
+                        *albedo,
+                        vec![Shape::Rect {
+                            p0: v3(*center) - 0.5 * (e1 + e2),
+                            e1,
+                            e2,
+                        }],
+                    )
+                }
+                ObjectDef::Box {
+                    min,
+                    max,
+                    omit,
+                    albedo,
+                } => {
+                    let (a, b) = (v3(*min), v3(*max));
+                    if !(a.cmplt(b).all()) {
+                        return Err(bad(
+                            &field("min"),
+                            format!("must be below max in every axis, got {min:?}..{max:?}"),
+                        ));
+                    }
+                    let d = b - a;
+                    let faces = [
+                        (
+                            "-x",
+                            Shape::Rect {
+                                p0: a,
+                                e1: DVec3::Y * d.y,
+                                e2: DVec3::Z * d.z,
+                            },
+                        ),
+                        (
+                            "+x",
+                            Shape::Rect {
+                                p0: DVec3::new(b.x, a.y, a.z),
+                                e1: DVec3::Y * d.y,
+                                e2: DVec3::Z * d.z,
+                            },
+                        ),
+                        (
+                            "-y",
+                            Shape::Rect {
+                                p0: a,
+                                e1: DVec3::X * d.x,
+                                e2: DVec3::Z * d.z,
+                            },
+                        ),
+                        (
+                            "+y",
+                            Shape::Rect {
+                                p0: DVec3::new(a.x, b.y, a.z),
+                                e1: DVec3::X * d.x,
+                                e2: DVec3::Z * d.z,
+                            },
+                        ),
+                        (
+                            "-z",
+                            Shape::Rect {
+                                p0: a,
+                                e1: DVec3::X * d.x,
+                                e2: DVec3::Y * d.y,
+                            },
+                        ),
+                        (
+                            "+z",
+                            Shape::Rect {
+                                p0: DVec3::new(a.x, a.y, b.z),
+                                e1: DVec3::X * d.x,
+                                e2: DVec3::Y * d.y,
+                            },
+                        ),
+                    ];
+                    if let Some(w) = omit.iter().find(|w| !faces.iter().any(|(n, _)| n == w)) {
+                        return Err(bad(
+                            &field("omit"),
+                            format!("unknown face '{w}' (use -x, +x, -y, +y, -z, +z)"),
+                        ));
+                    }
+                    let prims = faces
+                        .into_iter()
+                        .filter(|(n, _)| !omit.iter().any(|w| w == n))
+                        .map(|(_, s)| s)
+                        .collect();
+                    (*albedo, prims)
+                }
+                ObjectDef::ZLetter {
+                    center,
+                    scale,
+                    albedo,
+                } => {
+                    let outline = murk_synth::z_letter_outline();
+                    let c = v3(*center);
+                    let p = |k: usize| c + DVec3::new(outline[k][0], outline[k][1], 0.0) * *scale;
+                    let prims = triangulate(&outline)
+                        .into_iter()
+                        .map(|t| Shape::Triangle {
+                            p0: p(t[0]),
+                            e1: p(t[1]) - p(t[0]),
+                            e2: p(t[2]) - p(t[0]),
+                        })
+                        .collect();
+                    (*albedo, prims)
+                }
+                ObjectDef::Mesh {
+                    file,
+                    scale,
+                    translate,
+                    albedo,
+                } => {
+                    let full = dir.join(file);
+                    let opts = tobj::LoadOptions {
+                        triangulate: true,
+                        single_index: true,
+                        ..Default::default()
+                    };
+                    let (models, _) = tobj::load_obj(&full, &opts).map_err(|e| {
+                        Error::format(
+                            path,
+                            format!("{}: cannot load OBJ {}: {e}", field("file"), full.display()),
+                        )
+                    })?;
+                    let mut prims = Vec::new();
+                    for m in &models {
+                        let pos = &m.mesh.positions;
+                        let p = |k: u32| {
+                            let k = k as usize * 3;
+                            DVec3::new(pos[k] as f64, pos[k + 1] as f64, pos[k + 2] as f64) * *scale
+                                + v3(*translate)
+                        };
+                        for t in m.mesh.indices.chunks_exact(3) {
+                            let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+                            if (b - a).cross(c - a).length_squared() > 0.0 {
+                                prims.push(Shape::Triangle {
+                                    p0: a,
+                                    e1: b - a,
+                                    e2: c - a,
+                                });
+                            }
+                        }
+                    }
+                    if prims.is_empty() {
+                        return Err(Error::format(
+                            path,
+                            format!("{}: OBJ {} has no triangles", field("file"), full.display()),
+                        ));
+                    }
+                    (*albedo, prims)
+                }
+            };
+            check_albedo(albedo, &field("albedo"), &bad)?;
+            let obj = Object::new(albedo, prims);
+            if obj.bounds.min.z < 0.0 || !obj.bounds.min.is_finite() || !obj.bounds.max.is_finite()
+            {
+                return Err(bad(
+                    &field("shape"),
+                    format!(
+                    "must lie in the hidden volume z ≥ 0 and be finite, its bounds are {:?}..{:?}",
+                    obj.bounds.min.to_array(), obj.bounds.max.to_array()
+                ),
+                ));
+            }
+            objects.push(obj);
+        }
+        let geometry = Geometry { objects };
+
+        let scene = Scene {
+            relay,
+            geometry,
+            medium,
+            capture,
+            settings: f.render.clone(),
+            source: text.to_string(),
+            file_name: path
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        };
+        scene
+            .check_time_window()
+            .map_err(|m| bad("capture.bins/bin_width/start", m))?;
+        Ok(scene)
+    }
+
+    /// Rejects a time window that cannot hold any return from the hidden geometry.
+    fn check_time_window(&self) -> std::result::Result<(), String> {
+        if self.geometry.is_empty() {
+            return Ok(());
+        }
+        let b = self.geometry.bounds();
+        let c = &self.capture;
+        let range = |ps: &PointSet, dev: Option<DVec3>| {
+            ps.points
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(lo, hi), p| {
+                    let (n, f) = b.distance_range(*p);
+                    let leg = match (c.account_first_and_last_bounces, dev) {
+                        (true, Some(d)) => (*p - d).length(),
+                        _ => 0.0,
+                    };
+                    (lo.min(n + leg), hi.max(f + leg))
+                })
+        };
+        let (il, ih) = range(&c.illum, c.laser_xyz);
+        let (sl, sh) = range(&c.sensor, c.sensor_xyz);
+        // Geometric bounds; a medium's index stretches paths, so scale the upper end by it.
+        let ior = self.medium.map_or(1.0, |m| m.ior);
+        let (earliest, latest) = (il + sl, (ih + sh) * ior);
+        let t = &c.time;
+        if earliest >= t.end_m() {
+            return Err(format!(
+                "the window [{:.3}, {:.3}] m ends before the earliest return from the hidden geometry ({earliest:.3} m)",
+                t.start_m,
+                t.end_m()
+            ));
+        }
+        if latest < t.start_m {
+            return Err(format!(
+                "the window [{:.3}, {:.3}] m starts after the latest direct return from the hidden geometry ({latest:.3} m)",
+                t.start_m,
+                t.end_m()
+            ));
+        }
+        Ok(())
+    }
+}
+
+fn check_albedo(a: f64, field: &str, bad: &impl Fn(&str, String) -> Error) -> Result<()> {
+    if (0.0..=1.0).contains(&a) {
+        Ok(())
+    } else {
+        Err(bad(field, format!("must be in [0, 1], got {a}")))
+    }
+}

@@ -1,0 +1,180 @@
+//! `murk render` and `murk merge`: Monte Carlo captures of scene files (see `scenes/`).
+
+use anyhow::{bail, Context};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use murk_render::{merge, Overrides, Plan, RenderOptions, Scene};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML; examples in scenes/).
+    pub scene: PathBuf,
+    /// Output capture (y-tal HDF5), written atomically.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Paths per traced wall point (per laser point for a laser grid); default: the scene's [render] spp.
+    #[arg(long, conflicts_with = "time_budget")]
+    pub spp: Option<u64>,
+    /// Pick the spp that fits this many seconds (measured on a short pilot run, then rendered deterministically).
+    #[arg(long, value_name = "SECONDS")]
+    pub time_budget: Option<f64>,
+    /// Random seed; a seeded render gives identical bytes for any --threads and any sharding.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Override the grid with N × N points.
+    #[arg(long, value_name = "N")]
+    pub grid: Option<usize>,
+    /// Override the number of time bins.
+    #[arg(long, value_name = "N")]
+    pub bins: Option<usize>,
+    /// Render only part i of N (0-based), for `murk merge`.
+    #[arg(long, value_name = "i/N", value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Seconds between checkpoints (OUT.ckpt); 0 disables them.
+    #[arg(long, default_value_t = 60.0, value_name = "SECONDS")]
+    pub checkpoint_every: f64,
+    /// Continue from OUT.ckpt left by an interrupted run with the same scene, spp, seed and shard.
+    #[arg(long)]
+    pub resume: bool,
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The parts written by `murk render --shard i/N` (all N of them).
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Output capture; identical bytes to an unsharded render.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or("expected i/N, e.g. 0/4")?;
+    let (i, n): (usize, usize) = (
+        i.trim()
+            .parse()
+            .map_err(|_| format!("'{i}' is not a shard index"))?,
+        n.trim()
+            .parse()
+            .map_err(|_| format!("'{n}' is not a shard count"))?,
+    );
+    if n == 0 || i >= n {
+        return Err(format!("need 0 ≤ i < N, got {i}/{n}"));
+    }
+    Ok((i, n))
+}
+
+fn checkpoint_path(out: &Path) -> PathBuf {
+    let mut p = out.as_os_str().to_owned();
+    p.push(".ckpt");
+    PathBuf::from(p)
+}
+
+pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
+    let ov = Overrides {
+        grid: a.grid,
+        bins: a.bins,
+    };
+    let scene = Scene::load(&a.scene, &ov)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    pool.install(|| render(&a, &scene, quiet))
+}
+
+fn render(a: &RenderArgs, scene: &Scene, quiet: bool) -> anyhow::Result<()> {
+    let plan = Plan::new(scene);
+    let n_units = plan.shard_units(a.shard).len();
+    let spp = match (a.spp, a.time_budget) {
+        (Some(s), _) => s,
+        (None, Some(b)) => spp_for_budget(&plan, b, n_units)?,
+        (None, None) => scene.settings.spp,
+    };
+    let ckpt = checkpoint_path(&a.out);
+    if !a.resume && ckpt.exists() {
+        std::fs::remove_file(&ckpt)
+            .with_context(|| format!("cannot remove the old checkpoint {}", ckpt.display()))?;
+    }
+    if a.resume && !ckpt.exists() && !quiet {
+        eprintln!(
+            "murk: no checkpoint at {}; starting from scratch",
+            ckpt.display()
+        );
+    }
+    let opt = RenderOptions {
+        spp,
+        seed: a.seed,
+        shard: a.shard,
+        checkpoint: (a.checkpoint_every > 0.0).then(|| ckpt.clone()),
+        checkpoint_every: Duration::from_secs_f64(a.checkpoint_every.max(0.0)),
+    };
+    let bar = ProgressBar::new(n_units as u64);
+    if quiet || !std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} points  {elapsed} elapsed, ETA {eta}")
+            .expect("static template"),
+    );
+    let t0 = Instant::now();
+    let cap = plan.render(&opt, &|done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    let secs = t0.elapsed().as_secs_f64();
+    murk_io::write_capture(&a.out, &cap)?;
+    if opt.checkpoint.is_some() {
+        // The capture is safely written; a stale checkpoint would only mislead a later --resume.
+        let _ = std::fs::remove_file(&ckpt);
+    }
+    if !quiet {
+        let paths = n_units as f64 * spp as f64;
+        eprintln!(
+            "murk: {} points × {spp} spp in {secs:.2} s ({:.2} M paths/s) → {}",
+            n_units,
+            paths / secs / 1e6,
+            a.out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Times a few units at low spp and returns the spp that fills 90 % of `budget_s` for `n_units`.
+fn spp_for_budget(plan: &Plan, budget_s: f64, n_units: usize) -> anyhow::Result<u64> {
+    if !(budget_s.is_finite() && budget_s > 0.0) {
+        bail!("--time-budget must be a positive number of seconds, got {budget_s}");
+    }
+    let threads = rayon::current_num_threads();
+    let pilot: Vec<usize> = (0..threads * 2)
+        .map(|k| k * plan.n_units() / (threads * 2))
+        .collect();
+    let pilot_spp = 8;
+    let t0 = Instant::now();
+    use rayon::prelude::*;
+    pilot.par_iter().for_each(|&u| {
+        plan.render_unit(u, pilot_spp, u64::MAX);
+    });
+    let per_path =
+        t0.elapsed().as_secs_f64() * threads as f64 / (pilot.len() as f64 * pilot_spp as f64);
+    let spp = (0.9 * budget_s * threads as f64 / (n_units as f64 * per_path)).floor();
+    Ok((spp as u64).max(1))
+}
+
+pub fn run_merge(a: MergeArgs, quiet: bool) -> anyhow::Result<()> {
+    let parts = a
+        .parts
+        .iter()
+        .map(|p| Ok((p.clone(), murk_io::read_capture(p)?)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let cap = merge(&parts)?;
+    murk_io::write_capture(&a.out, &cap)?;
+    if !quiet {
+        eprintln!("murk: merged {} parts → {}", parts.len(), a.out.display());
+    }
+    Ok(())
+}
