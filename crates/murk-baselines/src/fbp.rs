@@ -1,0 +1,173 @@
+//! Filtered backprojection: backprojection followed by a high-pass filter on the volume, then
+//! normalised to a maximum of 1 and clamped at 0.
+//!
+//! Sign: the Laplacian of a Gaussian ∇²G is negative at its centre, so ∇²G ⊛ BP has its *minimum* at
+//! a point scatterer (and its maximum a few voxels away in depth). The filter is therefore −∇²G
+//! (algorithms.md §5.2, pitfall 10).
+
+use crate::bp::{backproject, BpOptions};
+use crate::Reconstruction;
+use murk_core::{Capture, Result, Volume};
+use rayon::prelude::*;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FbpFilter {
+    /// −∇²G, 5×5×5 voxels, σ = 1 voxel, zero-mean (O'Toole/Lindell `filterLaplacian`).
+    #[default]
+    LaplacianOfGaussian,
+    /// −∂²/∂z² along depth only, [−1, 2, −1] (Velten et al. 2012).
+    DepthSecondDerivative,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FbpOptions {
+    pub bp: BpOptions,
+    pub filter: FbpFilter,
+}
+
+pub fn fbp(capture: &Capture, volume: &Volume, opts: FbpOptions) -> Result<Reconstruction> {
+    let mut r = backproject(capture, volume, opts.bp)?;
+    let filtered = match opts.filter {
+        FbpFilter::LaplacianOfGaussian => {
+            let mut k = laplacian_of_gaussian_kernel();
+            k.iter_mut().for_each(|v| *v = -*v);
+            convolve_same(&r.data, volume.shape(), &k, [5, 5, 5])
+        }
+        FbpFilter::DepthSecondDerivative => {
+            convolve_same(&r.data, volume.shape(), &[-1.0, 2.0, -1.0], [1, 1, 3])
+        }
+    };
+    let max = filtered.iter().copied().fold(0.0f32, f32::max);
+    let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
+    r.data = filtered.into_iter().map(|v| (v * scale).max(0.0)).collect();
+    Ok(r)
+}
+
+/// ∇²G on a 5×5×5 grid (σ = 1 voxel): G (normalised to sum 1) times (r² − 3σ²)/σ⁴, minus its mean
+/// so that it sums to zero (flat regions filter to 0). C order [x][y][z].
+pub fn laplacian_of_gaussian_kernel() -> [f32; 125] {
+    let mut g = [0.0f64; 125];
+    let mut r2 = [0.0f64; 125];
+    for (i, (gv, rv)) in g.iter_mut().zip(r2.iter_mut()).enumerate() {
+        let d = |c: usize| c as f64 - 2.0;
+        *rv = d(i / 25).powi(2) + d(i / 5 % 5).powi(2) + d(i % 5).powi(2);
+        *gv = (-*rv / 2.0).exp();
+    }
+    let gsum: f64 = g.iter().sum();
+    let w: Vec<f64> = g
+        .iter()
+        .zip(&r2)
+        .map(|(g, r2)| g / gsum * (r2 - 3.0))
+        .collect();
+    let mean = w.iter().sum::<f64>() / 125.0;
+    std::array::from_fn(|i| (w[i] - mean) as f32)
+}
+
+/// "Same"-size 3-D correlation with a kernel of odd size `ks` centred on the output voxel, zeros
+/// outside the volume. The kernels here are symmetric, so correlation equals convolution.
+pub fn convolve_same(data: &[f32], shape: [usize; 3], kernel: &[f32], ks: [usize; 3]) -> Vec<f32> {
+    let [nx, ny, nz] = shape;
+    let h = ks.map(|k| (k / 2) as isize);
+    let mut out = vec![0.0f32; data.len()];
+    out.par_chunks_mut(nz).enumerate().for_each(|(col, dst)| {
+        let (ix, iy) = ((col / ny) as isize, (col % ny) as isize);
+        for (iz, o) in dst.iter_mut().enumerate() {
+            let mut acc = 0.0f32;
+            for a in 0..ks[0] {
+                let x = ix + a as isize - h[0];
+                if x < 0 || x >= nx as isize {
+                    continue;
+                }
+                for b in 0..ks[1] {
+                    let y = iy + b as isize - h[1];
+                    if y < 0 || y >= ny as isize {
+                        continue;
+                    }
+                    let row = (x as usize * ny + y as usize) * nz;
+                    let krow = (a * ks[1] + b) * ks[2];
+                    for c in 0..ks[2] {
+                        let z = iz as isize + c as isize - h[2];
+                        if z >= 0 && z < nz as isize {
+                            acc += kernel[krow + c] * data[row + z as usize];
+                        }
+                    }
+                }
+            }
+            *o = acc;
+        }
+    });
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{add_point, axis, confocal};
+    use murk_core::{Axis, DVec3};
+
+    fn point_bp() -> (Capture, Volume, [usize; 3]) {
+        let mut c = confocal(16, 0.64, axis(0.0, 0.01, 128));
+        // Scan point (8, 7) is at (0.02, −0.02); voxel (8, 7, 20) below it at z = 0.4.
+        add_point(&mut c, DVec3::new(0.02, -0.02, 0.4));
+        let vol = Volume {
+            x: Axis::new(-0.3, 0.3, 16),
+            y: Axis::new(-0.3, 0.3, 16),
+            z: Axis::new(0.3, 0.5, 41),
+        };
+        (c, vol, [8, 7, 20])
+    }
+
+    #[test]
+    fn kernel_is_zero_mean_and_negative_at_the_centre() {
+        let k = laplacian_of_gaussian_kernel();
+        assert!(k.iter().map(|&v| v as f64).sum::<f64>().abs() < 1e-6);
+        let min = k.iter().copied().fold(f32::MAX, f32::min);
+        assert_eq!(k[62], min);
+        assert!(min < 0.0);
+    }
+
+    #[test]
+    fn negative_laplacian_peaks_at_the_point_and_positive_one_has_its_minimum_there() {
+        let (c, vol, truth) = point_bp();
+        let r = fbp(&c, &vol, FbpOptions::default()).unwrap();
+        assert_eq!(r.argmax(), truth);
+        assert_eq!(r.data.iter().copied().fold(0.0, f32::max), 1.0);
+        assert!(r.data.iter().all(|&v| v >= 0.0));
+
+        // The wrong sign: +∇²G ⊛ BP has its minimum at the point and its maximum elsewhere.
+        let bp = backproject(&c, &vol, BpOptions::default()).unwrap();
+        let plus = convolve_same(
+            &bp.data,
+            vol.shape(),
+            &laplacian_of_gaussian_kernel(),
+            [5, 5, 5],
+        );
+        let argmin = plus
+            .iter()
+            .enumerate()
+            .fold(0, |b, (i, &v)| if v < plus[b] { i } else { b });
+        assert_eq!(argmin, vol.index(truth[0], truth[1], truth[2]));
+        let wrong = Reconstruction {
+            volume: vol,
+            data: plus,
+        }
+        .argmax();
+        assert!(
+            wrong[2].abs_diff(truth[2]) >= 2,
+            "+∇²G maximum at {wrong:?}"
+        );
+    }
+
+    #[test]
+    fn depth_second_derivative_peaks_at_the_point() {
+        let (c, vol, truth) = point_bp();
+        let opts = FbpOptions {
+            filter: FbpFilter::DepthSecondDerivative,
+            ..Default::default()
+        };
+        let got = fbp(&c, &vol, opts).unwrap().argmax();
+        for a in 0..3 {
+            assert!(got[a].abs_diff(truth[a]) <= 1, "{got:?} vs {truth:?}");
+        }
+    }
+}

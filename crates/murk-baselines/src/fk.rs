@@ -1,0 +1,159 @@
+//! f-k (Stolt) migration (Lindell, Wetzstein, O'Toole 2019), confocal captures only.
+//!
+//! The confocal transient is an exploding-reflector wavefield at speed c/2: after a 3-D FFT on the
+//! (2M × 2N × 2N) zero-padded data, the spectrum at temporal frequency k_z′ = √(a²(k_x² + k_y²) + k_z²)
+//! is moved to k_z, with the Jacobian |k_z|/k_z′, for k_z > 0 only. With the normalised grids
+//! k_z = m/M and k_x = j/N, a = Δs/(2Δx) (per axis, so Δx ≠ Δy is fine).
+//! Memory: two buffers of the padded size (one complex f32, one output), no voxel × sensor tensors;
+//! 64² × 512 takes 134 MB of complex data.
+
+use crate::confocal::{ConfocalGeometry, TimeGrid};
+use crate::fft3::{Fft3, C32};
+use crate::Reconstruction;
+use murk_core::{Capture, Result};
+use rayon::prelude::*;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FkParams {
+    pub grid: TimeGrid,
+}
+
+impl Default for FkParams {
+    fn default() -> Self {
+        FkParams {
+            grid: TimeGrid::Native,
+        }
+    }
+}
+
+pub struct FkPlan {
+    geom: ConfocalGeometry,
+    params: FkParams,
+    stolt: Stolt,
+}
+
+impl FkPlan {
+    pub fn new(capture: &Capture, params: FkParams) -> Result<Self> {
+        let geom = ConfocalGeometry::new(capture, params.grid)?;
+        Ok(FkPlan {
+            stolt: Stolt::new(&geom),
+            geom,
+            params,
+        })
+    }
+
+    /// Reconstructs on the scan grid: [nx, ny, nt], depth k·Δs′/2.
+    pub fn run(&self, capture: &Capture) -> Result<Reconstruction> {
+        self.geom.check_same(capture, self.params.grid)?;
+        let g = &self.geom;
+        let tau = g.sample(capture);
+        let mut buf = self.stolt.padded(&tau);
+        // √(τ·ẑ²), ẑ = k/M: the amplitude of the wavefield, with the t² falloff undone.
+        let m = g.nt as f32;
+        buf.par_chunks_mut(self.stolt.fft.dims[2]).for_each(|col| {
+            col[..g.nt]
+                .iter_mut()
+                .enumerate()
+                .for_each(|(k, v)| *v = C32::new(v.re.max(0.0).sqrt() * k as f32 / m, 0.0))
+        });
+        self.stolt.fft.forward(&mut buf, [g.nx, g.ny]);
+        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(buf)))
+    }
+}
+
+/// One-shot f-k migration (plans and runs).
+pub fn fk(capture: &Capture, params: FkParams) -> Result<Reconstruction> {
+    FkPlan::new(capture, params)?.run(capture)
+}
+
+/// The Stolt step on the padded [2nx][2ny][2m] spectrum, shared with CDT.
+pub(crate) struct Stolt {
+    pub fft: Fft3,
+    nx: usize,
+    ny: usize,
+    m: usize,
+    /// a² per lateral axis.
+    a2: [f64; 2],
+}
+
+impl Stolt {
+    pub fn new(g: &ConfocalGeometry) -> Self {
+        let [dx, dy] = g.spacing();
+        Stolt {
+            fft: Fft3::new([2 * g.nx, 2 * g.ny, 2 * g.nt]),
+            nx: g.nx,
+            ny: g.ny,
+            m: g.nt,
+            a2: [(g.ds / (2.0 * dx)).powi(2), (g.ds / (2.0 * dy)).powi(2)],
+        }
+    }
+
+    /// `tau` ([nx][ny][m], real) zero-padded into the first octant of a complex buffer.
+    pub fn padded(&self, tau: &[f32]) -> Vec<C32> {
+        let [_, ny2, m2] = self.fft.dims;
+        let mut buf = vec![C32::default(); self.fft.len()];
+        buf.par_chunks_mut(ny2 * m2)
+            .take(self.nx)
+            .enumerate()
+            .for_each(|(ix, slab)| {
+                for iy in 0..self.ny {
+                    let src = &tau[(ix * self.ny + iy) * self.m..][..self.m];
+                    slab[iy * m2..][..self.m]
+                        .iter_mut()
+                        .zip(src)
+                        .for_each(|(d, s)| *d = C32::new(*s, 0.0));
+                }
+            });
+        buf
+    }
+
+    /// Stolt-maps the spectrum `buf`, inverse-transforms it and returns |·|² of the first octant.
+    pub fn migrate_and_crop(&self, mut buf: Vec<C32>) -> Vec<f32> {
+        let [nx2, ny2, m2] = self.fft.dims;
+        let (m, mf) = (self.m, self.m as f64);
+        // Signed normalised frequency of FFT index j on an axis of 2n samples.
+        let freq = |j: usize, n: usize| {
+            (if j < n {
+                j as f64
+            } else {
+                j as f64 - 2.0 * n as f64
+            }) / n as f64
+        };
+        buf.par_chunks_mut(m2).enumerate().for_each(|(i, col)| {
+            let kx = freq(i / ny2, nx2 / 2);
+            let ky = freq(i % ny2, ny2 / 2);
+            let lateral = self.a2[0] * kx * kx + self.a2[1] * ky * ky;
+            // Output m reads the source at index ≥ m, so ascending order never reads a sample that
+            // was already overwritten: the mapping is done in place.
+            for mo in 1..m {
+                let kz = mo as f64 / mf;
+                let kzs = (lateral + kz * kz).sqrt();
+                // max() guards the in-place order against rounding when k_x = k_y = 0.
+                let u = (kzs * mf).max(mo as f64);
+                // Source samples exist for k_z′ ∈ [0, (M−1)/M]; outside is zero.
+                col[mo] = if u <= (m - 1) as f64 {
+                    let n = u.floor() as usize;
+                    let f = (u - n as f64) as f32;
+                    let hi = if n + 1 < m {
+                        col[n + 1]
+                    } else {
+                        C32::default()
+                    };
+                    (col[n] * (1.0 - f) + hi * f) * (kz / kzs.max(1e-6)) as f32
+                } else {
+                    C32::default()
+                };
+            }
+            // Only k_z > 0 survives: the wavefield travels towards the wall.
+            col[0] = C32::default();
+            col[m..].iter_mut().for_each(|v| *v = C32::default());
+        });
+        self.fft.inverse(&mut buf, [self.nx, self.ny]);
+        let mut out = vec![0.0f32; self.nx * self.ny * m];
+        out.par_chunks_mut(m).enumerate().for_each(|(i, o)| {
+            let src = &buf[((i / self.ny) * ny2 + i % self.ny) * m2..][..m];
+            o.iter_mut().zip(src).for_each(|(o, v)| *o = v.norm_sqr());
+        });
+        out
+    }
+}

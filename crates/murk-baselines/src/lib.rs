@@ -1,0 +1,62 @@
+//! Classic NLOS reconstruction baselines for murk captures.
+//!
+//! * [`bp`] and [`fbp`]: any capture kind, any voxel box.
+//! * [`lct`], [`fk`], [`cdt`]: confocal captures on a regular, axis-aligned scan grid. They work on
+//!   the capture's own grid: output [nx, ny, nt] with voxel (ix, iy, k) at scan point (ix, iy) and
+//!   k·Δs′/2 in front of the wall, after t_start and the laser/SPAD legs have been removed by
+//!   fractional shifts ([`TimeGrid`] chooses Δs′). Each has a plan (FFT plans, filters) built once
+//!   per geometry and run per capture.
+//!
+//! Bins: bin n of a histogram holds paths [start + nΔs, start + (n+1)Δs) (floor binning), so its
+//! value is read as belonging to the bin centre; see [`bp`].
+
+pub mod bp;
+pub mod cdt;
+mod confocal;
+pub mod fbp;
+mod fft3;
+pub mod fk;
+pub mod lct;
+#[cfg(test)]
+mod testutil;
+
+pub use bp::{backproject, BpOptions};
+pub use cdt::{cdt, CdtParams, CdtPlan, SlabParams};
+pub use confocal::TimeGrid;
+pub use fbp::{fbp, FbpFilter, FbpOptions};
+pub use fk::{fk, FkParams, FkPlan};
+pub use lct::{lct, LctParams, LctPlan, Reflectance};
+
+use murk_core::Volume;
+
+/// A reconstructed volume: `data[volume.index(ix, iy, iz)]`, C order [nx, ny, nz].
+#[derive(Clone, Debug)]
+pub struct Reconstruction {
+    pub volume: Volume,
+    pub data: Vec<f32>,
+}
+
+impl Reconstruction {
+    /// (ix, iy, iz) of the largest value.
+    pub fn argmax(&self) -> [usize; 3] {
+        let i = self
+            .data
+            .iter()
+            .enumerate()
+            .fold(
+                (0, f32::MIN),
+                |best, (i, &v)| if v > best.1 { (i, v) } else { best },
+            )
+            .0;
+        let [_, ny, nz] = self.volume.shape();
+        [i / (ny * nz), i / nz % ny, i % nz]
+    }
+
+    /// Maximum along depth, [nx][ny] row-major.
+    pub fn max_projection(&self) -> Vec<f32> {
+        self.data
+            .chunks(self.volume.z.n)
+            .map(|c| c.iter().copied().fold(f32::MIN, f32::max))
+            .collect()
+    }
+}
