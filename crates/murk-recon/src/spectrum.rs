@@ -1,0 +1,270 @@
+//! The temporal side of Phasor Fields: which part of each histogram matters for a volume, the band of
+//! frequencies of the virtual pulse, and each histogram's band-limited spectrum with its fixed path
+//! offsets already applied as exact phases.
+
+use crate::PfParams;
+use murk_core::{Capture, DVec3, Error, Result, Volume};
+use rayon::prelude::*;
+use realfft::RealFftPlanner;
+use rustfft::num_complex::{Complex32, Complex64};
+use std::f64::consts::PI;
+
+/// Gaussian envelope truncation used for time windows and padding, in units of σ.
+const ENVELOPE_SIGMAS: f64 = 4.0;
+
+/// Frequencies of the virtual pulse P0(s) = exp(i2πs/λ)·exp(−s²/2σ²) on the DFT grid of the padded window.
+#[derive(Clone, Debug)]
+pub struct Band {
+    /// DFT length of the padded window.
+    pub nf: usize,
+    pub bin_width_m: f64,
+    /// First DFT index kept; the band is `m_lo .. m_lo + weights.len()`.
+    pub m_lo: usize,
+    /// Gaussian weights W_m = exp(−2π²σ²(f_m − 1/λ)²), so W(1/λ) = 1.
+    pub weights: Vec<f64>,
+}
+
+impl Band {
+    /// tal pf_dev's band: f ∈ [1/λ − 1/(2σ), 1/λ + 1/(2σ)] (≈ ±3.1 spectral std), positive frequencies only.
+    pub fn new(nf: usize, bin_width_m: f64, wavelength_m: f64, sigma_m: f64) -> Band {
+        let span = nf as f64 * bin_width_m;
+        let mu = span / wavelength_m;
+        let half = span / (2.0 * sigma_m);
+        let m_lo = ((mu - half).floor().max(1.0)) as usize;
+        let m_hi = ((mu + half).ceil() as usize).min(nf / 2);
+        let weights = (m_lo..=m_hi.max(m_lo))
+            .map(|m| {
+                let df = m as f64 / span - 1.0 / wavelength_m;
+                (-2.0 * PI * PI * sigma_m * sigma_m * df * df).exp()
+            })
+            .collect();
+        Band {
+            nf,
+            bin_width_m,
+            m_lo,
+            weights,
+        }
+    }
+    pub fn len(&self) -> usize {
+        self.weights.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.weights.is_empty()
+    }
+    /// Angular wavenumber k_m = 2π f_m of the j-th band entry (rad per metre of path).
+    pub fn k(&self, j: usize) -> f64 {
+        2.0 * PI * (self.m_lo + j) as f64 / (self.nf as f64 * self.bin_width_m)
+    }
+    /// Spacing between consecutive k_m.
+    pub fn dk(&self) -> f64 {
+        2.0 * PI / (self.nf as f64 * self.bin_width_m)
+    }
+    /// Shortest wavelength in the band (what the spatial Nyquist limit applies to).
+    pub fn min_wavelength_m(&self) -> f64 {
+        2.0 * PI / self.k(self.len() - 1)
+    }
+}
+
+/// Band-limited spectra of every histogram, cropped to the paths the volume can see.
+pub struct Spectra {
+    pub band: Band,
+    /// `[hist][j]`: W_j·Ĥ_j·exp(ik_j(e_l + e_s − s_pad0)) / nf, so that a voxel's value is
+    /// Σ_j spec[j]·exp(ik_j(d_l + d_s)) summed over histograms.
+    pub spec: Vec<Complex32>,
+    /// True when the data's time window misses part of the paths the volume needs (zeros are used there).
+    pub truncated: bool,
+    /// True when no data bin falls within the volume's paths at all.
+    pub empty: bool,
+}
+
+impl Spectra {
+    pub fn hist(&self, i: usize) -> &[Complex32] {
+        let n = self.band.len();
+        &self.spec[i * n..(i + 1) * n]
+    }
+}
+
+/// Smallest and largest distance from `p` to the axis-aligned box of the volume.
+pub fn box_distance_range(p: DVec3, vol: &Volume) -> (f64, f64) {
+    let lo = DVec3::new(
+        vol.x.start.min(vol.x.end),
+        vol.y.start.min(vol.y.end),
+        vol.z.start.min(vol.z.end),
+    );
+    let hi = DVec3::new(
+        vol.x.start.max(vol.x.end),
+        vol.y.start.max(vol.y.end),
+        vol.z.start.max(vol.z.end),
+    );
+    let near = p.clamp(lo, hi);
+    let far = DVec3::new(
+        if (p.x - lo.x).abs() > (p.x - hi.x).abs() {
+            lo.x
+        } else {
+            hi.x
+        },
+        if (p.y - lo.y).abs() > (p.y - hi.y).abs() {
+            lo.y
+        } else {
+            hi.y
+        },
+        if (p.z - lo.z).abs() > (p.z - hi.z).abs() {
+            lo.z
+        } else {
+            hi.z
+        },
+    );
+    ((p - near).length(), (p - far).length())
+}
+
+/// Range of total path (device to device) over all measured pairs and all voxels of `vol`.
+fn path_range(cap: &Capture, vol: &Volume) -> (f64, f64) {
+    let side = |pts: &[DVec3], off: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+        pts.iter()
+            .enumerate()
+            .map(|(i, &p)| {
+                let (a, b) = box_distance_range(p, vol);
+                (a + off(i), b + off(i))
+            })
+            .collect()
+    };
+    let il = side(&cap.illum.points, &|l| cap.first_bounce_m(l));
+    let se = side(&cap.sensor.points, &|s| cap.last_bounce_m(s));
+    match cap.pairing {
+        murk_core::Pairing::Product => {
+            let min = |v: &[(f64, f64)]| v.iter().map(|r| r.0).fold(f64::MAX, f64::min);
+            let max = |v: &[(f64, f64)]| v.iter().map(|r| r.1).fold(f64::MIN, f64::max);
+            (min(&il) + min(&se), max(&il) + max(&se))
+        }
+        murk_core::Pairing::Paired => il
+            .iter()
+            .zip(&se)
+            .fold((f64::MAX, f64::MIN), |(lo, hi), (a, b)| {
+                (lo.min(a.0 + b.0), hi.max(a.1 + b.1))
+            }),
+    }
+}
+
+/// Smallest length ≥ n whose only prime factors are 2, 3, 5 and 7 (fast for rustfft).
+pub fn next_fast_len(n: usize) -> usize {
+    let mut m = n.max(1);
+    loop {
+        let mut r = m;
+        for p in [2, 3, 5, 7] {
+            while r % p == 0 {
+                r /= p;
+            }
+        }
+        if r == 1 {
+            return m;
+        }
+        m += 1;
+    }
+}
+
+/// Crops every histogram to the paths `vol` needs (± the pulse envelope), pads it with zeros (never
+/// wraps), transforms it and keeps the band.
+pub fn prepare(
+    cap: &Capture,
+    vol: &Volume,
+    params: &PfParams,
+    wavelength_m: f64,
+) -> Result<Spectra> {
+    let sigma = params.sigma_m(wavelength_m);
+    let t = cap.time;
+    let dt = t.bin_width_m;
+    let (pmin, pmax) = path_range(cap, vol);
+    let margin = ENVELOPE_SIGMAS * sigma;
+    // Bin n represents path start + (n + ½)Δs.
+    let want_lo = ((pmin - margin - t.start_m) / dt - 0.5).floor() as i64;
+    let want_hi = ((pmax + margin - t.start_m) / dt - 0.5).ceil() as i64 + 1;
+    let i_lo = want_lo.clamp(0, t.bins as i64) as usize;
+    let i_hi = want_hi.clamp(0, t.bins as i64) as usize;
+    let truncated = want_lo < 0 || want_hi > t.bins as i64;
+    let pad = (margin / dt).ceil() as usize + 1;
+    // The window the volume needs, not the data we have, sets the period: reads never alias.
+    let span_bins = (want_hi - want_lo).max(1) as usize;
+    let nf = next_fast_len(span_bins + 2 * pad);
+    if nf > 1 << 24 {
+        return Err(Error::Limits(format!(
+            "the volume needs {nf} time samples of {dt} m; use a smaller volume or coarser bins"
+        )));
+    }
+    let band = Band::new(nf, dt, wavelength_m, sigma);
+    if band.is_empty() {
+        return Err(Error::param(format!(
+            "no frequency of the virtual pulse (λ = {wavelength_m} m) fits the {dt} m bins"
+        )));
+    }
+    // Padded index 0: the window starts `pad` bins before want_lo.
+    let first_bin = want_lo - pad as i64;
+    let s_pad0 = t.start_m + (first_bin as f64 + 0.5) * dt;
+    let nb = band.len();
+    let mut spec = vec![Complex32::new(0.0, 0.0); cap.n_hist() * nb];
+    let empty = i_lo >= i_hi;
+    if !empty {
+        let fft = RealFftPlanner::<f32>::new().plan_fft_forward(nf);
+        let scale = 1.0 / nf as f64;
+        spec.par_chunks_mut(nb).enumerate().for_each_init(
+            || {
+                (
+                    fft.make_input_vec(),
+                    fft.make_output_vec(),
+                    fft.make_scratch_vec(),
+                )
+            },
+            |(input, output, scratch), (i, out)| {
+                input.iter_mut().for_each(|v| *v = 0.0);
+                let h = cap.histogram(i);
+                let off = (i_lo as i64 - first_bin) as usize;
+                input[off..off + (i_hi - i_lo)].copy_from_slice(&h[i_lo..i_hi]);
+                fft.process_with_scratch(input, output, scratch)
+                    .expect("realfft lengths match their plan");
+                let (l, s) = cap.hist_pair(i);
+                let shift = cap.first_bounce_m(l) + cap.last_bounce_m(s) - s_pad0;
+                for (j, o) in out.iter_mut().enumerate() {
+                    let x = output[band.m_lo + j];
+                    let ph = Complex64::from_polar(band.weights[j] * scale, band.k(j) * shift);
+                    *o = Complex32::new(x.re, x.im) * Complex32::new(ph.re as f32, ph.im as f32);
+                }
+            },
+        );
+    }
+    Ok(Spectra {
+        band,
+        spec,
+        truncated,
+        empty,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn band_matches_tal_table() {
+        // algorithms.md §2.2: 2 m wall / 128 points, λ = 4Δc, cycles 4, Nf = 5104, 1 mm bins → [20, 142].
+        let dc = 2.0 / 127.0;
+        let lambda = 4.0 * dc;
+        let b = Band::new(5104, 0.001, lambda, 4.0 * lambda / 6.0);
+        assert_eq!((b.m_lo, b.m_lo + b.len() - 1), (20, 142));
+        let jc = (5104.0 * 0.001 / lambda).round() as usize - b.m_lo;
+        // W(f_c) = 1 up to the off-grid distance of the nearest bin.
+        assert!((b.weights[jc] - 1.0).abs() < 1e-3, "{}", b.weights[jc]);
+    }
+
+    #[test]
+    fn fast_lengths() {
+        assert_eq!(next_fast_len(5101), 5103);
+        assert_eq!(next_fast_len(263), 270);
+        assert_eq!(next_fast_len(256), 256);
+    }
+
+    #[test]
+    fn box_distances() {
+        let v = Volume::parse("-1:1:3,-1:1:3,1:2:2").unwrap();
+        let (a, b) = box_distance_range(DVec3::ZERO, &v);
+        assert!((a - 1.0).abs() < 1e-12 && (b - 6f64.sqrt()).abs() < 1e-12);
+    }
+}

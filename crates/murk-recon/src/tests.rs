@@ -1,0 +1,452 @@
+//! Reconstruction tests against analytic cases and slow references (algorithms.md §7).
+
+use super::*;
+use murk_core::{Axis, TimeAxis};
+use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
+use rustfft::num_complex::Complex64;
+
+const POINT: DVec3 = DVec3::new(0.1, -0.2, 0.5);
+
+fn capture(kind: LayoutKind, start_m: f64, devices: bool) -> Capture {
+    let layout = CaptureLayout {
+        kind,
+        wall_size_m: 1.0,
+        grid: 32,
+        point: DVec3::new(0.05, -0.03, 0.0),
+        time: TimeAxis {
+            start_m,
+            bin_width_m: 0.004,
+            bins: 1400,
+        },
+        laser_xyz: devices.then_some(DVec3::new(-0.8, 0.3, -1.2)),
+        sensor_xyz: devices.then_some(DVec3::new(0.6, -0.4, -1.5)),
+    };
+    let mut cap = layout.empty_capture().unwrap();
+    let sc = Target::Point {
+        pos: POINT,
+        albedo: 1.0,
+    }
+    .scatterers()
+    .unwrap();
+    add_first_bounce(&mut cap, &sc, &SynthOptions::default()).unwrap();
+    cap
+}
+
+/// The wall's own lattice in x, y (32 pixel centres of a 1 m wall) and 21 depths 0.3..0.7.
+fn aligned_volume() -> Volume {
+    let c = 0.5 - 0.5 / 32.0;
+    Volume {
+        x: Axis::new(-c, c, 32),
+        y: Axis::new(-c, c, 32),
+        z: Axis::new(0.3, 0.7, 21),
+    }
+}
+
+fn argmax(r: &Reconstruction) -> [usize; 3] {
+    let i = r
+        .intensity
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .unwrap()
+        .0;
+    let v = &r.volume;
+    [i / (v.y.n * v.z.n), (i / v.z.n) % v.y.n, i % v.z.n]
+}
+
+fn nearest(axis: &Axis, x: f64) -> usize {
+    (0..axis.n)
+        .min_by(|&a, &b| (axis.at(a) - x).abs().total_cmp(&(axis.at(b) - x).abs()))
+        .unwrap()
+}
+
+fn assert_localised(r: &Reconstruction, what: &str) {
+    let got = argmax(r);
+    let v = &r.volume;
+    let want = [
+        nearest(&v.x, POINT.x),
+        nearest(&v.y, POINT.y),
+        nearest(&v.z, POINT.z),
+    ];
+    for k in 0..3 {
+        assert!(
+            got[k].abs_diff(want[k]) <= 1,
+            "{what}: peak at voxel {got:?}, point at {want:?}"
+        );
+    }
+}
+
+fn run(cap: &Capture, vol: &Volume, method: Method) -> Reconstruction {
+    reconstruct(cap, vol, &PfParams::default(), method, &NoProgress).unwrap()
+}
+
+/// Relative L2 distance between two intensity volumes, each normalised to its maximum.
+fn rel_l2(a: &[f32], b: &[f32]) -> f64 {
+    let (ma, mb) = (
+        a.iter().cloned().fold(0.0, f32::max) as f64,
+        b.iter().cloned().fold(0.0, f32::max) as f64,
+    );
+    let (mut num, mut den) = (0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        let (x, y) = (*x as f64 / ma, *y as f64 / mb);
+        num += (x - y) * (x - y);
+        den += y * y;
+    }
+    (num / den).sqrt()
+}
+
+#[test]
+fn point_found_for_every_capture_kind_fast_and_exact() {
+    let vol = aligned_volume();
+    for kind in [
+        LayoutKind::LaserGridSinglePoint,
+        LayoutKind::SinglePointSensorGrid,
+        LayoutKind::Confocal,
+    ] {
+        for (start, devices) in [(0.0, false), (0.2371, true)] {
+            let cap = capture(kind, start, devices);
+            for method in [Method::Fast, Method::Exact] {
+                let r = run(&cap, &vol, method);
+                assert_eq!(
+                    r.info.evaluated_with,
+                    if method == Method::Fast {
+                        "fast"
+                    } else {
+                        "exact"
+                    }
+                );
+                assert_localised(
+                    &r,
+                    &format!("{kind:?} start {start} devices {devices} {method:?}"),
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn exhaustive_point_found() {
+    let layout = CaptureLayout {
+        kind: LayoutKind::Exhaustive,
+        wall_size_m: 1.0,
+        grid: 8,
+        point: DVec3::ZERO,
+        time: TimeAxis {
+            start_m: 0.0,
+            bin_width_m: 0.004,
+            bins: 700,
+        },
+        laser_xyz: None,
+        sensor_xyz: None,
+    };
+    let mut cap = layout.empty_capture().unwrap();
+    add_first_bounce(
+        &mut cap,
+        &Target::Point {
+            pos: POINT,
+            albedo: 1.0,
+        }
+        .scatterers()
+        .unwrap(),
+        &SynthOptions::default(),
+    )
+    .unwrap();
+    let c = 0.5 - 0.5 / 8.0;
+    let vol = Volume {
+        x: Axis::new(-c, c, 8),
+        y: Axis::new(-c, c, 8),
+        z: Axis::new(0.3, 0.7, 11),
+    };
+    let fast = run(&cap, &vol, Method::Fast);
+    let exact = run(&cap, &vol, Method::Exact);
+    assert_localised(&fast, "exhaustive fast");
+    assert!(rel_l2(&fast.intensity, &exact.intensity) < 1e-2);
+}
+
+#[test]
+fn fast_equals_exact_for_smaller_larger_finer_and_offset_volumes() {
+    let cap = capture(LayoutKind::LaserGridSinglePoint, 0.1, true);
+    let c = 0.5 - 0.5 / 32.0;
+    let d = 1.0 / 32.0;
+    let cases = [
+        ("aligned", aligned_volume()),
+        (
+            "smaller, aligned",
+            Volume {
+                x: Axis::new(-0.25 - d / 2.0, 0.25 + d / 2.0, 17),
+                y: Axis::new(-c + 3.0 * d, c - 9.0 * d, 20),
+                z: Axis::new(0.4, 0.6, 11),
+            },
+        ),
+        (
+            "larger than the wall",
+            Volume {
+                x: Axis::new(-0.8, 0.8, 40),
+                y: Axis::new(-0.7, 0.7, 37),
+                z: Axis::new(0.45, 0.55, 6),
+            },
+        ),
+        (
+            "finer",
+            Volume {
+                x: Axis::new(-0.1, 0.3, 41),
+                y: Axis::new(-0.4, 0.0, 41),
+                z: Axis::new(0.48, 0.52, 5),
+            },
+        ),
+        (
+            "coarser, off-lattice",
+            Volume {
+                x: Axis::new(-0.47, 0.47, 19),
+                y: Axis::new(-0.41, 0.43, 15),
+                z: Axis::new(0.3, 0.7, 9),
+            },
+        ),
+    ];
+    for (what, vol) in cases {
+        let fast = run(&cap, &vol, Method::Fast);
+        let exact = run(&cap, &vol, Method::Exact);
+        let e = rel_l2(&fast.intensity, &exact.intensity);
+        assert!(e <= 1e-2, "{what}: relative L2 {e}");
+    }
+}
+
+/// The frequency-domain voxel sum (algorithms.md §1.4 B), the slowest and most literal form.
+fn oracle(cap: &Capture, vol: &Volume, params: &PfParams) -> Vec<Complex64> {
+    let lambda = match params.wavelength {
+        Wavelength::Metres(l) => l,
+        Wavelength::WallFactor(f) => f * wall_spacing_m(cap).unwrap(),
+    };
+    let sp = spectrum::prepare(cap, vol, params, lambda).unwrap();
+    let mut out = Vec::new();
+    for ix in 0..vol.x.n {
+        for iy in 0..vol.y.n {
+            for iz in 0..vol.z.n {
+                let v = vol.centre(ix, iy, iz);
+                let mut acc = Complex64::default();
+                for h in 0..cap.n_hist() {
+                    let (l, s) = cap.hist_pair(h);
+                    let (dl, ds) = (
+                        (v - cap.illum.points[l]).length(),
+                        (v - cap.sensor.points[s]).length(),
+                    );
+                    let a = if params.falloff == Falloff::InvR {
+                        1.0 / (dl * ds)
+                    } else {
+                        1.0
+                    };
+                    for (j, x) in sp.hist(h).iter().enumerate() {
+                        acc += Complex64::new(x.re as f64, x.im as f64)
+                            * Complex64::from_polar(a, sp.band.k(j) * (dl + ds));
+                    }
+                }
+                out.push(acc);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn fast_matches_frequency_domain_oracle_on_the_lattice() {
+    // Random-looking data (not a point), so every voxel and frequency is exercised.
+    let mut cap = capture(LayoutKind::SinglePointSensorGrid, 0.05, true);
+    for (i, v) in cap.h.iter_mut().enumerate() {
+        *v = ((i * 7919 % 1000) as f32 / 1000.0 - 0.5) * 0.01;
+    }
+    let c = 0.5 - 0.5 / 32.0;
+    let d = 1.0 / 32.0;
+    let vol = Volume {
+        x: Axis::new(-c + 4.0 * d, -c + 11.0 * d, 8),
+        y: Axis::new(c - 5.0 * d, c, 6),
+        z: Axis::new(0.5, 0.6, 2),
+    };
+    for falloff in [Falloff::None, Falloff::InvR] {
+        let params = PfParams {
+            falloff,
+            ..PfParams::default()
+        };
+        let fast = reconstruct(&cap, &vol, &params, Method::Fast, &NoProgress).unwrap();
+        let want = oracle(&cap, &vol, &params);
+        let scale = want.iter().map(|w| w.norm()).fold(0.0, f64::max);
+        for (f, w) in fast.field.iter().zip(&want) {
+            let err = (Complex64::new(f.re as f64, f.im as f64) - w).norm() / scale;
+            assert!(err < 2e-4, "{falloff:?}: error {err} of the peak");
+        }
+    }
+}
+
+#[test]
+fn reciprocity_and_linearity() {
+    let cap = capture(LayoutKind::LaserGridSinglePoint, 0.1, true);
+    let vol = Volume {
+        x: Axis::new(-0.2, 0.3, 9),
+        y: Axis::new(-0.4, 0.0, 8),
+        z: Axis::new(0.45, 0.55, 3),
+    };
+    let a = run(&cap, &vol, Method::Fast);
+    let b = run(&cap.swapped_roles(), &vol, Method::Fast);
+    let peak = a.field.iter().map(|u| u.norm()).fold(0.0, f32::max);
+    for (x, y) in a.field.iter().zip(&b.field) {
+        assert!((x - y).norm() <= 1e-4 * peak);
+    }
+    // U(2·H1 + 3·H2) = 2·U(H1) + 3·U(H2).
+    let mut other = cap.clone();
+    other
+        .h
+        .iter_mut()
+        .enumerate()
+        .for_each(|(i, v)| *v = (i % 13) as f32 * 1e-3);
+    let mut mix = cap.clone();
+    mix.h
+        .iter_mut()
+        .zip(&other.h)
+        .for_each(|(m, o)| *m = 2.0 * *m + 3.0 * o);
+    let u2 = run(&other, &vol, Method::Fast);
+    let um = run(&mix, &vol, Method::Fast);
+    let scale = um.field.iter().map(|u| u.norm()).fold(0.0, f32::max);
+    for ((m, x), y) in um.field.iter().zip(&a.field).zip(&u2.field) {
+        assert!((m - (x * 2.0 + y * 3.0)).norm() <= 1e-4 * scale);
+    }
+}
+
+/// Full width at half maximum of a 1-D profile, with linear interpolation at the crossings.
+fn fwhm(profile: &[f64], step: f64) -> f64 {
+    let (imax, &max) = profile
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .unwrap();
+    let half = max / 2.0;
+    let cross = |dir: isize| -> f64 {
+        let mut i = imax as isize;
+        while (i + dir) >= 0
+            && ((i + dir) as usize) < profile.len()
+            && profile[(i + dir) as usize] > half
+        {
+            i += dir;
+        }
+        let j = i + dir;
+        assert!(
+            j >= 0 && (j as usize) < profile.len(),
+            "profile does not fall to half maximum"
+        );
+        let (a, b) = (profile[i as usize], profile[j as usize]);
+        i as f64 + dir as f64 * (a - half) / (a - b)
+    };
+    (cross(1) - cross(-1)) * step
+}
+
+#[test]
+fn doubling_the_wavelength_doubles_lateral_and_depth_widths() {
+    let cap = capture(LayoutKind::LaserGridSinglePoint, 0.0, false);
+    let vol_x = Volume {
+        x: Axis::new(-0.4, 0.6, 201),
+        y: Axis::new(POINT.y, POINT.y, 1),
+        z: Axis::new(POINT.z, POINT.z, 1),
+    };
+    let vol_z = Volume {
+        x: Axis::new(POINT.x, POINT.x, 1),
+        y: Axis::new(POINT.y, POINT.y, 1),
+        z: Axis::new(0.2, 0.8, 301),
+    };
+    let widths = |factor: f64| {
+        let params = PfParams {
+            wavelength: Wavelength::WallFactor(factor),
+            ..PfParams::default()
+        };
+        let w = |vol: &Volume, step: f64| {
+            let r = reconstruct(&cap, vol, &params, Method::Fast, &NoProgress).unwrap();
+            fwhm(
+                &r.intensity.iter().map(|&v| v as f64).collect::<Vec<_>>(),
+                step,
+            )
+        };
+        (w(&vol_x, vol_x.x.step()), w(&vol_z, vol_z.z.step()))
+    };
+    let (lat1, dep1) = widths(4.0);
+    let (lat2, dep2) = widths(8.0);
+    let sigma = 4.0 * (4.0 / 32.0) / 6.0;
+    // algorithms.md §7.2 #11–12: depth FWHM ≈ 0.83–0.89 σ; both widths scale ×(1.8–2.2) with λ.
+    assert!(
+        (0.7..1.1).contains(&(dep1 / sigma)),
+        "depth FWHM {dep1} vs σ {sigma}"
+    );
+    assert!(
+        (1.8..2.2).contains(&(lat2 / lat1)),
+        "lateral {lat1} → {lat2}"
+    );
+    assert!((1.8..2.2).contains(&(dep2 / dep1)), "depth {dep1} → {dep2}");
+}
+
+#[test]
+fn bad_parameters_are_refused_with_a_reason() {
+    let cap = capture(LayoutKind::LaserGridSinglePoint, 0.0, false);
+    let vol = aligned_volume();
+    let p = PfParams {
+        wavelength: Wavelength::WallFactor(1.5),
+        ..PfParams::default()
+    };
+    let e = reconstruct(&cap, &vol, &p, Method::Fast, &NoProgress)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("Nyquist"), "{e}");
+    let conf = capture(LayoutKind::Confocal, 0.0, false);
+    let p = PfParams {
+        wavelength: Wavelength::WallFactor(3.0),
+        ..PfParams::default()
+    };
+    assert!(reconstruct(&conf, &vol, &p, Method::Fast, &NoProgress).is_err());
+    let behind = Volume {
+        z: Axis::new(-0.1, 0.5, 3),
+        ..vol
+    };
+    assert!(reconstruct(
+        &cap,
+        &behind,
+        &PfParams::default(),
+        Method::Fast,
+        &NoProgress
+    )
+    .is_err());
+    let mut nan = cap.clone();
+    nan.h[5] = f32::NAN;
+    assert!(
+        reconstruct(&nan, &vol, &PfParams::default(), Method::Fast, &NoProgress)
+            .unwrap_err()
+            .to_string()
+            .contains("non-finite")
+    );
+}
+
+#[test]
+fn truncated_window_is_padded_not_wrapped() {
+    // Data that stop just after the point's earliest arrival: the peak must stay at the point and the
+    // voxels whose paths lie beyond the data must stay dark (no wrapped energy).
+    let mut cap = capture(LayoutKind::LaserGridSinglePoint, 0.0, false);
+    let keep = 320; // 1.28 m of path: the point's returns span about 1.0–1.3 m.
+    let nt = cap.time.bins;
+    let mut h = Vec::with_capacity(cap.n_hist() * keep);
+    for i in 0..cap.n_hist() {
+        h.extend_from_slice(&cap.histogram(i)[..keep]);
+    }
+    assert_eq!(nt, 1400);
+    cap.h = h;
+    cap.time.bins = keep;
+    let r = run(&cap, &aligned_volume(), Method::Fast);
+    assert!(r
+        .info
+        .warnings
+        .iter()
+        .any(|w| w.contains("part of the paths")));
+    let far = Volume {
+        z: Axis::new(1.0, 1.2, 3),
+        ..aligned_volume()
+    };
+    let f = run(&cap, &far, Method::Fast);
+    let peak = r.intensity.iter().cloned().fold(0.0, f32::max);
+    assert!(
+        f.intensity.iter().all(|&v| v <= 1e-6 * peak),
+        "energy leaked beyond the window"
+    );
+}
