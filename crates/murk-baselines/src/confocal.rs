@@ -178,3 +178,44 @@ fn round_trip_offset(capture: &Capture, i: usize) -> f64 {
     let (l, s) = capture.hist_pair(i);
     capture.first_bounce_m(l) + capture.last_bounce_m(s)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{axis, confocal};
+    use murk_core::DVec3;
+
+    #[test]
+    fn samples_are_bin_averages_at_wall_relative_paths() {
+        let mut c = confocal(2, 0.2, axis(0.25, 0.01, 20));
+        c.laser_xyz = Some(DVec3::new(0.05, 0.05, -0.1));
+        c.sensor_xyz = Some(DVec3::new(0.05, 0.05, -0.1));
+        c.t_accounts_first_and_last_bounces = true;
+        // Scan point 3 is (0.05, 0.05): both wall legs are 0.1 m, so bin 4 (paths [0.29, 0.30) m)
+        // holds wall-relative paths [0.09, 0.10) m.
+        c.h[3 * 20 + 4] = 1.0;
+        let g = ConfocalGeometry::new(&c, TimeGrid::Native).unwrap();
+        // The latest wall-relative path among all scan points decides the length: 0.45 − 2·0.1 m.
+        assert_eq!(g.nt, 25);
+        let s = g.sample(&c);
+        let col = &s[3 * g.nt..][..g.nt];
+        // Sample k is the box [k − ½, k + ½]·Δs: samples 9 and 10 each see half of the bin.
+        for (k, &v) in col.iter().enumerate() {
+            let want = if k == 9 || k == 10 { 0.5 } else { 0.0 };
+            assert!((v - want).abs() < 1e-5, "sample {k}: {v}");
+        }
+        // Resampled to 5 cm: the bin falls inside the box of sample 2 ([0.075, 0.125) m), averaged.
+        let g = ConfocalGeometry::new(
+            &c,
+            TimeGrid::Resample {
+                max_path_m: 0.3,
+                bins: 6,
+            },
+        )
+        .unwrap();
+        let s = g.sample(&c);
+        assert!(
+            (s[3 * 6 + 2] - 0.2).abs() < 1e-5 && s[3 * 6..][..6].iter().sum::<f32>() - 0.2 < 1e-5
+        );
+    }
+}

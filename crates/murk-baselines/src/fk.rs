@@ -157,3 +157,61 @@ impl Stolt {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{add_plane, add_point, assert_plane_depth, axis, confocal};
+    use murk_core::DVec3;
+
+    /// Scan point (16, 16) of a 32² grid over 0.64 m is at (0.01, 0.01).
+    const ON_GRID: f64 = 0.01;
+
+    #[test]
+    fn point_at_half_a_metre_is_at_depth_index_100() {
+        // algorithms.md §7.2 #18: z = 0.5 m, Δs = 1 cm, M = 256, N = 32.
+        let mut c = confocal(32, 0.64, axis(0.0, 0.01, 256));
+        add_point(&mut c, DVec3::new(ON_GRID, ON_GRID, 0.5));
+        let r = fk(&c, FkParams::default()).unwrap();
+        assert_eq!(r.argmax(), [16, 16, 100]);
+        assert!((r.volume.z.at(100) - 0.5).abs() < 1e-12);
+        assert_eq!(r.volume.shape(), [32, 32, 256]);
+    }
+
+    #[test]
+    fn time_offsets_and_wall_legs_are_removed() {
+        // Same point, but the time axis starts at 2.2371 m and includes laser→wall and wall→SPAD.
+        let mut c = confocal(32, 0.64, axis(2.2371, 0.01, 256));
+        c.laser_xyz = Some(DVec3::new(0.5, -0.3, -1.2));
+        c.sensor_xyz = Some(DVec3::new(-0.4, 0.2, -1.0));
+        c.t_accounts_first_and_last_bounces = true;
+        add_point(&mut c, DVec3::new(ON_GRID, ON_GRID, 0.5));
+        let r = fk(&c, FkParams::default()).unwrap();
+        assert_eq!(r.argmax(), [16, 16, 100]);
+    }
+
+    #[test]
+    fn plane_comes_out_at_its_depth() {
+        let mut c = confocal(16, 0.64, axis(0.0, 0.01, 128));
+        add_plane(&mut c, 0.3, 0.48, 24);
+        let r = fk(&c, FkParams::default()).unwrap();
+        assert_plane_depth(&r, 60, 4);
+    }
+
+    #[test]
+    fn plan_rejects_another_geometry() {
+        let c = confocal(8, 0.64, axis(0.0, 0.01, 64));
+        let plan = FkPlan::new(&c, FkParams::default()).unwrap();
+        let e = plan
+            .run(&confocal(8, 0.64, axis(0.0, 0.02, 64)))
+            .unwrap_err();
+        assert!(e.to_string().contains("plan was built for"), "{e}");
+        let mut single = confocal(8, 0.64, axis(0.0, 0.01, 64));
+        single.pairing = murk_core::Pairing::Product;
+        single.sensor = murk_core::PointSet::single(DVec3::ZERO);
+        assert!(fk(&single, FkParams::default())
+            .unwrap_err()
+            .to_string()
+            .contains("confocal"));
+    }
+}

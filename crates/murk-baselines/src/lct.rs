@@ -205,3 +205,50 @@ impl Resampler {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil::{add_plane, add_point, assert_plane_depth, axis, confocal};
+    use murk_core::DVec3;
+
+    #[test]
+    fn point_at_half_a_metre_is_within_one_voxel_of_index_100() {
+        // algorithms.md §7.2 #17: z = 0.5 m, Δs = 1 cm, M = 256, N = 32; scan point (16, 16).
+        let mut c = confocal(32, 0.64, axis(0.0, 0.01, 256));
+        add_point(&mut c, DVec3::new(0.01, 0.01, 0.5));
+        let r = lct(&c, LctParams::default()).unwrap();
+        let [ix, iy, k] = r.argmax();
+        // The integer-centred PSF keeps the lateral position exact.
+        assert_eq!([ix, iy], [16, 16]);
+        assert!(k.abs_diff(100) <= 1, "depth index {k}");
+    }
+
+    #[test]
+    fn plane_comes_out_at_its_depth() {
+        // 100 bins: not a power of two, so the plan pads to M = 128 and crops back.
+        let mut c = confocal(16, 0.64, axis(0.0, 0.01, 100));
+        add_plane(&mut c, 0.3, 0.48, 24);
+        let r = lct(&c, LctParams::default()).unwrap();
+        assert_eq!(r.volume.shape(), [16, 16, 100]);
+        assert_plane_depth(&r, 60, 4);
+    }
+
+    #[test]
+    fn resampler_rows_hold_the_weights_of_their_fine_rows() {
+        let m = 8;
+        let r = Resampler::new(m);
+        // Row sums: (1/M) Σ_{j in block} 1/√j; every t sample is used.
+        for (i, row) in r.rows.iter().enumerate() {
+            let want: f64 = (i * m + 1..=(i + 1) * m)
+                .map(|j| 1.0 / (j as f64).sqrt())
+                .sum::<f64>()
+                / m as f64;
+            let got: f64 = row.iter().map(|&(_, w)| w as f64).sum();
+            assert!((got - want).abs() < 1e-6, "row {i}: {got} vs {want}");
+        }
+        let mut used = vec![false; m];
+        r.rows.iter().flatten().for_each(|&(c, _)| used[c] = true);
+        assert!(used.iter().all(|&u| u));
+    }
+}

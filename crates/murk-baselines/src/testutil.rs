@@ -1,5 +1,6 @@
 //! Synthetic confocal captures for the tests: point scatterers splatted linearly around bin centres.
 
+use crate::Reconstruction;
 use murk_core::{Capture, DVec3, Pairing, PointSet, TimeAxis};
 
 /// A confocal scan of `n × n` points over a `wall` m square centred on the origin, with empty histograms.
@@ -57,6 +58,25 @@ pub fn add_plane(c: &mut Capture, z: f64, side: f64, n: usize) {
         for j in 0..n {
             let f = |k: usize| -side / 2.0 + side * (k as f64 + 0.5) / n as f64;
             add_point(c, DVec3::new(f(i), f(j), z));
+        }
+    }
+}
+
+/// Every column of the central region (`margin` columns in from each side) has its depth maximum
+/// within ±1 sample of `k`.
+pub fn assert_plane_depth(r: &Reconstruction, k: usize, margin: usize) {
+    let [nx, ny, nz] = r.volume.shape();
+    for ix in margin..nx - margin {
+        for iy in margin..ny - margin {
+            let col = &r.data[r.volume.index(ix, iy, 0)..][..nz];
+            let kmax = col
+                .iter()
+                .enumerate()
+                .fold(0, |b, (i, &v)| if v > col[b] { i } else { b });
+            assert!(
+                kmax.abs_diff(k) <= 1,
+                "column ({ix}, {iy}): depth index {kmax}, expected {k}"
+            );
         }
     }
 }
