@@ -10,9 +10,18 @@
 
 mod atomic;
 mod h5;
+mod mat;
+mod npy;
+mod scene_info;
 mod tal;
+mod volume;
 
+pub use atomic::write_atomic;
+pub use mat::{read_mat_v5_array, read_mat_v73_array};
+pub use npy::{read_npy_f32, read_npy_f32_with_limit, write_npy_f32};
+pub use scene_info::scene_info_summary;
 pub use tal::{
     read_capture, read_capture_with_limit, write_capture, write_capture_compressed,
     DEFAULT_READ_LIMIT_BYTES, TAL_FIELDS,
 };
+pub use volume::{write_volume_h5, AttrValue};

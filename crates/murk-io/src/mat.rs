@@ -1,0 +1,156 @@
+//! MATLAB `.mat` imports for real captures. Both readers return the array in MATLAB's own shape
+//! (as `scipy.io.loadmat` or MATLAB's `size` report it) with the values in C (row-major) order over
+//! that shape. For a capture stored as MATLAB `t × a × b`, element (t, a, b) is at
+//! `(t·A + a)·B + b`. The CDT `meas` arrays (h5py shape (32, 32, 512)) come back as shape
+//! [512, 32, 32] = (t, a, b), the same array as the CDT code's `np.array(f['meas']).transpose(2, 1, 0)`.
+
+use crate::h5;
+use crate::npy::fortran_to_c;
+use crate::tal::DEFAULT_READ_LIMIT_BYTES;
+use murk_core::{Error, Result};
+use std::path::Path;
+
+/// What the first bytes of a file say it is.
+#[derive(PartialEq)]
+enum Kind {
+    V5,
+    V73,
+    Other,
+}
+
+fn sniff(path: &Path) -> Result<Kind> {
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut head = [0u8; 128];
+    let n = h5::read_prefix(&mut f, &mut head).map_err(|e| Error::io(path, e))?;
+    let head = &head[..n];
+    Ok(if head.starts_with(b"MATLAB 7.3 MAT-file") {
+        Kind::V73
+    } else if head.starts_with(b"MATLAB 5.0 MAT-file") {
+        Kind::V5
+    } else if hdf5_pure::is_hdf5(path).map_err(|e| Error::io(path, e))? {
+        Kind::V73
+    } else {
+        Kind::Other
+    })
+}
+
+fn missing_var(path: &Path, var: &str, present: &[String]) -> Error {
+    Error::format(
+        path,
+        format!(
+            "no variable '{var}' (variables present: {})",
+            if present.is_empty() {
+                "none".to_string()
+            } else {
+                present.join(", ")
+            }
+        ),
+    )
+}
+
+/// Reads numeric variable `var` of a MATLAB v7.3 (HDF5-based) `.mat` file as f32.
+pub fn read_mat_v73_array(path: &Path, var: &str) -> Result<(Vec<usize>, Vec<f32>)> {
+    match sniff(path)? {
+        Kind::V5 => {
+            return Err(Error::format(
+                path,
+                "this is a MATLAB v5 .mat file (not HDF5-based v7.3); use read_mat_v5_array",
+            ))
+        }
+        Kind::Other => {
+            return Err(Error::format(
+                path,
+                "not a MATLAB v7.3 .mat file (no HDF5 signature)",
+            ))
+        }
+        Kind::V73 => {}
+    }
+    let file = h5::open(path)?;
+    let names = h5::root_datasets(path, &file)?;
+    if !names.iter().any(|n| n == var) {
+        return Err(missing_var(path, var, &names));
+    }
+    let ds = h5::dataset(path, &file, var)?;
+    let (h5_shape, data) = h5::read_real::<f32>(path, &ds, var, DEFAULT_READ_LIMIT_BYTES)?;
+    // HDF5 stores MATLAB's column-major array with the axes reversed.
+    let shape: Vec<usize> = h5_shape.iter().rev().copied().collect();
+    let data = fortran_to_c(&shape, &data);
+    Ok((shape, data))
+}
+
+/// Reads numeric variable `var` of a MATLAB v5 (v6/v7, non-HDF5) `.mat` file as f32, e.g. the
+/// LCT data's `rect_data` (N × N × T uint16) or the scalar `width` (shape [1, 1]).
+pub fn read_mat_v5_array(path: &Path, var: &str) -> Result<(Vec<usize>, Vec<f32>)> {
+    match sniff(path)? {
+        Kind::V73 => {
+            return Err(Error::format(
+                path,
+                "this is a MATLAB v7.3 (HDF5) file; use read_mat_v73_array",
+            ))
+        }
+        Kind::Other => {
+            return Err(Error::format(
+                path,
+                "not a MATLAB v5 .mat file (no 'MATLAB 5.0 MAT-file' header)",
+            ))
+        }
+        Kind::V5 => {}
+    }
+    let len = std::fs::metadata(path)
+        .map_err(|e| Error::io(path, e))?
+        .len();
+    if len > DEFAULT_READ_LIMIT_BYTES {
+        return Err(Error::Limits(format!(
+            "{}: {} MiB .mat file is over the read limit",
+            path.display(),
+            len >> 20
+        )));
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let mat = h5::guarded(path, || {
+        matfile::MatFile::parse(bytes.as_slice())
+            .map_err(|e| Error::format(path, format!("truncated or corrupt MATLAB v5 file ({e})")))
+    })?;
+    let Some(arr) = mat.find_by_name(var) else {
+        let names: Vec<String> = mat.arrays().iter().map(|a| a.name().to_string()).collect();
+        return Err(missing_var(path, var, &names));
+    };
+    use matfile::NumericData as D;
+    let complex = || {
+        Error::Unsupported(format!(
+            "{}: variable '{var}' is complex; murk reads real arrays",
+            path.display()
+        ))
+    };
+    macro_rules! real {
+        ($real:expr, $imag:expr) => {{
+            if $imag.is_some() {
+                return Err(complex());
+            }
+            $real.iter().map(|&v| v as f32).collect::<Vec<f32>>()
+        }};
+    }
+    let col_major = match arr.data() {
+        D::Int8 { real, imag } => real!(real, imag),
+        D::UInt8 { real, imag } => real!(real, imag),
+        D::Int16 { real, imag } => real!(real, imag),
+        D::UInt16 { real, imag } => real!(real, imag),
+        D::Int32 { real, imag } => real!(real, imag),
+        D::UInt32 { real, imag } => real!(real, imag),
+        D::Int64 { real, imag } => real!(real, imag),
+        D::UInt64 { real, imag } => real!(real, imag),
+        D::Single { real, imag } => real!(real, imag),
+        D::Double { real, imag } => real!(real, imag),
+    };
+    let shape = arr.size().clone();
+    if shape.iter().product::<usize>() != col_major.len() {
+        return Err(Error::format(
+            path,
+            format!(
+                "variable '{var}' declares size {shape:?} but holds {} values",
+                col_major.len()
+            ),
+        ));
+    }
+    Ok((shape.clone(), fortran_to_c(&shape, &col_major)))
+}
