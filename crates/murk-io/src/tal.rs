@@ -191,7 +191,7 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
         Error::Limits(format!(
             "{}: cannot allocate {} MiB for H",
             path.display(),
-            tal_h.len() * 4 >> 20
+            (tal_h.len() * 4) >> 20
         ))
     })?;
     h.resize(tal_h.len(), 0.0);

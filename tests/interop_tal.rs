@@ -1,0 +1,507 @@
+//! Interoperability with the real y-tal package (PyPI `y-tal`, read for behaviour only).
+//!
+//! Python is `$MURK_PYTHON` or `<repo>/.venv/bin/python` (`.ci/run` creates it). Without a Python
+//! that imports `tal` and `h5py` the tests print "skipped: <why>" and pass.
+//!
+//! Python and Rust exchange values as text lines `key shape values...`: floats are printed with
+//! `repr`, which round-trips f32 and f64 exactly, so every comparison below is exact.
+
+use murk_core::{Capture, DVec3, Pairing, PointLayout, PointSet, TimeAxis};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn python() -> Result<PathBuf, String> {
+    let py = std::env::var_os("MURK_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
+    let out = Command::new(&py)
+        .args(["-c", "import tal, h5py"])
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", py.display()))?;
+    if !out.status.success() {
+        return Err(format!(
+            "{} cannot import tal and h5py: {}",
+            py.display(),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    Ok(py)
+}
+
+fn run_python(py: &Path, script: &str, args: &[&Path]) -> String {
+    let out = Command::new(py)
+        .arg("-c")
+        .arg(script)
+        .args(args)
+        .output()
+        .expect("run python");
+    assert!(
+        out.status.success(),
+        "python failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("utf-8")
+}
+
+fn tmpdir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("murk-interop-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Values Python printed for one file: numeric fields (shape, values) and word fields.
+#[derive(Default, Debug)]
+struct Fields {
+    num: HashMap<String, (Vec<usize>, Vec<f64>)>,
+    word: HashMap<String, String>,
+}
+
+impl Fields {
+    fn num(&self, k: &str) -> &(Vec<usize>, Vec<f64>) {
+        self.num
+            .get(k)
+            .unwrap_or_else(|| panic!("python printed no {k}"))
+    }
+    fn word(&self, k: &str) -> &str {
+        self.word
+            .get(k)
+            .unwrap_or_else(|| panic!("python printed no {k}"))
+    }
+}
+
+/// Parses blocks `FILE <name>` followed by `N <key> <shape,csv> <v>...` and `W <key> <word>` lines.
+fn parse(out: &str) -> HashMap<String, Fields> {
+    let mut all: HashMap<String, Fields> = HashMap::new();
+    let mut cur = String::new();
+    for line in out.lines() {
+        let mut it = line.splitn(3, ' ');
+        match (it.next(), it.next(), it.next()) {
+            (Some("FILE"), Some(name), _) => {
+                cur = name.to_string();
+                all.entry(cur.clone()).or_default();
+            }
+            (Some("N"), Some(k), Some(rest)) => {
+                let mut parts = rest.split(' ');
+                let shape = parts
+                    .next()
+                    .unwrap()
+                    .split(',')
+                    .filter(|s| !s.is_empty())
+                    .map(|s| s.parse().unwrap())
+                    .collect();
+                let vals = parts.map(|v| v.parse().unwrap()).collect();
+                all.get_mut(&cur)
+                    .unwrap()
+                    .num
+                    .insert(k.into(), (shape, vals));
+            }
+            (Some("W"), Some(k), Some(w)) => {
+                all.get_mut(&cur).unwrap().word.insert(k.into(), w.into());
+            }
+            _ => panic!("unexpected python output line: {line}"),
+        }
+    }
+    all
+}
+
+const EMIT: &str = r#"
+import sys, json, numpy as np, h5py
+def N(k, a):
+    a = np.asarray(a)
+    print('N', k, ','.join(map(str, a.shape)), *[repr(float(v)) for v in a.ravel()])
+def W(k, w):
+    print('W', k, w)
+"#;
+
+fn points_of(set: &PointSet) -> Vec<f64> {
+    set.points
+        .iter()
+        .flat_map(|p| [p.x as f32 as f64, p.y as f32 as f64, p.z as f32 as f64])
+        .collect()
+}
+
+fn normals_of(set: &PointSet) -> Vec<f64> {
+    set.normals
+        .iter()
+        .flat_map(|p| [p.x as f32 as f64, p.y as f32 as f64, p.z as f32 as f64])
+        .collect()
+}
+
+/// murk's H (histogram-major) in tal's time-first order.
+fn h_time_first(c: &Capture) -> Vec<f64> {
+    let (nt, nh) = (c.time.bins, c.n_hist());
+    (0..nt * nh)
+        .map(|j| c.h[(j % nh) * nt + j / nh] as f64)
+        .collect()
+}
+
+/// (a) y-tal writes captures of every layout; murk reads every field.
+#[test]
+fn murk_reads_captures_written_by_tal() {
+    let py = match python() {
+        Ok(p) => p,
+        Err(why) => return println!("skipped: {why}"),
+    };
+    let dir = tmpdir("a");
+    let script = format!(
+        "{EMIT}{}",
+        r#"
+import tal, tal.enums as E
+from tal.io.capture_data import NLOSCaptureData
+out = sys.argv[1]
+rng = np.random.default_rng(7)
+def grid(nx, ny, z=0.0):
+    x, y = np.meshgrid(np.linspace(-1, 1, nx), np.linspace(-0.5, 0.5, ny), indexing='ij')
+    return np.stack([x, y, np.full_like(x, z)], axis=-1).astype(np.float32)
+def normals(shape):
+    n = np.zeros(shape, np.float32); n[..., 2] = 1; n[..., 0] = 0.25
+    return n
+def make(name, H, hf, sgrid, lgrid, level=0, t_acc=False, t_start=0.0, xyz=False):
+    d = NLOSCaptureData()
+    d.H = H.astype(np.float32); d.H_format = hf
+    d.sensor_grid_xyz = sgrid; d.sensor_grid_normals = normals(sgrid.shape)
+    d.sensor_grid_format = E.GridFormat.X_Y_3 if sgrid.ndim == 3 else E.GridFormat.N_3
+    d.laser_grid_xyz = lgrid; d.laser_grid_normals = normals(lgrid.shape)
+    d.laser_grid_format = E.GridFormat.X_Y_3 if lgrid.ndim == 3 else E.GridFormat.N_3
+    if xyz:
+        d.laser_xyz = np.array([-0.5, 0.25, 1.5], np.float32)
+        d.sensor_xyz = np.array([0.75, -0.125, 2.0], np.float32)
+    d.delta_t = np.float32(0.0031); d.t_start = np.float32(t_start)
+    d.t_accounts_first_and_last_bounces = t_acc
+    d.scene_info = {'name': name, 'shape': np.arange(3), 'fmt': E.GroundTruthFormat.X_Y,
+                    'config': {'num_bins': int(H.shape[0]), 'scan': name}}
+    path = f'{out}/{name}.hdf5'
+    tal.io.write_capture(path, d, compression_level=level)
+    r = h5py.File(path, 'r')
+    print('FILE', name)
+    N('H', r['H'][()])
+    for side in ('sensor', 'laser'):
+        N(side + '_grid_xyz', r[side + '_grid_xyz'][()])
+        N(side + '_grid_normals', r[side + '_grid_normals'][()])
+    for k in ('laser_xyz', 'sensor_xyz'):
+        if isinstance(r[k][()], h5py.Empty): W(k, 'none')
+        else: N(k, r[k][()])
+    N('delta_t', r['delta_t'][()]); N('t_start', r['t_start'][()])
+    W('t_acc', str(bool(r['t_accounts_first_and_last_bounces'][()])))
+    W('scene_info_hex', r['scene_info'][()].hex())
+g = grid(4, 3)
+make('single', rng.random((9, 4, 3)), E.HFormat.T_Sx_Sy, g, np.array([[[0.1, 0.2, 0.0]]], np.float32))
+make('confocal', rng.random((9, 4, 3)), E.HFormat.T_Sx_Sy, g, g.copy(), t_acc=True, t_start=1.25, xyz=True)
+make('exhaustive', rng.random((8, 2, 3, 4, 3)), E.HFormat.T_Lx_Ly_Sx_Sy, g, grid(2, 3, 0.0))
+make('exhaustive_gzip', rng.random((8, 2, 3, 4, 3)), E.HFormat.T_Lx_Ly_Sx_Sy, g, grid(2, 3, 0.0), level=4)
+make('laser_grid_one_spad', rng.random((8, 2, 3, 1, 1)), E.HFormat.T_Lx_Ly_Sx_Sy, grid(1, 1), grid(2, 3))
+u = rng.random((5, 3)).astype(np.float32)
+make('unstructured_confocal', rng.random((6, 5)), E.HFormat.T_Si, u, u.copy(), level=4, t_start=-0.5)
+make('unstructured_single', rng.random((6, 5)), E.HFormat.T_Si, u, np.zeros((1, 3), np.float32))
+make('unstructured_exhaustive', rng.random((6, 2, 5)), E.HFormat.T_Li_Si, u, rng.random((2, 3)).astype(np.float32))
+"#
+    );
+    let printed = parse(&run_python(&py, &script, &[&dir]));
+    let expect: [(&str, Pairing, bool, bool); 8] = [
+        // name, pairing, illum is a grid, sensor is a grid
+        ("single", Pairing::Product, true, true),
+        ("confocal", Pairing::Paired, true, true),
+        ("exhaustive", Pairing::Product, true, true),
+        ("exhaustive_gzip", Pairing::Product, true, true),
+        ("laser_grid_one_spad", Pairing::Product, true, true),
+        ("unstructured_confocal", Pairing::Paired, false, false),
+        ("unstructured_single", Pairing::Product, false, false),
+        ("unstructured_exhaustive", Pairing::Product, false, false),
+    ];
+    assert_eq!(printed.len(), expect.len());
+    for (name, pairing, illum_grid, sensor_grid) in expect {
+        let f = &printed[name];
+        let c = murk_io::read_capture(&dir.join(format!("{name}.hdf5")))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let (hs, hv) = f.num("H");
+        assert_eq!(c.time.bins, hs[0], "{name}: bins");
+        assert_eq!(h_time_first(&c), *hv, "{name}: H");
+        assert_eq!(c.pairing, pairing, "{name}: pairing");
+        for (set, side, is_grid) in [
+            (&c.sensor, "sensor", sensor_grid),
+            (&c.illum, "laser", illum_grid),
+        ] {
+            let (gs, gv) = f.num(&format!("{side}_grid_xyz"));
+            assert_eq!(points_of(set), *gv, "{name}: {side} points");
+            assert_eq!(
+                normals_of(set),
+                f.num(&format!("{side}_grid_normals")).1,
+                "{name}"
+            );
+            match set.layout {
+                PointLayout::Grid { nx, ny } => {
+                    assert!(is_grid, "{name}: {side}");
+                    assert_eq!(gs[..], [nx, ny, 3], "{name}: {side} grid shape");
+                }
+                PointLayout::List => {
+                    assert!(!is_grid, "{name}: {side}");
+                    assert_eq!(gs[..], [set.len(), 3], "{name}: {side} list shape");
+                }
+            }
+        }
+        for (k, v) in [("laser_xyz", c.laser_xyz), ("sensor_xyz", c.sensor_xyz)] {
+            match v {
+                None => assert_eq!(f.word(k), "none", "{name}: {k}"),
+                Some(p) => assert_eq!(f.num(k).1, vec![p.x, p.y, p.z], "{name}: {k}"),
+            }
+        }
+        assert_eq!(c.time.bin_width_m, f.num("delta_t").1[0], "{name}: delta_t");
+        assert_eq!(c.time.start_m, f.num("t_start").1[0], "{name}: t_start");
+        assert_eq!(
+            c.t_accounts_first_and_last_bounces.to_string(),
+            f.word("t_acc").to_lowercase(),
+            "{name}: t_accounts"
+        );
+        let hex: String = c.scene_info.bytes().map(|b| format!("{b:02x}")).collect();
+        assert_eq!(hex, f.word("scene_info_hex"), "{name}: scene_info");
+        let summary = murk_io::scene_info_summary(&c.scene_info);
+        let keys: Vec<&str> = summary.iter().map(|(k, _)| k.as_str()).collect();
+        assert_eq!(
+            keys,
+            ["config", "fmt", "name", "shape"],
+            "{name}: {summary:?}"
+        );
+        assert_eq!(summary[2].1, name, "{name}");
+        c.validate().unwrap();
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+fn grid(nx: usize, ny: usize, z: f64) -> PointSet {
+    let mut points = Vec::new();
+    for ix in 0..nx {
+        for iy in 0..ny {
+            points.push(DVec3::new(ix as f64 * 0.25 - 0.5, iy as f64 * 0.125, z));
+        }
+    }
+    PointSet {
+        normals: vec![DVec3::new(0.0, 0.5, 1.0); points.len()],
+        points,
+        layout: PointLayout::Grid { nx, ny },
+    }
+}
+
+fn list(n: usize) -> PointSet {
+    PointSet {
+        points: (0..n)
+            .map(|i| DVec3::new(i as f64 * 0.375, 0.0625 * i as f64, 0.5))
+            .collect(),
+        normals: vec![DVec3::Z; n],
+        layout: PointLayout::List,
+    }
+}
+
+fn capture(illum: PointSet, sensor: PointSet, pairing: Pairing) -> Capture {
+    let mut c = Capture {
+        illum,
+        sensor,
+        laser_xyz: None,
+        sensor_xyz: None,
+        time: TimeAxis {
+            start_m: 0.5,
+            bin_width_m: 0.00390625,
+            bins: 6,
+        },
+        t_accounts_first_and_last_bounces: false,
+        pairing,
+        h: Vec::new(),
+        scene_info: "name: murk\nvalues:\n- 1\n- 2.5\n".into(),
+    };
+    c.h = (0..c.n_hist() * c.time.bins)
+        .map(|i| (i as f32 * 0.73).cos())
+        .collect();
+    c
+}
+
+/// (b) murk writes captures of every kind; y-tal reads every field.
+#[test]
+fn tal_reads_captures_written_by_murk() {
+    let py = match python() {
+        Ok(p) => p,
+        Err(why) => return println!("skipped: {why}"),
+    };
+    let dir = tmpdir("b");
+    let mut confocal = capture(grid(3, 2, 0.0), grid(3, 2, 0.0), Pairing::Paired);
+    confocal.t_accounts_first_and_last_bounces = true;
+    confocal.laser_xyz = Some(DVec3::new(-1.0, 0.5, 2.0));
+    confocal.sensor_xyz = Some(DVec3::new(1.0, 0.25, 2.5));
+    confocal.time.start_m = -0.75;
+    // (name, capture, H_format, laser grid format, sensor grid format, is_confocal, paired)
+    let cases: Vec<(&str, Capture, &str, &str, &str, bool, bool)> = vec![
+        (
+            "confocal", confocal, "T_Sx_Sy", "X_Y_3", "X_Y_3", true, true,
+        ),
+        (
+            "paired",
+            capture(grid(3, 2, 0.0), grid(3, 2, 0.25), Pairing::Paired),
+            "T_Sx_Sy",
+            "X_Y_3",
+            "X_Y_3",
+            false,
+            true,
+        ),
+        (
+            "single",
+            capture(
+                PointSet::single(DVec3::new(0.25, 0.5, 0.0)),
+                grid(4, 3, 0.0),
+                Pairing::Product,
+            ),
+            "T_Sx_Sy",
+            "X_Y_3",
+            "X_Y_3",
+            false,
+            false,
+        ),
+        (
+            "laser_grid_one_spad",
+            capture(
+                grid(3, 2, 0.0),
+                PointSet::single(DVec3::ZERO),
+                Pairing::Product,
+            ),
+            "T_Lx_Ly_Sx_Sy",
+            "X_Y_3",
+            "X_Y_3",
+            false,
+            false,
+        ),
+        (
+            "exhaustive",
+            capture(grid(2, 3, 0.0), grid(3, 2, 0.0), Pairing::Product),
+            "T_Lx_Ly_Sx_Sy",
+            "X_Y_3",
+            "X_Y_3",
+            false,
+            false,
+        ),
+        (
+            "unstructured_confocal",
+            capture(list(5), list(5), Pairing::Paired),
+            "T_Si",
+            "N_3",
+            "N_3",
+            true,
+            true,
+        ),
+        (
+            "unstructured_single",
+            capture(list(1), list(5), Pairing::Product),
+            "T_Si",
+            "N_3",
+            "N_3",
+            false,
+            false,
+        ),
+        (
+            "unstructured_exhaustive",
+            capture(list(2), list(4), Pairing::Product),
+            "T_Li_Si",
+            "N_3",
+            "N_3",
+            false,
+            false,
+        ),
+    ];
+    let mut paths = Vec::new();
+    for (i, (name, c, ..)) in cases.iter().enumerate() {
+        let p = dir.join(format!("{name}.hdf5"));
+        murk_io::write_capture_compressed(&p, c, if i % 2 == 0 { 0 } else { 4 }).unwrap();
+        paths.push(p);
+    }
+    let script = format!(
+        "{EMIT}{}",
+        r#"
+import os, tal, warnings
+for path in sys.argv[1:]:
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        d = tal.io.read_capture(path)
+    print('FILE', os.path.basename(path)[:-5])
+    r = h5py.File(path, 'r')
+    W('H_dtype', r['H'].dtype)
+    W('H_format_enum', json.dumps(h5py.check_enum_dtype(r['H_format'].dtype), sort_keys=True).replace(' ', ''))
+    W('grid_enum', json.dumps(h5py.check_enum_dtype(r['laser_grid_format'].dtype), sort_keys=True).replace(' ', ''))
+    W('bool_dtype', r['t_accounts_first_and_last_bounces'].dtype)
+    W('keys', ','.join(sorted(r.keys())))
+    N('H', d.H)
+    W('H_format', d.H_format.name)
+    for side in ('sensor', 'laser'):
+        N(side + '_grid_xyz', d.__dict__[side + '_grid_xyz'])
+        N(side + '_grid_normals', d.__dict__[side + '_grid_normals'])
+        W(side + '_grid_format', d.__dict__[side + '_grid_format'].name)
+    for k in ('laser_xyz', 'sensor_xyz'):
+        v = getattr(d, k, None)
+        if v is None: W(k, 'none')
+        else: N(k, v)
+    N('delta_t', d.delta_t); N('t_start', d.t_start)
+    W('t_acc', type(d.t_accounts_first_and_last_bounces).__name__ + ':' + str(d.t_accounts_first_and_last_bounces))
+    W('scene_info', json.dumps(d.scene_info, sort_keys=True).replace(' ', ''))
+    W('is_confocal', d.is_confocal())
+    W('paired', d.is_laser_paired_to_sensor())
+"#
+    );
+    let args: Vec<&Path> = paths.iter().map(|p| p.as_path()).collect();
+    let printed = parse(&run_python(&py, &script, &args));
+    for (name, c, hf, lf, sf, confocal, paired) in &cases {
+        let f = &printed[*name];
+        assert_eq!(f.word("H_dtype"), "float32", "{name}");
+        assert_eq!(
+            f.word("H_format_enum"),
+            r#"{"T_Li_Si":4,"T_Lx_Ly_Sx_Sy":2,"T_Si":3,"T_Sx_Sy":1,"UNKNOWN":0}"#,
+            "{name}"
+        );
+        assert_eq!(f.word("grid_enum"), r#"{"N_3":1,"UNKNOWN":0,"X_Y_3":2}"#);
+        assert_eq!(f.word("bool_dtype"), "bool", "{name}");
+        for k in f.word("keys").split(',') {
+            assert!(murk_io::TAL_FIELDS.contains(&k), "{name}: extra key {k}");
+        }
+        let (hs, hv) = f.num("H");
+        assert_eq!(hs[0], c.time.bins, "{name}");
+        assert_eq!(*hv, h_time_first(c), "{name}: H");
+        assert_eq!(f.word("H_format"), *hf, "{name}");
+        assert_eq!(f.word("laser_grid_format"), *lf, "{name}");
+        assert_eq!(f.word("sensor_grid_format"), *sf, "{name}");
+        for (set, side) in [(&c.sensor, "sensor"), (&c.illum, "laser")] {
+            let (gs, gv) = f.num(&format!("{side}_grid_xyz"));
+            assert_eq!(*gv, points_of(set), "{name}: {side}");
+            let want_shape = match set.layout {
+                PointLayout::Grid { nx, ny } => vec![nx, ny, 3],
+                PointLayout::List => vec![set.len(), 3],
+            };
+            assert_eq!(*gs, want_shape, "{name}: {side} shape");
+            assert_eq!(f.num(&format!("{side}_grid_normals")).1, normals_of(set));
+        }
+        for (k, v) in [("laser_xyz", c.laser_xyz), ("sensor_xyz", c.sensor_xyz)] {
+            match v {
+                None => assert_eq!(f.word(k), "none", "{name}: {k}"),
+                Some(p) => assert_eq!(f.num(k).1, vec![p.x, p.y, p.z], "{name}: {k}"),
+            }
+        }
+        assert_eq!(f.num("delta_t").1, vec![c.time.bin_width_m], "{name}");
+        assert_eq!(f.num("t_start").1, vec![c.time.start_m], "{name}");
+        let want_bool = if c.t_accounts_first_and_last_bounces {
+            "bool_:True"
+        } else {
+            "bool_:False"
+        };
+        assert_eq!(f.word("t_acc"), want_bool, "{name}");
+        assert_eq!(
+            f.word("scene_info"),
+            r#"{"name":"murk","values":[1,2.5]}"#,
+            "{name}"
+        );
+        assert_eq!(
+            f.word("is_confocal"),
+            if *confocal { "True" } else { "False" },
+            "{name}"
+        );
+        assert_eq!(
+            f.word("paired"),
+            if *paired { "True" } else { "False" },
+            "{name}"
+        );
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
