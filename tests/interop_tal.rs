@@ -505,3 +505,92 @@ for path in sys.argv[1:]:
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// Volumes and `.npy` files murk writes open in h5py/numpy; `.npy` files numpy writes (other
+/// dtypes, Fortran order) and MATLAB v5 files scipy writes open in murk.
+#[test]
+fn volumes_npy_and_mat_v5_with_numpy_scipy() {
+    let py = match python() {
+        Ok(p) => p,
+        Err(why) => return println!("skipped: {why}"),
+    };
+    let dir = tmpdir("c");
+    let vol: Vec<f32> = (0..2 * 3 * 4).map(|i| i as f32 * 0.25).collect();
+    let attrs = [
+        ("method", murk_io::AttrValue::Text("phasor fields".into())),
+        ("wavelength_m", murk_io::AttrValue::Num(0.0625)),
+    ];
+    let (x, y, z) = ([0.0, 0.5], [-1.0, 0.0, 1.0], [1.0, 1.25, 1.5, 1.75]);
+    murk_io::write_volume_h5(&dir.join("v.h5"), [2, 3, 4], &vol, &x, &y, &z, &attrs).unwrap();
+    murk_io::write_npy_f32(&dir.join("v.npy"), &[2, 3, 4], &vol).unwrap();
+    let script = format!(
+        "{EMIT}{}",
+        r#"
+import scipy.io
+d = sys.argv[1]
+print('FILE volume')
+f = h5py.File(d + '/v.h5', 'r')
+N('intensity', f['intensity'][()]); W('dtype', f['intensity'].dtype)
+N('x', f['x'][()]); N('y', f['y'][()]); N('z', f['z'][()])
+W('method', f.attrs['method'].replace(' ', '_') if isinstance(f.attrs['method'], str) else f.attrs['method'].decode().replace(' ', '_'))
+N('wavelength_m', f.attrs['wavelength_m'])
+a = np.load(d + '/v.npy'); N('npy', a); W('npy_dtype', a.dtype)
+a = np.arange(24, dtype=np.float64).reshape(2, 3, 4) / 8
+np.save(d + '/f64.npy', a); np.save(d + '/fortran_u16.npy', np.asfortranarray((a * 8).astype('>u2')))
+np.save(d + '/i32.npy', (a * -8).astype(np.int32))
+rect = (np.arange(4 * 4 * 6) % 7).astype(np.uint16).reshape(4, 4, 6)
+scipy.io.savemat(d + '/lct.mat', {'rect_data': rect, 'width': 0.4})
+scipy.io.savemat(d + '/lct_c.mat', {'rect_data': rect, 'width': 0.4}, do_compression=True)
+print('FILE rect'); N('rect_data', rect)
+"#
+    );
+    let printed = parse(&run_python(&py, &script, &[&dir]));
+    let f = &printed["volume"];
+    let as64 = |v: &[f32]| v.iter().map(|&a| a as f64).collect::<Vec<_>>();
+    assert_eq!(*f.num("intensity"), (vec![2, 3, 4], as64(&vol)));
+    assert_eq!(f.word("dtype"), "float32");
+    assert_eq!(f.num("x").1, x);
+    assert_eq!(f.num("y").1, y);
+    assert_eq!(f.num("z").1, z);
+    assert_eq!(f.word("method"), "phasor_fields");
+    assert_eq!(f.num("wavelength_m").1, vec![0.0625]);
+    assert_eq!(*f.num("npy"), (vec![2, 3, 4], as64(&vol)));
+    assert_eq!(f.word("npy_dtype"), "float32");
+
+    let want: Vec<f32> = (0..24).map(|i| i as f32 / 8.0).collect();
+    let (s, v) = murk_io::read_npy_f32(&dir.join("f64.npy")).unwrap();
+    assert_eq!((s, v), (vec![2, 3, 4], want.clone()));
+    let (s, v) = murk_io::read_npy_f32(&dir.join("fortran_u16.npy")).unwrap();
+    assert_eq!(s, vec![2, 3, 4]);
+    assert_eq!(v, (0..24).map(|i| i as f32).collect::<Vec<_>>());
+    let (_, v) = murk_io::read_npy_f32(&dir.join("i32.npy")).unwrap();
+    assert_eq!(v, (0..24).map(|i| -(i as f32)).collect::<Vec<_>>());
+
+    let (rs, rv) = printed["rect"].num("rect_data");
+    for file in ["lct.mat", "lct_c.mat"] {
+        let p = dir.join(file);
+        let (s, v) = murk_io::read_mat_v5_array(&p, "rect_data").unwrap();
+        assert_eq!((&s, &as64(&v)), (rs, rv), "{file}");
+        let (s, v) = murk_io::read_mat_v5_array(&p, "width").unwrap();
+        assert_eq!((s, v), (vec![1, 1], vec![0.4f32]), "{file}");
+        let e = murk_io::read_mat_v5_array(&p, "meas")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("variables present") && e.contains("rect_data") && e.contains("width"),
+            "{e}"
+        );
+        let e = murk_io::read_mat_v73_array(&p, "rect_data")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("use read_mat_v5_array"), "{e}");
+        let bytes = std::fs::read(&p).unwrap();
+        let cut = dir.join("cut.mat");
+        std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+        let e = murk_io::read_mat_v5_array(&cut, "rect_data")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cut.mat") && !e.contains('\n'), "{e}");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}

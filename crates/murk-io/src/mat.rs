@@ -154,3 +154,47 @@ pub fn read_mat_v5_array(path: &Path, var: &str) -> Result<(Vec<usize>, Vec<f32>
     }
     Ok((shape.clone(), fortran_to_c(&shape, &col_major)))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CDT: &str = "/work/shared/data/real/cdt_lindell2020";
+
+    /// The real CDT capture matches its lossless `.npy` copy (made with h5py + transpose(2, 1, 0)).
+    #[test]
+    fn cdt_letter_s_matches_npy_copy() {
+        let mat = Path::new(CDT).join("letter_s.mat");
+        if !mat.exists() {
+            return println!("skipped: {} not present", mat.display());
+        }
+        let (shape, data) = read_mat_v73_array(&mat, "meas").unwrap();
+        assert_eq!(shape, vec![512, 32, 32]);
+        let (nshape, ndata) =
+            crate::read_npy_f32(&Path::new(CDT).join("npy/letter_s.meas_t_a_b.u16.npy")).unwrap();
+        assert_eq!(nshape, shape);
+        assert_eq!(ndata, data);
+        let e = read_mat_v73_array(&mat, "nope").unwrap_err().to_string();
+        assert!(e.contains("variables present: meas"), "{e}");
+        let e = read_mat_v5_array(&mat, "meas").unwrap_err().to_string();
+        assert!(
+            e.contains("MATLAB v7.3 (HDF5)") && e.contains("read_mat_v73_array"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn non_mat_files_are_named() {
+        let dir = crate::tal::tests::tmpdir("mat");
+        let p = dir.join("x.mat");
+        std::fs::write(&p, b"MATLAB 5.0 MAT-file, truncated").unwrap();
+        let e = read_mat_v5_array(&p, "a").unwrap_err().to_string();
+        assert!(e.contains("x.mat") && !e.contains('\n'), "{e}");
+        let e = read_mat_v73_array(&p, "a").unwrap_err().to_string();
+        assert!(e.contains("use read_mat_v5_array"), "{e}");
+        std::fs::write(&p, b"hello").unwrap();
+        assert!(read_mat_v5_array(&p, "a").is_err());
+        assert!(read_mat_v73_array(&p, "a").is_err());
+        std::fs::remove_dir_all(dir).ok();
+    }
+}
