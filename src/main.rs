@@ -26,6 +26,16 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Build a capture of a hidden Z letter, reconstruct it and write pictures into murk-demo/.
+    Demo(cmd::demo::DemoArgs),
+    /// Describe a capture file: kind, points, time axis, H statistics, scene_info.
+    Info(cmd::info::InfoArgs),
+    /// Make an analytic capture (first hidden bounce) of points and planar shapes.
+    Synth(cmd::synth::SynthArgs),
+    /// Reconstruct a capture into a volume (.npy / .h5) and pictures.
+    Reconstruct(cmd::reconstruct::ReconstructArgs),
+    /// Measure reconstruction speed (paper format; side by side with y-tal when available).
+    Bench(cmd::bench::BenchArgs),
     /// Render a scene file (scenes/*.toml) into a capture by time-resolved volumetric path tracing.
     Render(cmd::render::RenderArgs),
     /// Sum the parts of a sharded render (`murk render --shard i/N`) into one capture.
@@ -35,6 +45,11 @@ enum Command {
 fn main() {
     let cli = Cli::parse();
     let result: anyhow::Result<()> = match cli.command {
+        Command::Demo(a) => cmd::demo::run(a, cli.quiet),
+        Command::Info(a) => cmd::info::run(a),
+        Command::Synth(a) => cmd::synth::run(a, cli.quiet),
+        Command::Reconstruct(a) => cmd::reconstruct::run(a, cli.quiet),
+        Command::Bench(a) => cmd::bench::run(a, cli.quiet),
         Command::Render(a) => cmd::render::run(a, cli.quiet),
         Command::Merge(a) => cmd::render::run_merge(a, cli.quiet),
     };

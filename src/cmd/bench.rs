@@ -1,0 +1,252 @@
+//! `murk bench`: reconstruction speed on the paper's Z-letter configuration, and side by side with
+//! y-tal's pf_dev on its own benchmark capture when a Python with y-tal is available.
+
+use crate::cmd::progress::say;
+use anyhow::{bail, Context};
+use clap::Args;
+use murk_core::{Axis, DVec3, TimeAxis, Volume};
+use murk_recon::{Method, NoProgress, PfParams, Wavelength};
+use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Timed repetitions per case (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub runs: usize,
+    /// Python interpreter with y-tal installed, for the side-by-side case (default: .venv/bin/python if present).
+    #[arg(long)]
+    pub tal_python: Option<PathBuf>,
+    /// Skip the paper-format Z-letter case.
+    #[arg(long)]
+    pub skip_z: bool,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Peak resident memory of this process so far (Linux), in MiB.
+fn peak_rss_mib() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace()
+        .nth(1)?
+        .parse::<f64>()
+        .ok()
+        .map(|kb| kb / 1024.0)
+}
+
+pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
+    if a.runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    say(
+        quiet,
+        format!(
+            "murk bench: {} rayon threads, median of {} runs",
+            rayon::current_num_threads(),
+            a.runs
+        ),
+    );
+    if !a.skip_z {
+        z_letter(a.runs, quiet)?;
+    }
+    let python = a
+        .tal_python
+        .clone()
+        .or_else(|| Some(PathBuf::from(".venv/bin/python")).filter(|p| p.exists()));
+    match python {
+        Some(py) => versus_tal(&py, a.runs, quiet)?,
+        None => say(
+            quiet,
+            "side by side with y-tal: skipped (no --tal-python and no .venv/bin/python)",
+        ),
+    }
+    Ok(())
+}
+
+/// The paper's synthetic setup: 128 × 128 laser grid on a 2 m wall, one SPAD point at the centre,
+/// 4096 bins of 0.9 mm from 3.5 m, planar Z 2 m away; 73 × 59 × 73 voxels with the fast form.
+fn z_letter(runs: usize, quiet: bool) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let layout = CaptureLayout {
+        kind: LayoutKind::LaserGridSinglePoint,
+        wall_size_m: 2.0,
+        grid: 128,
+        point: DVec3::ZERO,
+        time: TimeAxis {
+            start_m: 3.5,
+            bin_width_m: 0.0009,
+            bins: 4096,
+        },
+        laser_xyz: None,
+        sensor_xyz: None,
+    };
+    let mut cap = layout.empty_capture()?;
+    let z = Target::Polygon {
+        outline: murk_synth::z_letter_outline(),
+        offset: [0.0; 2],
+        depth_m: 2.0,
+        albedo: 1.0,
+        spacing_m: 2.0 / 128.0 / 2.0,
+    };
+    add_first_bounce(
+        &mut cap,
+        &z.scatterers()?,
+        &SynthOptions {
+            cosines: true,
+            ..SynthOptions::default()
+        },
+    )?;
+    let synth_s = t0.elapsed().as_secs_f64();
+    let c = 1.0 - 1.0 / 128.0;
+    let vol = Volume {
+        x: Axis::new(-c, c, 73),
+        y: Axis::new(-c, c, 59),
+        z: Axis::new(1.5, 2.5, 73),
+    };
+    let mut times = Vec::new();
+    let mut rec = None;
+    for _ in 0..runs {
+        let t = Instant::now();
+        rec = Some(murk_recon::reconstruct(
+            &cap,
+            &vol,
+            &PfParams::default(),
+            Method::Fast,
+            &NoProgress,
+        )?);
+        times.push(t.elapsed().as_secs_f64());
+    }
+    let rec = rec.expect("runs ≥ 1");
+    let (p, _) = crate::cmd::reconstruct::peak(&vol, &rec.intensity);
+    say(quiet, format!(
+        "Z letter, 128² laser grid × 4096 bins → 73×59×73 voxels (fast PF, {} frequencies, DFT {}): median {:.3} s (runs {:?}); synthesis {:.2} s; peak depth {:.3} m (Z at 2.000 m); peak RSS {:.0} MiB",
+        rec.info.frequencies,
+        rec.info.dft_len,
+        median(times.clone()),
+        times.iter().map(|t| (t * 1000.0).round() / 1000.0).collect::<Vec<_>>(),
+        synth_s,
+        p[2],
+        peak_rss_mib().unwrap_or(f64::NAN)
+    ));
+    Ok(())
+}
+
+/// y-tal's benchmark case (tal.md §11): 64 × 64 single-laser capture, 512 bins of 1 cm, point at
+/// (0.1, −0.2, 1.0); 32 planes of 64 × 64 at z = 0.85…1.16; λ = σ = 0.06 m. tal's pf_dev needs one call
+/// per plane for several planes (its multi-plane DIRECT_LIGHT path fails), as in its own benchmark.
+fn versus_tal(python: &std::path::Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+    let layout = CaptureLayout {
+        kind: LayoutKind::SinglePointSensorGrid,
+        wall_size_m: 1.0,
+        grid: 64,
+        point: DVec3::ZERO,
+        time: TimeAxis {
+            start_m: 0.0,
+            bin_width_m: 0.01,
+            bins: 512,
+        },
+        laser_xyz: None,
+        sensor_xyz: None,
+    };
+    let mut cap = layout.empty_capture()?;
+    add_first_bounce(
+        &mut cap,
+        &Target::Point {
+            pos: DVec3::new(0.1, -0.2, 1.0),
+            albedo: 1.0,
+        }
+        .scatterers()?,
+        &SynthOptions::default(),
+    )?;
+    let dir = std::env::temp_dir().join(format!("murk-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
+    let file = dir.join("point_single_N64_T512.h5");
+    murk_io::write_capture(&file, &cap)?;
+    let c = 0.5 - 0.5 / 64.0;
+    let vol = Volume {
+        x: Axis::new(-c, c, 64),
+        y: Axis::new(-c, c, 64),
+        z: Axis::new(0.85, 1.16, 32),
+    };
+    // cycles = 6 makes σ = λ = 0.06 m, tal's wl_mean = wl_sigma = 0.06.
+    let params = PfParams {
+        wavelength: Wavelength::Metres(0.06),
+        cycles: 6.0,
+        ..PfParams::default()
+    };
+    let loaded = murk_io::read_capture(&file)?;
+    let mut murk_times = Vec::new();
+    for _ in 0..runs.max(3) {
+        let t = Instant::now();
+        murk_recon::reconstruct(&loaded, &vol, &params, Method::Fast, &NoProgress)?;
+        murk_times.push(t.elapsed().as_secs_f64());
+    }
+    let script = format!(
+        r#"
+import time, json, inspect, numpy as np, tal
+tal.set_log_level(tal.LogLevel.WARNING)
+d = tal.io.read_capture({file:?})
+vol = tal.reconstruct.get_volume_project_rw(d, depths=list(np.round(0.85 + 0.01*np.arange(32), 4)))
+kw = {{}}
+if 'nt' in inspect.signature(tal.reconstruct.pf_dev.solve).parameters:
+    kw['nt'] = d.H.shape[0]
+times = []
+for _ in range({reps}):
+    t = time.perf_counter()
+    for iz in range(vol.shape[2]):
+        tal.reconstruct.pf_dev.solve(d, wl_mean=0.06, wl_sigma=0.06, volume_xyz=vol[:, :, iz:iz+1, :],
+            camera_system=tal.enums.CameraSystem.DIRECT_LIGHT, progress=False, **kw)
+    times.append(time.perf_counter() - t)
+print(json.dumps({{"times": times, "version": tal.__version__}}))
+"#,
+        file = file.display().to_string(),
+        reps = runs.clamp(1, 3)
+    );
+    let out = std::process::Command::new(python)
+        .arg("-c")
+        .arg(&script)
+        .output()
+        .with_context(|| python.display().to_string())?;
+    let _ = std::fs::remove_dir_all(&dir);
+    let murk_med = median(murk_times);
+    if !out.status.success() {
+        say(
+            quiet,
+            format!(
+                "y-tal side by side: skipped ({} could not run tal: {})",
+                python.display(),
+                String::from_utf8_lossy(&out.stderr)
+                    .lines()
+                    .last()
+                    .unwrap_or("")
+            ),
+        );
+        say(
+            quiet,
+            format!("murk on the same case: median {murk_med:.4} s"),
+        );
+        return Ok(());
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text.lines().last().unwrap_or("");
+    let times: Vec<f64> = line
+        .split("\"times\": [")
+        .nth(1)
+        .and_then(|r| r.split(']').next())
+        .map(|l| l.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_default();
+    if times.is_empty() {
+        bail!("could not parse tal's timing output: {line}");
+    }
+    let tal_med = median(times);
+    say(quiet, format!(
+        "64×64×512 single-laser capture → 32 planes of 64×64 (λ = σ = 0.06 m): y-tal pf_dev median {tal_med:.3} s, murk fast PF median {murk_med:.4} s: {:.0}× faster",
+        tal_med / murk_med
+    ));
+    Ok(())
+}

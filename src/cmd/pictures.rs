@@ -1,0 +1,251 @@
+//! Pictures of a reconstructed volume: maximum-intensity projections along each axis and a depth map,
+//! false-coloured, written as PNG with their extents in tEXt chunks, plus a one-page index.html.
+
+use murk_core::{Result, Volume};
+use std::path::{Path, PathBuf};
+
+/// Key colours of a perceptual dark-to-bright map (close to matplotlib's "inferno").
+const INFERNO: [[f32; 3]; 6] = [
+    [0.0, 0.0, 4.0],
+    [66.0, 10.0, 104.0],
+    [147.0, 38.0, 103.0],
+    [221.0, 81.0, 58.0],
+    [252.0, 165.0, 10.0],
+    [252.0, 255.0, 164.0],
+];
+
+/// Colour of `v` ∈ [0, 1].
+fn colour(v: f32) -> [u8; 3] {
+    let x = v.clamp(0.0, 1.0) * (INFERNO.len() - 1) as f32;
+    let i = (x.floor() as usize).min(INFERNO.len() - 2);
+    let f = x - i as f32;
+    let (a, b) = (INFERNO[i], INFERNO[i + 1]);
+    [0, 1, 2].map(|k| (a[k] + (b[k] - a[k]) * f).round() as u8)
+}
+
+/// A 2-D float image, row-major, with what its axes mean.
+pub struct Plane {
+    pub width: usize,
+    pub height: usize,
+    pub values: Vec<f32>,
+    /// e.g. "columns: x from +0.98 m (left) to −0.98 m (right); rows: y from +0.98 m (top) to −0.98 m (bottom)".
+    pub extents: String,
+}
+
+/// The projections murk draws, in the order they appear on the page.
+pub struct Views {
+    pub front: Plane,
+    pub top: Plane,
+    pub side: Plane,
+    /// Depth (m) of the brightest voxel per (x, y), NaN where the front MIP is below 20 % of its maximum.
+    pub depth: Plane,
+}
+
+fn axis_text(name: &str, a: &murk_core::Axis, reversed: bool, from: &str, to: &str) -> String {
+    let (s, e) = if reversed {
+        (a.end, a.start)
+    } else {
+        (a.start, a.end)
+    };
+    format!("{name} from {s:+.3} m ({from}) to {e:+.3} m ({to})")
+}
+
+/// Projections of an intensity volume (C order [nx, ny, nz]). The front view is seen from the wall
+/// looking into the hidden scene (+z), with +y up, so +x is on the left.
+pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
+    let (nx, ny, nz) = (vol.x.n, vol.y.n, vol.z.n);
+    let at = |ix: usize, iy: usize, iz: usize| intensity[vol.index(ix, iy, iz)];
+    // Row r of an image with +y up is iy = ny − 1 − r; column c with +x on the left is ix = nx − 1 − c.
+    let mut front = vec![0f32; nx * ny];
+    let mut depth = vec![f32::NAN; nx * ny];
+    for r in 0..ny {
+        for c in 0..nx {
+            let (ix, iy) = (nx - 1 - c, ny - 1 - r);
+            let (iz, m) = (0..nz)
+                .map(|iz| (iz, at(ix, iy, iz)))
+                .fold((0, f32::MIN), |a, b| if b.1 > a.1 { b } else { a });
+            front[r * nx + c] = m;
+            depth[r * nx + c] = vol.z.at(iz) as f32;
+        }
+    }
+    let fmax = front.iter().cloned().fold(0.0, f32::max);
+    for (d, f) in depth.iter_mut().zip(&front) {
+        if *f < 0.2 * fmax {
+            *d = f32::NAN;
+        }
+    }
+    let mut top = vec![0f32; nz * nx];
+    for r in 0..nz {
+        for c in 0..nx {
+            top[r * nx + c] = (0..ny).map(|iy| at(nx - 1 - c, iy, r)).fold(0.0, f32::max);
+        }
+    }
+    let mut side = vec![0f32; ny * nz];
+    for r in 0..ny {
+        for c in 0..nz {
+            side[r * nz + c] = (0..nx).map(|ix| at(ix, ny - 1 - r, c)).fold(0.0, f32::max);
+        }
+    }
+    let cols_x = axis_text("columns: x", &vol.x, true, "left", "right");
+    let rows_y = axis_text("rows: y", &vol.y, true, "top", "bottom");
+    let rows_z = axis_text("rows: depth z", &vol.z, false, "top", "bottom");
+    let cols_z = axis_text("columns: depth z", &vol.z, false, "left", "right");
+    Views {
+        front: Plane {
+            width: nx,
+            height: ny,
+            values: front,
+            extents: format!("{cols_x}; {rows_y}"),
+        },
+        depth: Plane {
+            width: nx,
+            height: ny,
+            values: depth,
+            extents: format!(
+                "{cols_x}; {rows_y}; colour: depth z from {:.3} m (dark) to {:.3} m (bright)",
+                vol.z.start, vol.z.end
+            ),
+        },
+        top: Plane {
+            width: nx,
+            height: nz,
+            values: top,
+            extents: format!("{cols_x}; {rows_z}"),
+        },
+        side: Plane {
+            width: nz,
+            height: ny,
+            values: side,
+            extents: format!("{cols_z}; {rows_y}"),
+        },
+    }
+}
+
+/// Writes `plane` as an RGB PNG scaled to roughly 384 px on its longer side (nearest neighbour, so voxels
+/// stay visible). Values map [lo, hi] → colour map; NaN is black.
+pub fn write_png(path: &Path, plane: &Plane, lo: f32, hi: f32) -> Result<()> {
+    let scale = (384 / plane.width.max(plane.height)).max(1);
+    let (w, h) = (plane.width * scale, plane.height * scale);
+    let mut rgb = Vec::with_capacity(w * h * 3);
+    for y in 0..h {
+        for x in 0..w {
+            let v = plane.values[(y / scale) * plane.width + x / scale];
+            let c = if v.is_nan() {
+                [0, 0, 0]
+            } else {
+                colour((v - lo) / (hi - lo).max(f32::MIN_POSITIVE))
+            };
+            rgb.extend_from_slice(&c);
+        }
+    }
+    murk_io::write_atomic(path, |out| {
+        let mut enc = png::Encoder::new(out, w as u32, h as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let fail = |e: png::EncodingError| murk_core::Error::format(path, e.to_string());
+        enc.add_text_chunk("murk:extents".into(), plane.extents.clone())
+            .map_err(fail)?;
+        enc.add_text_chunk("murk:range".into(), format!("{lo} .. {hi}"))
+            .map_err(fail)?;
+        let mut wr = enc.write_header().map_err(fail)?;
+        wr.write_image_data(&rgb).map_err(fail)?;
+        wr.finish().map_err(fail)
+    })
+}
+
+/// Writes front.png, top.png, side.png and depth.png into `dir`; returns their paths with captions.
+pub fn write_views(dir: &Path, vol: &Volume, intensity: &[f32]) -> Result<Vec<(PathBuf, String)>> {
+    std::fs::create_dir_all(dir).map_err(|e| murk_core::Error::io(dir, e))?;
+    let v = views(vol, intensity);
+    let max = intensity.iter().cloned().fold(0.0, f32::max);
+    let mut out = Vec::new();
+    for (name, plane, caption) in [
+        (
+            "front.png",
+            &v.front,
+            "front: maximum along depth, seen from the wall",
+        ),
+        ("top.png", &v.top, "top: maximum along y"),
+        ("side.png", &v.side, "side: maximum along x"),
+    ] {
+        let p = dir.join(name);
+        write_png(&p, plane, 0.0, max)?;
+        out.push((p, format!("{caption} ({})", plane.extents)));
+    }
+    let p = dir.join("depth.png");
+    let (z0, z1) = (
+        vol.z.start.min(vol.z.end) as f32,
+        vol.z.start.max(vol.z.end) as f32,
+    );
+    write_png(&p, &v.depth, z0, z1)?;
+    out.push((
+        p,
+        format!("depth of the brightest voxel ({})", v.depth.extents),
+    ));
+    Ok(out)
+}
+
+/// A self-contained page: a parameter table and the pictures (relative links).
+pub fn write_index(
+    dir: &Path,
+    title: &str,
+    params: &[(String, String)],
+    pictures: &[(PathBuf, String)],
+) -> Result<PathBuf> {
+    let esc = |s: &str| {
+        s.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let mut html = format!(
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>{t}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto}}figure{{display:inline-block;margin:.5em;vertical-align:top;max-width:400px}}img{{image-rendering:pixelated;border:1px solid #888}}td{{padding:2px 10px}}</style></head><body><h1>{t}</h1><table>",
+        t = esc(title)
+    );
+    for (k, v) in params {
+        html += &format!("<tr><td>{}</td><td>{}</td></tr>", esc(k), esc(v));
+    }
+    html += "</table>";
+    for (p, caption) in pictures {
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        html += &format!(
+            "<figure><img src=\"{n}\" alt=\"{n}\"><figcaption>{}</figcaption></figure>",
+            esc(caption),
+            n = esc(&name)
+        );
+    }
+    html += "</body></html>\n";
+    let path = dir.join("index.html");
+    murk_io::write_atomic(&path, |w| {
+        w.write_all(html.as_bytes())
+            .map_err(|e| murk_core::Error::io(&path, e))
+    })?;
+    Ok(path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use murk_core::Axis;
+
+    #[test]
+    fn front_view_has_plus_x_on_the_left_and_plus_y_on_top() {
+        let vol = Volume {
+            x: Axis::new(-1.0, 1.0, 3),
+            y: Axis::new(-1.0, 1.0, 2),
+            z: Axis::new(1.0, 2.0, 2),
+        };
+        let mut v = vec![0f32; vol.len()];
+        v[vol.index(2, 1, 1)] = 5.0; // x = +1, y = +1, z = 2
+        let views = views(&vol, &v);
+        assert_eq!(views.front.values[0], 5.0);
+        assert_eq!(views.depth.values[0], 2.0);
+        assert!(views.depth.values[1].is_nan());
+        assert_eq!(views.top.values[1 * 3], 5.0); // row = depth index 1, column 0 = +x
+        assert_eq!(views.side.values[1], 5.0); // row 0 = +y, column = depth index 1
+        assert_eq!(colour(0.0), [0, 0, 4]);
+        assert_eq!(colour(1.0), [252, 255, 164]);
+    }
+}

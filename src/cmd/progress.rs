@@ -1,0 +1,45 @@
+//! Progress bars on stderr for long steps; silent with --quiet or when stderr is not a terminal.
+
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+
+pub struct Bar(ProgressBar);
+
+impl Bar {
+    pub fn new(label: &str, quiet: bool) -> Bar {
+        let pb = if quiet || !std::io::stderr().is_terminal() {
+            ProgressBar::hidden()
+        } else {
+            ProgressBar::new(0)
+        };
+        pb.set_style(
+            ProgressStyle::with_template(
+                "{msg:>12} [{bar:40}] {pos}/{len} ({elapsed} elapsed, ETA {eta})",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        pb.set_message(label.to_string());
+        Bar(pb)
+    }
+    pub fn finish(&self) {
+        self.0.finish_and_clear();
+    }
+}
+
+impl murk_recon::Progress for Bar {
+    fn start(&self, total: u64) {
+        self.0.set_length(total);
+        self.0.set_position(0);
+    }
+    fn advance(&self, n: u64) {
+        self.0.inc(n);
+    }
+}
+
+/// Prints a line unless quiet.
+pub fn say(quiet: bool, line: impl AsRef<str>) {
+    if !quiet {
+        println!("{}", line.as_ref());
+    }
+}
