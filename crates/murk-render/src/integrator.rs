@@ -179,6 +179,72 @@ impl Equiangular {
     }
 }
 
+/// Time-window-aware distance sampling for one target: the connected path length through the point at
+/// distance t, L(t) = t + |o + t·ω − target|, is drawn uniformly over the part of the capture window the
+/// segment can reach, so late bins (the object window behind fog) get as many medium vertices as early
+/// ones. Needs ior = 1 (L is then this closed form).
+struct TimeWindow {
+    c: f64,
+    v2: f64,
+    l_lo: f64,
+    l_hi: f64,
+}
+
+impl TimeWindow {
+    /// `window` is the range of L (path still to go) that lands in the histogram.
+    fn new(
+        o: DVec3,
+        dir: DVec3,
+        target: DVec3,
+        a: f64,
+        b: f64,
+        window: (f64, f64),
+    ) -> Option<Self> {
+        let v = o - target;
+        let (c, v2) = (dir.dot(v), v.length_squared());
+        let l = |t: f64| t + (t * t + 2.0 * t * c + v2).max(0.0).sqrt();
+        let (l_lo, l_hi) = (l(a).max(window.0), l(b).min(window.1));
+        (l_hi > l_lo + 1e-12).then_some(TimeWindow { c, v2, l_lo, l_hi })
+    }
+
+    fn sample(&self, u: f64) -> (f64, f64) {
+        let l = self.l_lo + u * (self.l_hi - self.l_lo);
+        let t = (l * l - self.v2) / (2.0 * (l + self.c));
+        (t, self.pdf(t))
+    }
+
+    fn pdf(&self, t: f64) -> f64 {
+        let r = (t * t + 2.0 * t * self.c + self.v2).max(0.0).sqrt();
+        let l = t + r;
+        if l < self.l_lo || l > self.l_hi || r <= 0.0 {
+            return 0.0;
+        }
+        (1.0 + (t + self.c) / r) / (self.l_hi - self.l_lo)
+    }
+}
+
+/// Per-segment distance samplers toward each target (reused buffers).
+#[derive(Default)]
+struct SegmentSamplers {
+    equi: Vec<Option<Equiangular>>,
+    time: Vec<Option<TimeWindow>>,
+}
+
+impl SegmentSamplers {
+    /// Sum of the connection-technique densities for target k at distance t.
+    fn pdf(&self, k: usize, t: f64) -> f64 {
+        self.equi
+            .get(k)
+            .and_then(|e| e.as_ref())
+            .map_or(0.0, |e| e.pdf(t))
+            + self
+                .time
+                .get(k)
+                .and_then(|e| e.as_ref())
+                .map_or(0.0, |e| e.pdf(t))
+    }
+}
+
 /// Per-scene precomputation shared by all work units.
 pub struct Tracer<'a> {
     scene: &'a Scene,
@@ -250,9 +316,9 @@ impl<'a> Tracer<'a> {
         s: &mut Sampler,
         out: &mut [f64],
     ) {
-        let mut equi = Vec::with_capacity(targets.len());
+        let mut seg = SegmentSamplers::default();
         for _ in 0..spp {
-            self.path(origin, targets, s, out, &mut equi);
+            self.path(origin, targets, s, out, &mut seg);
         }
     }
 
@@ -318,7 +384,7 @@ impl<'a> Tracer<'a> {
         targets: &[Endpoint],
         s: &mut Sampler,
         out: &mut [f64],
-        equi: &mut Vec<Option<Equiangular>>,
+        seg: &mut SegmentSamplers,
     ) {
         let set = &self.scene.settings;
         let bins = self.scene.capture.time.bins;
@@ -340,42 +406,83 @@ impl<'a> Tracer<'a> {
             let hit = self.intersect(pos, d);
             let t_hit = hit.map_or(f64::INFINITY, |h| h.0.t);
             let mut medium_len = 0.0;
+            let mut connected = false;
             if let Some(m) = self.medium() {
                 if let Some((m0, m1)) = m.region.clip(pos, d, t_hit) {
                     medium_len = m1 - m0;
                     let sigma_s = m.sigma_s();
                     if sigma_s > 0.0 {
                         let pdf_ff = |t: f64| m.sigma_t * (-m.sigma_t * (t - m0)).exp();
-                        // Equiangular connections: one medium vertex per target on this segment, MIS-weighted
-                        // (balance heuristic) against the free-flight vertex's connection below.
-                        equi.clear();
+                        // Connections from distances drawn toward each target (equiangular, and uniform in the
+                        // capture's time window), MIS-combined (balance heuristic) with each other and with the
+                        // free-flight vertex's connection below.
+                        seg.equi.clear();
+                        seg.time.clear();
                         if set.equiangular {
-                            equi.extend(
+                            seg.equi.extend(
                                 targets
                                     .iter()
                                     .map(|t| Equiangular::new(pos, d, t.p, m0, m1)),
                             );
                         }
-                        for (k, e) in equi.iter().enumerate() {
-                            let Some(e) = e else { continue };
-                            let (t, pdf) = e.sample(s.next());
-                            if !(t >= m0 && t <= m1 && pdf > 0.0) {
-                                continue;
+                        if set.time_sampling && m.ior == 1.0 {
+                            let tw = &self.scene.capture.time;
+                            seg.time.extend(targets.iter().map(|t| {
+                                let base = opl + t.extra_m;
+                                TimeWindow::new(
+                                    pos,
+                                    d,
+                                    t.p,
+                                    m0,
+                                    m1,
+                                    (tw.start_m - base, tw.end_m() - base),
+                                )
+                            }));
+                        }
+                        for k in 0..targets.len() {
+                            let draws = [
+                                seg.equi
+                                    .get(k)
+                                    .and_then(|e| e.as_ref())
+                                    .map(|e| e.sample(s.next())),
+                                seg.time
+                                    .get(k)
+                                    .and_then(|e| e.as_ref())
+                                    .map(|e| e.sample(s.next())),
+                            ];
+                            for (t, pdf) in draws.into_iter().flatten() {
+                                if !(t >= m0 && t <= m1 && pdf > 0.0) {
+                                    continue;
+                                }
+                                let b = beta * sigma_s * (-m.sigma_t * (t - m0)).exp() / pdf;
+                                let w = pdf / (seg.pdf(k, t) + pdf_ff(t));
+                                let o = opl + t + (m.ior - 1.0) * (t - m0);
+                                let v = Vertex::Medium { dir: d };
+                                self.connect(
+                                    pos + d * t,
+                                    &v,
+                                    b,
+                                    o,
+                                    &targets[k..=k],
+                                    |_| w,
+                                    s,
+                                    &mut out[k * bins..],
+                                );
                             }
-                            let b = beta * sigma_s * (-m.sigma_t * (t - m0)).exp() / pdf;
-                            let w = pdf / (pdf + pdf_ff(t));
-                            let o = opl + t + (m.ior - 1.0) * (t - m0);
-                            let v = Vertex::Medium { dir: d };
-                            self.connect(
-                                pos + d * t,
-                                &v,
-                                b,
-                                o,
-                                &targets[k..=k],
-                                |_| w,
-                                s,
-                                &mut out[k * bins..],
-                            );
+                        }
+                        // The surface the segment reaches is connected now, weighted by the segment's
+                        // transmittance (the expected value of free flight's pass/scatter choice), so every
+                        // path toward the hidden object contributes its return; a pass below does not connect
+                        // again.
+                        if let Some((h, false)) = hit {
+                            let tr = (-m.sigma_t * medium_len).exp();
+                            let v = Vertex::Surface {
+                                n: h.n,
+                                albedo: h.albedo,
+                            };
+                            let o = opl + h.t + (m.ior - 1.0) * medium_len;
+                            self.connect(pos + d * h.t, &v, beta * tr, o, targets, |_| 1.0, s, out);
+                            connected = true;
                         }
                         // Free flight: scatter with density σt·exp(−σt·(t − m0)), else cross (weight T/P = 1).
                         let t = m0 - (1.0 - s.next()).ln() / m.sigma_t;
@@ -385,10 +492,7 @@ impl<'a> Tracer<'a> {
                             opl += t + (m.ior - 1.0) * (t - m0);
                             beta *= m.albedo;
                             let pff = pdf_ff(t);
-                            let mis = |k: usize| match equi.get(k) {
-                                Some(Some(e)) => pff / (pff + e.pdf(t)),
-                                _ => 1.0,
-                            };
+                            let mis = |k: usize| pff / (pff + seg.pdf(k, t));
                             self.connect(
                                 pos,
                                 &Vertex::Medium { dir: d },
@@ -416,7 +520,7 @@ impl<'a> Tracer<'a> {
             pos += d * h.t;
             opl += h.t + self.medium().map_or(0.0, |m| (m.ior - 1.0) * medium_len);
             // A vertex on the relay is coplanar with every target: its connections vanish.
-            if !on_relay {
+            if !on_relay && !connected {
                 let v = Vertex::Surface {
                     n: h.n,
                     albedo: h.albedo,

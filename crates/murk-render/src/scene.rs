@@ -104,6 +104,9 @@ pub struct RenderDef {
     pub hidden_geometry_sampling: f64,
     /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight.
     pub equiangular: bool,
+    /// Medium distances drawn so the connected path lands uniformly in the capture's time window (MIS-combined
+    /// with equiangular and free flight); used where the medium's ior is 1.
+    pub time_sampling: bool,
     pub trace_from: TraceFrom,
 }
 
@@ -114,8 +117,9 @@ impl Default for RenderDef {
             max_depth: 8,
             rr_depth: 5,
             time_jitter: 0.0,
-            hidden_geometry_sampling: 0.5,
+            hidden_geometry_sampling: 0.8,
             equiangular: true,
+            time_sampling: false,
             trace_from: TraceFrom::Auto,
         }
     }

@@ -252,9 +252,9 @@ fn reciprocity_laser_and_sensor_tracing_agree() {
         ))
     };
     let (la, se) = (mk("laser"), mk("sensor"));
-    let a = render(&la, 20_000, 4).h;
+    let a = render(&la, 80_000, 4).h;
     let a2 = render(&la, 20_000, 5).h;
-    let b = render(&se, 180_000, 6).h;
+    let b = render(&se, 720_000, 6).h;
     for hist in 0..9 {
         let sum = |h: &[f32]| {
             h[hist * 30..(hist + 1) * 30]
