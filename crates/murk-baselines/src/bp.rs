@@ -7,7 +7,7 @@
 //! truncates it, too) biases every depth by half a bin of path.
 
 use crate::Reconstruction;
-use murk_core::{Capture, Error, Pairing, Result, Volume};
+use murk_core::{Capture, CaptureKind, DVec3, Error, Pairing, Result, Volume};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -32,52 +32,66 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
     let inv = 1.0 / t.bin_width_m;
     let offset = t.start_m * inv + 0.5;
 
+    // Confocal scans need one distance per voxel and scan point, not two.
+    let confocal = capture.kind() == CaptureKind::Confocal;
     let mut data = vec![0.0f32; volume.len()];
     data.par_chunks_mut(nz).enumerate().for_each_init(
-        || (vec![0.0f64; nz], vec![0.0f64; nz], vec![0.0f64; ns * nz]),
-        |(acc, leg, sensor_legs), (col, out)| {
+        || ColumnScratch::new(nz, ns),
+        |sc, (col, out)| {
             let (x, y) = (volume.x.at(col / volume.y.n), volume.y.at(col % volume.y.n));
-            acc.fill(0.0);
             // Distance from wall point p to voxel (x, y, z_k), for every k of this column.
-            let legs = |p: murk_core::DVec3, e: f64, out: &mut [f64]| {
+            let legs = |p: DVec3, out: &mut [f64]| {
                 let rho2 = (p.x - x).powi(2) + (p.y - y).powi(2);
                 for (o, &zk) in out.iter_mut().zip(&z) {
-                    *o = e + (rho2 + (zk - p.z).powi(2)).sqrt();
+                    *o = (rho2 + (zk - p.z).powi(2)).sqrt();
                 }
             };
+            sc.acc.fill(0.0);
             match capture.pairing {
                 Pairing::Paired => {
                     for i in 0..nl {
-                        legs(capture.illum.points[i], e_l[i], leg);
-                        legs(capture.sensor.points[i], e_s[i], sensor_legs);
-                        let h = capture.histogram(i);
-                        accumulate(
-                            acc,
-                            h,
-                            leg,
-                            &sensor_legs[..nz],
-                            inv,
-                            offset,
+                        legs(capture.illum.points[i], &mut sc.leg);
+                        if !confocal {
+                            legs(capture.sensor.points[i], &mut sc.sensor_legs[..nz]);
+                        }
+                        let ds = if confocal {
+                            &sc.leg
+                        } else {
+                            &sc.sensor_legs[..nz]
+                        };
+                        paths(
+                            &mut sc.path,
+                            &mut sc.weight,
+                            &sc.leg,
+                            ds,
+                            e_l[i] + e_s[i],
                             opts,
-                            e_l[i],
-                            e_s[i],
                         );
+                        sc.accumulate(capture.histogram(i), inv, offset, opts);
                     }
                 }
                 Pairing::Product => {
-                    for (s, dst) in sensor_legs.chunks_mut(nz).enumerate() {
-                        legs(capture.sensor.points[s], e_s[s], dst);
+                    for (s, dst) in sc.sensor_legs.chunks_mut(nz).enumerate() {
+                        legs(capture.sensor.points[s], dst);
                     }
                     for l in 0..nl {
-                        legs(capture.illum.points[l], e_l[l], leg);
-                        for (s, ds) in sensor_legs.chunks(nz).enumerate() {
-                            let h = capture.histogram(l * ns + s);
-                            accumulate(acc, h, leg, ds, inv, offset, opts, e_l[l], e_s[s]);
+                        legs(capture.illum.points[l], &mut sc.leg);
+                        for s in 0..ns {
+                            let ds = &sc.sensor_legs[s * nz..][..nz];
+                            paths(
+                                &mut sc.path,
+                                &mut sc.weight,
+                                &sc.leg,
+                                ds,
+                                e_l[l] + e_s[s],
+                                opts,
+                            );
+                            sc.accumulate(capture.histogram(l * ns + s), inv, offset, opts);
                         }
                     }
                 }
             }
-            for (o, a) in out.iter_mut().zip(acc.iter()) {
+            for (o, a) in out.iter_mut().zip(&sc.acc) {
                 *o = *a as f32;
             }
         },
@@ -88,41 +102,62 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
     })
 }
 
-/// Adds H at paths `dl[k] + ds[k]` (each leg including its wall bounce `el`/`es`) to `acc[k]`.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn accumulate(
-    acc: &mut [f64],
-    h: &[f32],
-    dl: &[f64],
-    ds: &[f64],
-    inv: f64,
-    offset: f64,
-    opts: BpOptions,
-    el: f64,
-    es: f64,
-) {
-    let last = h.len() as f64 - 1.0;
-    for ((a, &l), &s) in acc.iter_mut().zip(dl).zip(ds) {
-        let u = (l + s) * inv - offset;
-        if !(u > -1.0 && u < last + 1.0) {
-            continue;
+/// Full paths `e + d_l + d_s` and, if asked, the weights (d_l·d_s)².
+fn paths(path: &mut [f64], weight: &mut [f64], dl: &[f64], ds: &[f64], e: f64, opts: BpOptions) {
+    for ((p, &l), &s) in path.iter_mut().zip(dl).zip(ds) {
+        *p = e + l + s;
+    }
+    if opts.inverse_square {
+        for ((w, &l), &s) in weight.iter_mut().zip(dl).zip(ds) {
+            *w = (l * s).powi(2);
         }
-        let n = u.floor();
-        let f = u - n;
-        let n = n as isize;
-        let at = |i: isize| {
-            if i >= 0 && (i as usize) < h.len() {
-                h[i as usize] as f64
+    }
+}
+
+/// Per-thread buffers for one voxel column.
+struct ColumnScratch {
+    acc: Vec<f64>,
+    /// Illumination leg d_l per depth.
+    leg: Vec<f64>,
+    /// Sensor legs d_s per depth, for every sensor point (product captures) or the current one.
+    sensor_legs: Vec<f64>,
+    path: Vec<f64>,
+    weight: Vec<f64>,
+}
+
+impl ColumnScratch {
+    fn new(nz: usize, ns: usize) -> Self {
+        ColumnScratch {
+            acc: vec![0.0; nz],
+            leg: vec![0.0; nz],
+            sensor_legs: vec![0.0; ns * nz],
+            path: vec![0.0; nz],
+            weight: vec![0.0; nz],
+        }
+    }
+
+    /// Adds H read at `path[k]` (index path·inv − offset, linear interpolation, zero outside) to `acc[k]`.
+    fn accumulate(&mut self, h: &[f32], inv: f64, offset: f64, opts: BpOptions) {
+        let last = h.len() - 1;
+        for (k, (a, &p)) in self.acc.iter_mut().zip(&self.path).enumerate() {
+            let u = p * inv - offset;
+            let v = if u >= 0.0 && u < last as f64 {
+                let n = u as usize;
+                let f = (u - n as f64) as f32;
+                h[n] + f * (h[n + 1] - h[n])
+            } else if u > -1.0 && u < 0.0 {
+                (u + 1.0) as f32 * h[0]
+            } else if u >= last as f64 && u < h.len() as f64 {
+                (h.len() as f64 - u) as f32 * h[last]
             } else {
-                0.0
-            }
-        };
-        let mut v = (1.0 - f) * at(n) + f * at(n + 1);
-        if opts.inverse_square {
-            v *= ((l - el) * (s - es)).powi(2);
+                continue;
+            };
+            *a += if opts.inverse_square {
+                v as f64 * self.weight[k]
+            } else {
+                v as f64
+            };
         }
-        *a += v;
     }
 }
 

@@ -44,13 +44,19 @@ impl Default for SlabParams {
 impl SlabParams {
     /// Time-resolved transmittance at lateral distance `rho` (m) and time `t` (s) after entry.
     pub fn transmittance(&self, rho: f64, t: f64) -> f64 {
-        if t <= 0.0 {
-            return 0.0;
-        }
+        let (a, four_dvt) = self.temporal(t);
+        a * (-rho * rho / four_dvt).exp()
+    }
+
+    /// K(ρ, t) = a(t)·exp(−ρ²/(4Dvt)): returns (a(t), 4Dvt), the part shared by all ρ.
+    fn temporal(&self, t: f64) -> (f64, f64) {
         let v = SPEED_OF_LIGHT_M_PER_S / self.n;
         let d_coef = 1.0 / (3.0 * (self.mu_a + self.mu_s_prime));
-        let z0 = 1.0 / self.mu_s_prime;
         let four_dvt = 4.0 * d_coef * v * t;
+        if t <= 0.0 {
+            return (0.0, 1.0);
+        }
+        let z0 = 1.0 / self.mu_s_prime;
         let (d, ze) = (self.thickness_m, self.ze_m);
         let dipoles: f64 = (-20..=20)
             .map(|i| {
@@ -60,10 +66,11 @@ impl SlabParams {
                 z1 * (-z1 * z1 / four_dvt).exp() - z2 * (-z2 * z2 / four_dvt).exp()
             })
             .sum();
-        (4.0 * std::f64::consts::PI * d_coef * v).powf(-1.5)
+        let a = (4.0 * std::f64::consts::PI * d_coef * v).powf(-1.5)
             * t.powf(-2.5)
-            * (-self.mu_a * v * t - rho * rho / four_dvt).exp()
-            * dipoles
+            * (-self.mu_a * v * t).exp()
+            * dipoles;
+        (a, four_dvt)
     }
 
     fn validate(&self) -> Result<()> {
@@ -191,11 +198,12 @@ fn slab_kernel(g: &ConfocalGeometry, slab: &SlabParams, dims: [usize; 3]) -> Vec
         }
     };
     // In f64 until normalised: the raw values span far more than f32's range.
+    let temporal: Vec<(f64, f64)> = (0..m2).map(|t| slab.temporal(t as f64 * dt)).collect();
     let mut k = vec![0.0f64; nx2 * ny2 * m2];
     k.par_chunks_mut(m2).enumerate().for_each(|(i, col)| {
-        let rho = (offset(i / ny2, nx2) * dx).hypot(offset(i % ny2, ny2) * dy);
-        for (t, v) in col.iter_mut().enumerate() {
-            *v = slab.transmittance(rho, t as f64 * dt);
+        let rho2 = (offset(i / ny2, nx2) * dx).powi(2) + (offset(i % ny2, ny2) * dy).powi(2);
+        for (v, &(a, four_dvt)) in col.iter_mut().zip(&temporal) {
+            *v = a * (-rho2 / four_dvt).exp();
         }
     });
     let s = 1.0 / k.iter().sum::<f64>();
