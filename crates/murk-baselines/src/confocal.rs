@@ -155,7 +155,7 @@ impl ConfocalGeometry {
                 }
                 let integral = |u: f64| -> f64 {
                     let u = u.clamp(0.0, h.len() as f64);
-                    let n = (u.floor() as usize).min(h.len() - 1);
+                    let n = (u as usize).min(h.len() - 1);
                     cum[n] + (u - n as f64) * h[n] as f64
                 };
                 // Bin n covers paths [start + nΔs, start + (n+1)Δs) (floor binning), so the

@@ -123,30 +123,31 @@ impl Stolt {
             let kx = freq(i / ny2, nx2 / 2);
             let ky = freq(i % ny2, ny2 / 2);
             let lateral = self.a2[0] * kx * kx + self.a2[1] * ky * ky;
+            // Source samples exist for k_z′ ≤ (M−1)/M; beyond, and for all larger k_z, it is zero.
+            let mut end = m;
             // Output m reads the source at index ≥ m, so ascending order never reads a sample that
             // was already overwritten: the mapping is done in place.
             for mo in 1..m {
                 let kz = mo as f64 / mf;
-                let kzs = (lateral + kz * kz).sqrt();
                 // max() guards the in-place order against rounding when k_x = k_y = 0.
-                let u = (kzs * mf).max(mo as f64);
-                // Source samples exist for k_z′ ∈ [0, (M−1)/M]; outside is zero.
-                col[mo] = if u <= (m - 1) as f64 {
-                    let n = u.floor() as usize;
-                    let f = (u - n as f64) as f32;
-                    let hi = if n + 1 < m {
-                        col[n + 1]
-                    } else {
-                        C32::default()
-                    };
-                    (col[n] * (1.0 - f) + hi * f) * (kz / kzs.max(1e-6)) as f32
+                let u = ((lateral + kz * kz).sqrt() * mf).max(mo as f64);
+                if u > (m - 1) as f64 {
+                    end = mo;
+                    break;
+                }
+                // u ≥ 0, so the cast is the floor (f64::floor is a libm call without SSE4.1).
+                let n = u as usize;
+                let f = (u - n as f64) as f32;
+                let hi = if n + 1 < m {
+                    col[n + 1]
                 } else {
                     C32::default()
                 };
+                col[mo] = (col[n] * (1.0 - f) + hi * f) * (mo as f64 / u) as f32;
             }
             // Only k_z > 0 survives: the wavefield travels towards the wall.
             col[0] = C32::default();
-            col[m..].iter_mut().for_each(|v| *v = C32::default());
+            col[end..].iter_mut().for_each(|v| *v = C32::default());
         });
         self.fft.inverse(&mut buf, [self.nx, self.ny]);
         let mut out = vec![0.0f32; self.nx * self.ny * m];
