@@ -52,47 +52,26 @@ impl Fft2 {
         self.fwd_x.process_with_scratch(t, scratch);
     }
 
-    /// Inverse of [`Fft2::forward`] (unnormalised), producing only output rows x ∈ [x0, x0 + out.len()/fy)
-    /// into `out` as [x][y]. `t` is clobbered.
+    /// Inverse of [`Fft2::forward`] (unnormalised) into `a` as [x][y], transforming along y only the
+    /// rows x ∈ [x0, x0 + rows) that the caller reads. `t` is clobbered; other rows of `a` are garbage.
     pub fn inverse_rows(
         &self,
         t: &mut [Complex32],
-        out: &mut [Complex32],
+        a: &mut [Complex32],
         x0: usize,
+        rows: usize,
         scratch: &mut [Complex32],
     ) {
         self.inv_x.process_with_scratch(t, scratch);
-        let rows = out.len() / self.fy;
-        transpose_cols(t, out, self.fy, self.fx, x0, rows);
-        self.inv_y.process_with_scratch(out, scratch);
+        transpose(t, a, self.fy, self.fx);
+        self.inv_y
+            .process_with_scratch(&mut a[x0 * self.fy..(x0 + rows) * self.fy], scratch);
     }
 }
-
-const BLOCK: usize = 16;
 
 /// `src` is rows×cols; `dst` becomes cols×rows.
 fn transpose(src: &[Complex32], dst: &mut [Complex32], rows: usize, cols: usize) {
-    transpose_cols(src, dst, rows, cols, 0, cols);
-}
-
-/// Transposes columns [c0, c0 + n) of the rows×cols matrix `src` into the n×rows matrix `dst`.
-fn transpose_cols(
-    src: &[Complex32],
-    dst: &mut [Complex32],
-    rows: usize,
-    cols: usize,
-    c0: usize,
-    n: usize,
-) {
-    for rb in (0..rows).step_by(BLOCK) {
-        for cb in (0..n).step_by(BLOCK) {
-            for r in rb..(rb + BLOCK).min(rows) {
-                for c in cb..(cb + BLOCK).min(n) {
-                    dst[c * rows + r] = src[r * cols + c0 + c];
-                }
-            }
-        }
-    }
+    transpose::transpose(src, dst, cols, rows);
 }
 
 #[cfg(test)]
@@ -125,11 +104,10 @@ mod tests {
         }
         let got = t[ky * fx + kx];
         assert!((got.re as f64 - want.re).abs() < 1e-4 && (got.im as f64 - want.im).abs() < 1e-4);
-        let mut out = vec![Complex32::default(); 3 * fy];
-        f.inverse_rows(&mut t, &mut out, 2, &mut s);
-        for r in 0..3 {
+        f.inverse_rows(&mut t, &mut a, 2, 3, &mut s);
+        for r in 2..5 {
             for y in 0..fy {
-                let d = out[r * fy + y] / (fx * fy) as f32 - a0[(r + 2) * fy + y];
+                let d = a[r * fy + y] / (fx * fy) as f32 - a0[r * fy + y];
                 assert!(d.norm() < 1e-5);
             }
         }

@@ -148,19 +148,30 @@ impl<'a> Plan<'a> {
     fn grid_spectra(&self, spectra: &Spectra, src: Option<usize>) -> Vec<Complex32> {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
         let (gnx, gny) = (self.grid.nx, self.grid.ny);
-        let mut out = vec![Complex32::default(); spectra.band.len() * fx * fy];
-        out.par_chunks_mut(fx * fy).enumerate().for_each_init(
-            || (vec![Complex32::default(); fx * fy], self.fft.scratch()),
-            |(a, scratch), (j, t)| {
-                a.iter_mut().for_each(|v| *v = Complex32::default());
-                for ix in 0..gnx {
-                    for iy in 0..gny {
-                        a[ix * fy + iy] = spectra.hist(self.hist_index(ix * gny + iy, src))[j];
+        let nb = spectra.band.len();
+        // Frequency-major copy of the grid's spectra, so each frequency reads contiguous memory.
+        let mut by_freq = vec![Complex32::default(); nb * gnx * gny];
+        for cell in 0..gnx * gny {
+            for (j, v) in spectra.hist(self.hist_index(cell, src)).iter().enumerate() {
+                by_freq[j * gnx * gny + cell] = *v;
+            }
+        }
+        let mut out = vec![Complex32::default(); nb * fx * fy];
+        out.par_chunks_mut(fx * fy)
+            .zip(by_freq.par_chunks(gnx * gny))
+            .for_each_init(
+                || (vec![Complex32::default(); fx * fy], self.fft.scratch()),
+                |(a, scratch), (t, cells)| {
+                    a.iter_mut().for_each(|v| *v = Complex32::default());
+                    for ix in 0..gnx {
+                        a[ix * fy..ix * fy + gny].copy_from_slice(&cells[ix * gny..(ix + 1) * gny]);
                     }
-                }
-                self.fft.forward(a, t, scratch);
-            },
-        );
+                    self.fft.forward(a, t, scratch);
+                    // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
+                    let norm = 1.0 / (fx * fy) as f32;
+                    t.iter_mut().for_each(|v| *v *= norm);
+                },
+            );
         out
     }
 
@@ -212,7 +223,6 @@ impl<'a> Plan<'a> {
                 }
             }
         }
-        let norm = 1.0 / (fx * fy) as f64;
         let mut acc = vec![Complex64::default(); nx * ny];
         for j in 0..band.len() {
             ws.g.iter_mut().for_each(|v| *v = Complex32::default());
@@ -232,31 +242,36 @@ impl<'a> Plan<'a> {
                 *t *= h;
             }
             self.fft
-                .inverse_rows(&mut ws.t, &mut ws.out, gnx - 1, &mut ws.scratch);
-            // Resample along y for every lattice row, then along x.
+                .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
+            // Resample along y for every lattice row the x pass reads, then along x.
             for a in 0..vx {
-                let row = &ws.out[a * fy + gny - 1..a * fy + gny - 1 + vy];
+                let row = &ws.g[(gnx - 1 + a) * fy + gny - 1..][..vy];
                 for iy in 0..ny {
-                    let w = self.ry.weights_of(iy);
                     let st = self.ry.starts[iy];
-                    let mut sum = Complex64::default();
-                    for (k, wk) in w.iter().enumerate() {
-                        let v = row[st + k];
-                        sum += Complex64::new(v.re as f64, v.im as f64) * *wk;
-                    }
-                    ws.tmp[a * ny + iy] = sum;
+                    ws.tmp[a * ny + iy] = row[st..st + self.ry.taps]
+                        .iter()
+                        .zip(self.ry.weights_of(iy))
+                        .map(|(v, w)| v * w)
+                        .sum();
                 }
             }
             for ix in 0..nx {
-                let w = self.rx.weights_of(ix);
-                let st = self.rx.starts[ix];
-                for iy in 0..ny {
-                    let mut sum = Complex64::default();
-                    for (k, wk) in w.iter().enumerate() {
-                        sum += ws.tmp[(st + k) * ny + iy] * *wk;
+                let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
+                // Contiguous over y so the tap loop vectorises.
+                ws.xrow.iter_mut().for_each(|v| *v = Complex32::default());
+                for (k, wk) in w.iter().enumerate() {
+                    for (x, t) in ws
+                        .xrow
+                        .iter_mut()
+                        .zip(&ws.tmp[(st + k) * ny..(st + k + 1) * ny])
+                    {
+                        *x += t * wk;
                     }
+                }
+                for iy in 0..ny {
                     let i = ix * ny + iy;
-                    acc[i] += sum * ws.pbase[i] * norm;
+                    let sum = ws.xrow[iy];
+                    acc[i] += Complex64::new(sum.re as f64, sum.im as f64) * ws.pbase[i];
                     ws.pbase[i] *= ws.pstep[i];
                 }
             }
@@ -280,7 +295,6 @@ fn c32(v: Complex64) -> Complex32 {
 struct Workspace {
     g: Vec<Complex32>,
     t: Vec<Complex32>,
-    out: Vec<Complex32>,
     scratch: Vec<Complex32>,
     /// Kernel at the current frequency and its per-frequency phase step (f32 recurrence: the drift
     /// over a band of a few hundred frequencies stays below 1e-5).
@@ -288,7 +302,8 @@ struct Workspace {
     step: Vec<Complex32>,
     pbase: Vec<Complex64>,
     pstep: Vec<Complex64>,
-    tmp: Vec<Complex64>,
+    tmp: Vec<Complex32>,
+    xrow: Vec<Complex32>,
 }
 
 impl Workspace {
@@ -299,13 +314,13 @@ impl Workspace {
         Workspace {
             g: vec![Complex32::default(); fx * fy],
             t: vec![Complex32::default(); fx * fy],
-            out: vec![Complex32::default(); plan.rx.len * fy],
             scratch: plan.fft.scratch(),
             base: vec![Complex32::default(); support],
             step: vec![Complex32::default(); support],
             pbase: vec![Complex64::default(); nv],
             pstep: vec![Complex64::default(); nv],
-            tmp: vec![Complex64::default(); plan.rx.len * plan.vol.y.n],
+            tmp: vec![Complex32::default(); plan.rx.len * plan.vol.y.n],
+            xrow: vec![Complex32::default(); plan.vol.y.n],
         }
     }
 }

@@ -17,7 +17,7 @@ pub struct Resampler {
     pub len: usize,
     pub starts: Vec<usize>,
     pub taps: usize,
-    pub weights: Vec<f64>,
+    pub weights: Vec<f32>,
 }
 
 impl Resampler {
@@ -42,7 +42,7 @@ impl Resampler {
             if aligned {
                 weights.push(1.0);
             } else {
-                weights.extend((0..taps as i64).map(|k| windowed_sinc(t - (f + k) as f64)));
+                weights.extend((0..taps as i64).map(|k| windowed_sinc(t - (f + k) as f64) as f32));
             }
         }
         Resampler {
@@ -54,7 +54,7 @@ impl Resampler {
         }
     }
 
-    pub fn weights_of(&self, out: usize) -> &[f64] {
+    pub fn weights_of(&self, out: usize) -> &[f32] {
         &self.weights[out * self.taps..(out + 1) * self.taps]
     }
 }
@@ -109,8 +109,8 @@ mod tests {
                 for (k, wk) in w.iter().enumerate() {
                     let j = (r.lo + (r.starts[o] + k) as i64) as f64;
                     let ph = 2.0 * std::f64::consts::PI * nu * j;
-                    re += wk * ph.cos();
-                    im += wk * ph.sin();
+                    re += *wk as f64 * ph.cos();
+                    im += *wk as f64 * ph.sin();
                 }
                 let ph = 2.0 * std::f64::consts::PI * nu * t;
                 worst = worst.max(((re - ph.cos()).powi(2) + (im - ph.sin()).powi(2)).sqrt());
