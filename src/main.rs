@@ -38,12 +38,26 @@ enum Command {
     Bench(cmd::bench::BenchArgs),
     /// Render a scene file (scenes/*.toml) into a capture by time-resolved volumetric path tracing.
     Render(cmd::render::RenderArgs),
+    /// Import a real confocal capture (CDT v7.3 `meas`, LCT v5 `rect_data`) into a y-tal HDF5 file.
+    Import(cmd::import::ImportArgs),
+    /// Reproduce a figure: `real` reconstructs the CDT captures with CDT and Phasor Fields.
+    Figure(cmd::figure::FigureArgs),
     /// Sum the parts of a sharded render (`murk render --shard i/N`) into one capture.
     Merge(cmd::render::MergeArgs),
 }
 
 fn main() {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => e.exit(), // --help and --version
+        Err(e) => {
+            // clap's usage errors span several lines; keep murk's one-line contract.
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("invalid arguments").trim_start_matches("error: ");
+            eprintln!("murk: error: {first} (see murk --help)");
+            std::process::exit(2);
+        }
+    };
     let result: anyhow::Result<()> = match cli.command {
         Command::Demo(a) => cmd::demo::run(a, cli.quiet),
         Command::Info(a) => cmd::info::run(a),
@@ -51,6 +65,8 @@ fn main() {
         Command::Reconstruct(a) => cmd::reconstruct::run(a, cli.quiet),
         Command::Bench(a) => cmd::bench::run(a, cli.quiet),
         Command::Render(a) => cmd::render::run(a, cli.quiet),
+        Command::Import(a) => cmd::import::run(a, cli.quiet),
+        Command::Figure(a) => cmd::figure::run(a, cli.quiet),
         Command::Merge(a) => cmd::render::run_merge(a, cli.quiet),
     };
     if let Err(e) = result {

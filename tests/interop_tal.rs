@@ -594,3 +594,74 @@ print('FILE rect'); N('rect_data', rect)
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// murk's Phasor Fields against y-tal's `fbp` (the same virtual pulse, then backprojection) on one
+/// synthetic capture and the same voxels: the intensities must correlate at ≥ 0.99.
+#[test]
+fn phasor_fields_match_tal_fbp() {
+    let py = match python() {
+        Ok(p) => p,
+        Err(why) => return eprintln!("skipped: {why}"),
+    };
+    use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
+    let layout = CaptureLayout {
+        kind: LayoutKind::SinglePointSensorGrid,
+        wall_size_m: 1.0,
+        grid: 32,
+        point: DVec3::ZERO,
+        time: TimeAxis { start_m: 0.0, bin_width_m: 0.005, bins: 512 },
+        laser_xyz: None,
+        sensor_xyz: None,
+    };
+    let mut cap = layout.empty_capture().unwrap();
+    let t_letter = vec![[-0.25, 0.25], [0.25, 0.25], [0.25, 0.15], [0.05, 0.15], [0.05, -0.25], [-0.05, -0.25], [-0.05, 0.15], [-0.25, 0.15]];
+    let mut sc = Target::Polygon { outline: t_letter, offset: [0.0; 2], depth_m: 0.7, albedo: 1.0, spacing_m: 1.0 / 64.0 }.scatterers().unwrap();
+    sc.extend(Target::Point { pos: DVec3::new(0.3, -0.3, 0.6), albedo: 0.02 }.scatterers().unwrap());
+    add_first_bounce(&mut cap, &sc, &SynthOptions { cosines: true, ..SynthOptions::default() }).unwrap();
+    let dir = tmpdir("pf-fbp");
+    let file = dir.join("t_single.h5");
+    murk_io::write_capture(&file, &cap).unwrap();
+
+    let (lambda, cycles) = (4.0 / 32.0, 4.0);
+    let sigma = cycles * lambda / 6.0;
+    let script = format!(
+        r#"
+import sys, numpy as np, tal
+tal.set_log_level(tal.LogLevel.WARNING)
+d = tal.io.read_capture(sys.argv[1])
+vol = tal.reconstruct.get_volume_project_rw(d, depths=list(np.linspace(0.55, 0.85, 16)))
+r = tal.reconstruct.fbp.solve(d, wl_mean={lambda}, wl_sigma={sigma}, volume_xyz=vol,
+    camera_system=tal.enums.CameraSystem.DIRECT_LIGHT, progress=False)
+print(' '.join(repr(float(v)) for v in (np.abs(r) ** 2).ravel()))
+"#
+    );
+    let out = run_python(&py, &script, &[&file]);
+    let tal_i: Vec<f64> = out.split_whitespace().map(|v| v.parse().unwrap()).collect();
+
+    let c = 0.5 - 0.5 / 32.0;
+    let vol = murk_core::Volume {
+        x: murk_core::Axis::new(-c, c, 32),
+        y: murk_core::Axis::new(-c, c, 32),
+        z: murk_core::Axis::new(0.55, 0.85, 16),
+    };
+    let params = murk_recon::PfParams { wavelength: murk_recon::Wavelength::Metres(lambda), cycles, ..Default::default() };
+    let rec = murk_recon::reconstruct(&murk_io::read_capture(&file).unwrap(), &vol, &params, murk_recon::Method::Fast, &murk_recon::NoProgress).unwrap();
+    assert_eq!(tal_i.len(), rec.intensity.len());
+    let murk_i: Vec<f64> = rec.intensity.iter().map(|&v| v as f64).collect();
+    let corr = pearson(&murk_i, &tal_i);
+    eprintln!("PF (murk) vs fbp (y-tal): Pearson correlation of |U|² = {corr:.5}");
+    assert!(corr >= 0.99, "correlation {corr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    sab / (saa * sbb).sqrt()
+}
