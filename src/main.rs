@@ -53,7 +53,11 @@ fn main() {
         Err(e) => {
             // clap's usage errors span several lines; keep murk's one-line contract.
             let text = e.to_string();
-            let first = text.lines().next().unwrap_or("invalid arguments").trim_start_matches("error: ");
+            let first = text
+                .lines()
+                .next()
+                .unwrap_or("invalid arguments")
+                .trim_start_matches("error: ");
             eprintln!("murk: error: {first} (see murk --help)");
             std::process::exit(2);
         }

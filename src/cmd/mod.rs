@@ -1,5 +1,7 @@
 pub mod bench;
 pub mod demo;
+pub mod figure;
+pub mod import;
 pub mod info;
 pub mod pictures;
 pub mod progress;

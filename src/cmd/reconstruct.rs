@@ -4,7 +4,8 @@ use crate::cmd::pictures;
 use crate::cmd::progress::{say, Bar};
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
-use murk_core::{Axis, Capture, Volume};
+use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, SlabParams};
+use murk_core::{Axis, Capture, Volume, SPEED_OF_LIGHT_M_PER_S};
 use murk_recon::{Compensation, Falloff, Method, PfParams, Wavelength};
 use std::path::{Path, PathBuf};
 
@@ -14,6 +15,23 @@ pub enum MethodArg {
     Pf,
     /// Phasor Fields, exact time-domain form for any geometry (slow on big captures).
     PfExact,
+    /// Backprojection (any capture kind, on --volume).
+    Bp,
+    /// Filtered backprojection: BP then a −∇²G filter (any capture kind, on --volume).
+    Fbp,
+    /// Light-cone transform with Wiener deconvolution (confocal grid; own volume).
+    Lct,
+    /// f-k (Stolt) migration (confocal grid; own volume).
+    Fk,
+    /// Confocal diffuse tomography: slab deconvolution, then f-k (confocal grid behind a slab; own volume).
+    Cdt,
+}
+
+impl MethodArg {
+    /// Methods that reconstruct on the confocal scan grid and ignore --volume.
+    pub fn own_grid(self) -> bool {
+        matches!(self, MethodArg::Lct | MethodArg::Fk | MethodArg::Cdt)
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -33,13 +51,21 @@ pub enum FalloffArg {
 }
 
 #[derive(Args)]
-#[command(after_help = "Examples:\n  \
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  \
 murk reconstruct capture.h5 --out volume.npy --png pictures/\n  \
 murk reconstruct capture.h5 --out volume.h5 --wavefactor 8 --cycles 4 --volume -1:1:73,-1:1:59,1.5:2.5:73\n  \
-murk reconstruct fog.h5 --out v.npy --compensate paper --mu-t 1.0 --albedo 0.5\n\n\
+murk reconstruct fog.h5 --out v.npy --compensate paper --mu-t 1.0 --albedo 0.5\n  \
+murk reconstruct letter_s.h5 --method cdt --out cdt.h5 --png cdt/\n  \
+murk reconstruct letter_s.h5 --method pf --wavefactor 4 --cycles 8 --t-offset slab --out pf.h5\n\n\
+Methods pf, pf-exact, bp and fbp reconstruct on --volume. lct, fk and cdt need a confocal capture on a regular\n\
+grid and reconstruct on their own grid (the scan points × depth k·Δs′/2; cdt and its defaults: 128 depths over\n\
+1 m); they ignore --volume and write their true x, y, z axes.\n\n\
 Volumes: --volume x0:x1:nx,y0:y1:ny,z0:z1:nz gives nx voxel centres from x0 to x1 inclusive (metres; z is the\n\
 depth in front of the wall at z = 0). Default: the wall grid's extent and spacing in x and y, depth from 0.1 m to\n\
-as deep as the capture's time window reaches. Output arrays have shape [nx, ny, nz], float32 |U|²·K, C order.")]
+as deep as the capture's time window reaches. Output arrays have shape [nx, ny, nz], float32 |U|²·K, C order."
+)]
 pub struct ReconstructArgs {
     /// A y-tal HDF5 capture.
     pub file: PathBuf,
@@ -75,6 +101,46 @@ pub struct ReconstructArgs {
     /// Amplitude factor per leg.
     #[arg(long, value_enum, default_value = "none")]
     pub falloff: FalloffArg,
+    /// Subtract this much optical path (m) from every time stamp before reconstructing (shifts the
+    /// capture's time start), or `slab`: the peak delay of the slab's round trip (--slab-* flags),
+    /// so that depth is measured from the back of the slab.
+    #[arg(long, allow_hyphen_values = true)]
+    pub t_offset: Option<String>,
+    #[command(flatten)]
+    pub slab: SlabArgs,
+}
+
+/// The scattering slab in front of the scene (CDT; `--t-offset slab`). Defaults: the 2.54 cm foam
+/// of Lindell & Wetzstein 2020.
+#[derive(Args, Clone, Copy)]
+pub struct SlabArgs {
+    /// Slab thickness (m).
+    #[arg(long, default_value_t = 0.0254)]
+    pub slab_thickness: f64,
+    /// Absorption coefficient μa (1/m).
+    #[arg(long, default_value_t = 0.53)]
+    pub slab_mua: f64,
+    /// Reduced scattering coefficient μs′ (1/m).
+    #[arg(long, default_value_t = 262.0)]
+    pub slab_musp: f64,
+    /// Refractive index.
+    #[arg(long, default_value_t = 1.12)]
+    pub slab_n: f64,
+    /// Wiener signal-to-noise ratio (cdt default 1e4; lct default 0.1).
+    #[arg(long)]
+    pub snr: Option<f64>,
+}
+
+impl SlabArgs {
+    pub fn slab(&self) -> SlabParams {
+        SlabParams {
+            thickness_m: self.slab_thickness,
+            mu_a: self.slab_mua,
+            mu_s_prime: self.slab_musp,
+            n: self.slab_n,
+            ..Default::default()
+        }
+    }
 }
 
 impl ReconstructArgs {
@@ -143,20 +209,42 @@ pub fn default_volume(cap: &Capture) -> anyhow::Result<Volume> {
 }
 
 /// Writes the intensity volume by extension.
+/// Output volume formats, chosen by the file extension.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum VolumeFormat {
+    Npy,
+    Hdf5,
+}
+
+impl VolumeFormat {
+    /// Checked before any work so a typo costs nothing.
+    pub fn of(path: &Path) -> anyhow::Result<VolumeFormat> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
+        match ext.as_str() {
+            "npy" => Ok(VolumeFormat::Npy),
+            "h5" | "hdf5" => Ok(VolumeFormat::Hdf5),
+            _ => bail!(
+                "{}: unknown output type '.{ext}' (use .npy or .h5)",
+                path.display()
+            ),
+        }
+    }
+}
+
+/// Writes the intensity volume in the format its extension names.
 pub fn write_volume(
     path: &Path,
     vol: &Volume,
     intensity: &[f32],
     params: &[(String, String)],
 ) -> anyhow::Result<()> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    match ext.as_str() {
-        "npy" => murk_io::write_npy_f32(path, &vol.shape(), intensity)?,
-        "h5" | "hdf5" => {
+    match VolumeFormat::of(path)? {
+        VolumeFormat::Npy => murk_io::write_npy_f32(path, &vol.shape(), intensity)?,
+        VolumeFormat::Hdf5 => {
             let attrs: Vec<(&str, murk_io::AttrValue)> = params
                 .iter()
                 .map(|(k, v)| (k.as_str(), murk_io::AttrValue::Text(v.clone())))
@@ -171,10 +259,6 @@ pub fn write_volume(
                 &attrs,
             )?
         }
-        _ => bail!(
-            "{}: unknown output type '.{ext}' (use .npy or .h5)",
-            path.display()
-        ),
     }
     Ok(())
 }
@@ -194,41 +278,196 @@ pub fn peak(vol: &Volume, intensity: &[f32]) -> ([f64; 3], f32) {
     (vol.centre(ix, iy, iz).to_array(), v)
 }
 
-pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
-    let params = a.params()?;
-    let cap = murk_io::read_capture(&a.file)?;
-    let volume = match &a.volume {
-        Some(spec) => Volume::parse(spec)?,
-        None => default_volume(&cap)?,
+/// Peak delay (m of path) of the slab's round trip K ⊛ K, integrated over the lateral plane: where a
+/// point behind the slab shows up late in a capture without deconvolution.
+pub fn slab_delay_m(slab: &SlabParams) -> f64 {
+    // 1 ps steps over 4 ns cover the foam's response (its peak is near 0.3 ns).
+    let dt = 1e-12;
+    let n = 4000;
+    // ∫K(ρ, t) 2πρ dρ = a(t)·4πDvt ∝ K(0, t)·t.
+    let k: Vec<f64> = (0..n)
+        .map(|i| slab.transmittance(0.0, i as f64 * dt) * i as f64)
+        .collect();
+    let best = (0..n)
+        .map(|m| (m, (0..=m).map(|j| k[j] * k[m - j]).sum::<f64>()))
+        .fold((0, f64::MIN), |a, b| if b.1 > a.1 { b } else { a });
+    best.0 as f64 * dt * SPEED_OF_LIGHT_M_PER_S
+}
+
+/// The optical path `--t-offset` asks to remove (0 without it).
+pub fn t_offset_m(spec: Option<&str>, slab: &SlabParams) -> anyhow::Result<f64> {
+    match spec {
+        None => Ok(0.0),
+        Some("slab") => Ok(slab_delay_m(slab)),
+        Some(s) => {
+            let v: f64 = s
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--t-offset '{s}': expected metres or 'slab'"))?;
+            if !v.is_finite() {
+                bail!("--t-offset must be finite, got {v}");
+            }
+            Ok(v)
+        }
+    }
+}
+
+/// A reconstruction by any method, with the rows that describe how it was made.
+pub struct Output {
+    pub volume: Volume,
+    pub intensity: Vec<f32>,
+    pub method_rows: Vec<(String, String)>,
+    pub warnings: Vec<String>,
+}
+
+/// Runs `method` on `cap`; `volume` is used by pf, pf-exact, bp and fbp.
+pub fn reconstruct_any(
+    cap: &Capture,
+    method: MethodArg,
+    pf: &PfParams,
+    slab: &SlabArgs,
+    volume: &Volume,
+    bar: &Bar,
+) -> anyhow::Result<Output> {
+    let row = |k: &str, v: String| (k.to_string(), v);
+    let baseline = |r: murk_baselines::Reconstruction, rows: Vec<(String, String)>| Output {
+        volume: r.volume,
+        intensity: r.data,
+        method_rows: rows,
+        warnings: Vec::new(),
     };
-    let method = if a.method == MethodArg::PfExact {
-        Method::Exact
-    } else {
-        Method::Fast
+    Ok(match method {
+        MethodArg::Pf | MethodArg::PfExact => {
+            let m = if method == MethodArg::PfExact {
+                Method::Exact
+            } else {
+                Method::Fast
+            };
+            let rec = murk_recon::reconstruct(cap, volume, pf, m, bar)?;
+            let rows = pf_rows(&rec.info);
+            Output {
+                volume: rec.volume,
+                intensity: rec.intensity,
+                method_rows: rows,
+                warnings: rec.info.warnings,
+            }
+        }
+        MethodArg::Bp => baseline(
+            murk_baselines::backproject(cap, volume, Default::default())?,
+            vec![row(
+                "method",
+                "backprojection (linear reads at bin centres)".into(),
+            )],
+        ),
+        MethodArg::Fbp => baseline(
+            murk_baselines::fbp(cap, volume, FbpOptions::default())?,
+            vec![row(
+                "method",
+                "filtered backprojection (−∇²G, 5³ voxels, σ = 1 voxel)".into(),
+            )],
+        ),
+        MethodArg::Lct => {
+            let p = LctParams {
+                snr: slab.snr.unwrap_or(LctParams::default().snr),
+                ..Default::default()
+            };
+            baseline(
+                murk_baselines::lct(cap, p)?,
+                vec![
+                    row("method", "light-cone transform (Wiener)".into()),
+                    row("snr", format!("{}", p.snr)),
+                    row("reflectance", format!("{:?}", p.reflectance)),
+                ],
+            )
+        }
+        MethodArg::Fk => baseline(
+            murk_baselines::fk(cap, FkParams::default())?,
+            vec![row("method", "f-k migration".into())],
+        ),
+        MethodArg::Cdt => {
+            let p = CdtParams {
+                slab: slab.slab(),
+                snr: slab.snr.unwrap_or(CdtParams::default().snr),
+                ..Default::default()
+            };
+            let s = p.slab;
+            baseline(
+                murk_baselines::cdt(cap, p)?,
+                vec![
+                    row(
+                        "method",
+                        "confocal diffuse tomography (slab Wiener + f-k)".into(),
+                    ),
+                    row(
+                        "slab",
+                        format!(
+                            "{} m, μa {} /m, μs′ {} /m, n {}, ze {} m",
+                            s.thickness_m, s.mu_a, s.mu_s_prime, s.n, s.ze_m
+                        ),
+                    ),
+                    row("snr", format!("{}", p.snr)),
+                    row("time grid", format!("{:?}", p.grid)),
+                ],
+            )
+        }
+    })
+}
+
+pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
+    VolumeFormat::of(&a.out)?;
+    let params = a.params()?;
+    let mut cap = murk_io::read_capture(&a.file)?;
+    let offset = t_offset_m(a.t_offset.as_deref(), &a.slab.slab())?;
+    cap.time.start_m -= offset;
+    let volume = match &a.volume {
+        Some(_) if a.method.own_grid() => {
+            if !quiet {
+                eprintln!("murk: warning: --volume is ignored by {:?}: it reconstructs on the capture's scan grid", a.method);
+            }
+            None
+        }
+        Some(spec) => Some(Volume::parse(spec)?),
+        None if a.method.own_grid() => None,
+        None => Some(default_volume(&cap)?),
     };
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
-    let rec = murk_recon::reconstruct(&cap, &volume, &params, method, &bar)
-        .with_context(|| a.file.display().to_string())?;
+    // Own-grid methods never read the volume; an empty one stands in.
+    let empty = Volume {
+        x: Axis::new(0.0, 0.0, 1),
+        y: Axis::new(0.0, 0.0, 1),
+        z: Axis::new(0.0, 0.0, 1),
+    };
+    let out = reconstruct_any(
+        &cap,
+        a.method,
+        &params,
+        &a.slab,
+        volume.as_ref().unwrap_or(&empty),
+        &bar,
+    )
+    .with_context(|| a.file.display().to_string())?;
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
-    for w in &rec.info.warnings {
+    for w in out.warnings.iter().filter(|_| !quiet) {
         eprintln!("murk: warning: {w}");
     }
-    let table = summary(&a.file, &cap, &rec, secs);
-    write_volume(&a.out, &volume, &rec.intensity, &table)?;
+    let mut rows = out.method_rows.clone();
+    rows.push(("t_offset_m".into(), format!("{offset:.6}")));
+    let table = table(&a.file, &cap, rows, &out.volume, &out.intensity, secs);
+    let v = &out.volume;
+    write_volume(&a.out, v, &out.intensity, &table)?;
     say(
         quiet,
         format!(
             "wrote {} ({}×{}×{} voxels)",
             a.out.display(),
-            volume.x.n,
-            volume.y.n,
-            volume.z.n
+            v.x.n,
+            v.y.n,
+            v.z.n
         ),
     );
     if let Some(dir) = &a.png {
-        let pics = pictures::write_views(dir, &volume, &rec.intensity)?;
+        let pics = pictures::write_views(dir, v, &out.intensity)?;
         let index = pictures::write_index(
             dir,
             &format!("murk reconstruction of {}", a.file.display()),
@@ -243,19 +482,8 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The parameters and results worth recording next to a volume.
-pub fn summary(
-    file: &Path,
-    cap: &Capture,
-    rec: &murk_recon::Reconstruction,
-    secs: f64,
-) -> Vec<(String, String)> {
-    let v = &rec.volume;
-    let (p, val) = peak(v, &rec.intensity);
-    let i = &rec.info;
+fn pf_rows(i: &murk_recon::ReconInfo) -> Vec<(String, String)> {
     vec![
-        ("capture".into(), file.display().to_string()),
-        ("capture kind".into(), cap.kind().to_string()),
         (
             "method".into(),
             format!("Phasor Fields ({} form)", i.evaluated_with),
@@ -272,6 +500,42 @@ pub fn summary(
             "frequencies".into(),
             format!("{} of a {}-point DFT", i.frequencies, i.dft_len),
         ),
+    ]
+}
+
+/// The parameters and results of a Phasor Fields reconstruction worth recording next to a volume.
+pub fn summary(
+    file: &Path,
+    cap: &Capture,
+    rec: &murk_recon::Reconstruction,
+    secs: f64,
+) -> Vec<(String, String)> {
+    table(
+        file,
+        cap,
+        pf_rows(&rec.info),
+        &rec.volume,
+        &rec.intensity,
+        secs,
+    )
+}
+
+/// Capture, method rows, volume, peak and time as a key/value table.
+pub fn table(
+    file: &Path,
+    cap: &Capture,
+    method_rows: Vec<(String, String)>,
+    v: &Volume,
+    intensity: &[f32],
+    secs: f64,
+) -> Vec<(String, String)> {
+    let (p, val) = peak(v, intensity);
+    let mut t = vec![
+        ("capture".into(), file.display().to_string()),
+        ("capture kind".into(), cap.kind().to_string()),
+    ];
+    t.extend(method_rows);
+    t.extend([
         (
             "volume".into(),
             format!(
@@ -288,5 +552,6 @@ pub fn summary(
         ),
         ("seconds".into(), format!("{secs:.3}")),
         ("murk_version".into(), env!("CARGO_PKG_VERSION").into()),
-    ]
+    ]);
+    t
 }

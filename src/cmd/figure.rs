@@ -1,0 +1,240 @@
+//! `murk figure real`: the paper's real-data comparison (its Fig. 5): the five CDT captures of
+//! Lindell & Wetzstein 2020 reconstructed with CDT and with confocal Phasor Fields (λ = 4Δc,
+//! 8 cycles), as a PNG grid (rows CDT, PF; a column per scene) and an index.html with parameters,
+//! depths and timings.
+
+use crate::cmd::import::{import, Format, ImportOptions, CDT_SCENES};
+use crate::cmd::pictures::{self, Plane};
+use crate::cmd::progress::{say, Bar};
+use crate::cmd::reconstruct::slab_delay_m;
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use murk_baselines::{CdtParams, CdtPlan};
+use murk_core::{Capture, Volume};
+use murk_recon::{Falloff, Method, PfParams, Wavelength};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Which {
+    /// CDT vs Phasor Fields on the five real captures behind a 2.54 cm foam slab.
+    Real,
+}
+
+#[derive(Args)]
+#[command(after_help = "Example:\n  \
+murk figure real --data ../shared/data/real/cdt_lindell2020 --out fig-real/")]
+pub struct FigureArgs {
+    pub which: Which,
+    /// Folder with letter_s.mat, mannequin.mat, letter_t.mat, cones.mat, letters_ut.mat.
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Output folder (grid.png, index.html).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Timed runs per reconstruction (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    pub runs: usize,
+}
+
+/// Scene order of the figure (the paper's: S, mannequin, diffuse T, cones, then U+T).
+const ORDER: [&str; 5] = ["letter_s", "mannequin", "letter_t", "cones", "letters_ut"];
+/// Screen pixels per voxel in grid.png, and the gap between cells.
+const ZOOM: usize = 6;
+const GAP: usize = 6;
+
+/// Median seconds of `runs` calls, and the last result.
+fn timed<T>(runs: usize, mut f: impl FnMut() -> anyhow::Result<T>) -> anyhow::Result<(f64, T)> {
+    let mut secs = Vec::new();
+    let mut last = None;
+    for _ in 0..runs.max(1) {
+        let t0 = Instant::now();
+        last = Some(f()?);
+        secs.push(t0.elapsed().as_secs_f64());
+    }
+    secs.sort_by(f64::total_cmp);
+    Ok((secs[secs.len() / 2], last.expect("at least one run")))
+}
+
+/// Depth of the brightest voxel, and the median per-pixel argmax depth over pixels whose
+/// maximum-intensity projection exceeds half of its maximum.
+pub fn depths(vol: &Volume, intensity: &[f32]) -> (f64, f64) {
+    let nz = vol.z.n;
+    let (p, _) = crate::cmd::reconstruct::peak(vol, intensity);
+    let cols: Vec<(usize, f32)> = intensity
+        .chunks(nz)
+        .map(|c| {
+            c.iter()
+                .enumerate()
+                .fold((0, f32::MIN), |a, (k, &v)| if v > a.1 { (k, v) } else { a })
+        })
+        .collect();
+    let max = cols.iter().map(|c| c.1).fold(f32::MIN, f32::max);
+    let mut zs: Vec<f64> = cols
+        .iter()
+        .filter(|c| c.1 > 0.5 * max)
+        .map(|c| vol.z.at(c.0))
+        .collect();
+    zs.sort_by(f64::total_cmp);
+    (p[2], zs[zs.len() / 2])
+}
+
+struct Cell {
+    volume: Volume,
+    intensity: Vec<f32>,
+    secs: f64,
+}
+
+fn scene(path: &Path, snr: f64, runs: usize, pf: &PfParams) -> anyhow::Result<[Cell; 2]> {
+    let cap: Capture = import(
+        path,
+        &ImportOptions {
+            format: Format::Cdt,
+            wall_size_m: None,
+            bin_width_ps: None,
+            gate_bins: None,
+        },
+    )?;
+    let params = CdtParams {
+        snr,
+        ..Default::default()
+    };
+    let (secs, r) = timed(runs, || Ok(CdtPlan::new(&cap, params)?.run(&cap)?))?;
+    let cdt = Cell {
+        volume: r.volume,
+        intensity: r.data,
+        secs,
+    };
+    // PF depth from the back of the slab: remove the slab's round-trip delay.
+    let mut shifted = cap.clone();
+    shifted.time.start_m -= slab_delay_m(&params.slab);
+    // PF on CDT's voxels (the scan grid laterally, the same depths) but the first: PF needs z > 0.
+    let z = cdt.volume.z;
+    let vol = Volume {
+        z: murk_core::Axis::new(z.at(1), z.end, z.n - 1),
+        ..cdt.volume
+    };
+    let hidden = Bar::new("pf", true);
+    let (secs, r) = timed(runs, || {
+        Ok(murk_recon::reconstruct(
+            &shifted,
+            &vol,
+            pf,
+            Method::Fast,
+            &hidden,
+        )?)
+    })?;
+    let pf = Cell {
+        volume: r.volume,
+        intensity: r.intensity,
+        secs,
+    };
+    Ok([cdt, pf])
+}
+
+pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
+    let Which::Real = a.which;
+    std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
+    let pf = PfParams {
+        wavelength: Wavelength::WallFactor(4.0),
+        cycles: 8.0,
+        falloff: Falloff::None,
+        compensation: murk_recon::Compensation::None,
+    };
+    let slab = CdtParams::default().slab;
+    let mut rows = vec![
+        (
+            "CDT".to_string(),
+            format!(
+                "slab {} m, μa {} /m, μs′ {} /m, n {}, ze {} m; Wiener snr per scene; 2.0 m of path at 128 samples",
+                slab.thickness_m, slab.mu_a, slab.mu_s_prime, slab.n, slab.ze_m
+            ),
+        ),
+        (
+            "PF".to_string(),
+            format!(
+                "confocal round-trip kernel, λ = 4Δc, 8 cycles, no falloff, fast form; time shifted by the slab's round-trip peak delay {:.4} m of path; same voxels as CDT",
+                slab_delay_m(&slab)
+            ),
+        ),
+        (
+            "timings".to_string(),
+            format!(
+                "median of {} runs each (CDT: plan + run; PF: whole reconstruction), {} threads",
+                a.runs.max(1),
+                rayon::current_num_threads()
+            ),
+        ),
+        (
+            "grid.png".to_string(),
+            "top row CDT, bottom row PF; columns: letter_s, mannequin, letter_t, cones, letters_ut; front views (from the wall, +y up, +x left), each normalised to its own maximum".to_string(),
+        ),
+    ];
+    let mut cells = Vec::new();
+    for name in ORDER {
+        let snr = CDT_SCENES
+            .iter()
+            .find(|s| s.0 == name)
+            .map(|s| s.2)
+            .expect("every figure scene is a known CDT scene");
+        let path = a.data.join(format!("{name}.mat"));
+        let pair = scene(&path, snr, a.runs, &pf).with_context(|| path.display().to_string())?;
+        for (label, c) in ["CDT", "PF"].iter().zip(&pair) {
+            let (peak, median) = depths(&c.volume, &c.intensity);
+            let line = format!(
+                "peak depth {peak:.3} m, median depth {median:.3} m, {:.1} ms",
+                c.secs * 1e3
+            );
+            say(quiet, format!("{name} {label}: {line}"));
+            let extra = if *label == "CDT" {
+                format!(" (snr {snr})")
+            } else {
+                String::new()
+            };
+            rows.push((format!("{name} {label}"), line + &extra));
+        }
+        cells.push(pair);
+    }
+    let grid = grid_plane(&cells);
+    let png = a.out.join("grid.png");
+    pictures::write_png(&png, &grid, 0.0, 1.0)?;
+    let index = pictures::write_index(
+        &a.out,
+        "Real captures behind 2.54 cm of foam: CDT (top) vs Phasor Fields (bottom)",
+        &rows,
+        &[(png, grid.extents.clone())],
+    )?;
+    say(quiet, format!("wrote {}", index.display()));
+    Ok(())
+}
+
+/// Front views side by side, each normalised to [0, 1], NaN (black) between cells.
+fn grid_plane(cells: &[[Cell; 2]]) -> Plane {
+    let front = |c: &Cell| pictures::views(&c.volume, &c.intensity).front;
+    let (cw, ch) = {
+        let f = front(&cells[0][0]);
+        (f.width * ZOOM, f.height * ZOOM)
+    };
+    let (w, h) = (cells.len() * (cw + GAP) - GAP, 2 * ch + GAP);
+    let mut values = vec![f32::NAN; w * h];
+    for (col, pair) in cells.iter().enumerate() {
+        for (row, c) in pair.iter().enumerate() {
+            let f = front(c);
+            let max = f.values.iter().copied().fold(f32::MIN, f32::max);
+            let min = f.values.iter().copied().fold(f32::MAX, f32::min);
+            let span = (max - min).max(f32::MIN_POSITIVE);
+            for y in 0..ch.min(f.height * ZOOM) {
+                for x in 0..cw.min(f.width * ZOOM) {
+                    let v = f.values[(y / ZOOM) * f.width + x / ZOOM];
+                    values[(row * (ch + GAP) + y) * w + col * (cw + GAP) + x] = (v - min) / span;
+                }
+            }
+        }
+    }
+    Plane {
+        width: w,
+        height: h,
+        values,
+        extents: "rows: CDT, PF; columns: letter_s, mannequin, letter_t, cones, letters_ut; each a front view (from the wall, +y up, +x left), normalised to its own range".into(),
+    }
+}
