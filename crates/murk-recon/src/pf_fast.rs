@@ -121,7 +121,7 @@ impl<'a> Plan<'a> {
         let mut field = vec![Complex64::default(); nx * ny * nz];
         for src in sources {
             let hspec = self.grid_spectra(spectra, src);
-            let planes: Vec<Vec<Complex64>> = (0..nz)
+            let planes: Vec<Vec<Complex32>> = (0..nz)
                 .into_par_iter()
                 .map_init(
                     || Workspace::new(self),
@@ -134,7 +134,7 @@ impl<'a> Plan<'a> {
                 .collect();
             for (iz, plane) in planes.iter().enumerate() {
                 for (ixy, v) in plane.iter().enumerate() {
-                    field[ixy * nz + iz] += v;
+                    field[ixy * nz + iz] += Complex64::new(v.re as f64, v.im as f64);
                 }
             }
         }
@@ -182,7 +182,7 @@ impl<'a> Plan<'a> {
         hspec: &[Complex32],
         src: Option<usize>,
         iz: usize,
-    ) -> Vec<Complex64> {
+    ) -> Vec<Complex32> {
         let band = &spectra.band;
         let (fx, fy) = (self.fft.fx, self.fft.fy);
         let (gnx, gny) = (self.grid.nx, self.grid.ny);
@@ -213,17 +213,18 @@ impl<'a> Plan<'a> {
                     Some(s) => {
                         let v = DVec3::new(self.vol.x.at(ix), self.vol.y.at(iy), z);
                         let d = (v - self.source_point(s)).length();
-                        ws.pbase[i] = Complex64::from_polar(amplitude(self.falloff, d), k0 * d);
-                        ws.pstep[i] = Complex64::from_polar(1.0, dk * d);
+                        ws.pbase[i] =
+                            c32(Complex64::from_polar(amplitude(self.falloff, d), k0 * d));
+                        ws.pstep[i] = c32(Complex64::from_polar(1.0, dk * d));
                     }
                     None => {
-                        ws.pbase[i] = Complex64::new(1.0, 0.0);
-                        ws.pstep[i] = Complex64::new(1.0, 0.0);
+                        ws.pbase[i] = Complex32::new(1.0, 0.0);
+                        ws.pstep[i] = Complex32::new(1.0, 0.0);
                     }
                 }
             }
         }
-        let mut acc = vec![Complex64::default(); nx * ny];
+        let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
             ws.g.iter_mut().for_each(|v| *v = Complex32::default());
             for p in 0..gx {
@@ -243,40 +244,75 @@ impl<'a> Plan<'a> {
             }
             self.fft
                 .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
-            // Resample along y for every lattice row the x pass reads, then along x.
-            for a in 0..vx {
-                let row = &ws.g[(gnx - 1 + a) * fy + gny - 1..][..vy];
-                for iy in 0..ny {
-                    let st = self.ry.starts[iy];
-                    ws.tmp[a * ny + iy] = row[st..st + self.ry.taps]
-                        .iter()
-                        .zip(self.ry.weights_of(iy))
-                        .map(|(v, w)| v * w)
-                        .sum();
-                }
-            }
-            for ix in 0..nx {
-                let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
-                // Contiguous over y so the tap loop vectorises.
-                ws.xrow.iter_mut().for_each(|v| *v = Complex32::default());
-                for (k, wk) in w.iter().enumerate() {
-                    for (x, t) in ws
-                        .xrow
-                        .iter_mut()
-                        .zip(&ws.tmp[(st + k) * ny..(st + k + 1) * ny])
-                    {
-                        *x += t * wk;
-                    }
-                }
-                for iy in 0..ny {
-                    let i = ix * ny + iy;
-                    let sum = ws.xrow[iy];
-                    acc[i] += Complex64::new(sum.re as f64, sum.im as f64) * ws.pbase[i];
-                    ws.pbase[i] *= ws.pstep[i];
-                }
+            self.resample(ws, ny, nx, vx, vy, gnx, gny, fy);
+            // Exact phase of the point-side leg; straight loops over f32 so they vectorise.
+            for ((a, f), (pb, ps)) in acc
+                .iter_mut()
+                .zip(&ws.field)
+                .zip(ws.pbase.iter_mut().zip(&ws.pstep))
+            {
+                *a += f * *pb;
+                *pb *= ps;
             }
         }
         acc
+    }
+}
+
+impl Plan<'_> {
+    /// Reads the convolution (lattice rows x ∈ [gnx−1, gnx−1+vx), columns [gny−1, gny−1+vy) of `ws.g`)
+    /// at the voxels into `ws.field`: a plain gather on the wall lattice, else windowed sinc along y
+    /// for every lattice row, then along x.
+    #[allow(clippy::too_many_arguments)]
+    fn resample(
+        &self,
+        ws: &mut Workspace,
+        ny: usize,
+        nx: usize,
+        vx: usize,
+        vy: usize,
+        gnx: usize,
+        gny: usize,
+        fy: usize,
+    ) {
+        let lattice = |a: usize| (gnx - 1 + a) * fy + gny - 1;
+        if self.rx.taps == 1 && self.ry.taps == 1 {
+            for ix in 0..nx {
+                let row = &ws.g[lattice(self.rx.starts[ix])..][..vy];
+                for (f, &sy) in ws.field[ix * ny..(ix + 1) * ny]
+                    .iter_mut()
+                    .zip(&self.ry.starts)
+                {
+                    *f = row[sy];
+                }
+            }
+            return;
+        }
+        for a in 0..vx {
+            let row = &ws.g[lattice(a)..][..vy];
+            for iy in 0..ny {
+                let st = self.ry.starts[iy];
+                ws.tmp[a * ny + iy] = row[st..st + self.ry.taps]
+                    .iter()
+                    .zip(self.ry.weights_of(iy))
+                    .map(|(v, w)| v * w)
+                    .sum();
+            }
+        }
+        for ix in 0..nx {
+            let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
+            // Contiguous over y so the tap loop vectorises.
+            let out = &mut ws.field[ix * ny..(ix + 1) * ny];
+            out.iter_mut().for_each(|v| *v = Complex32::default());
+            for (k, wk) in w.iter().enumerate() {
+                for (x, t) in out
+                    .iter_mut()
+                    .zip(&ws.tmp[(st + k) * ny..(st + k + 1) * ny])
+                {
+                    *x += t * wk;
+                }
+            }
+        }
     }
 }
 
@@ -300,10 +336,12 @@ struct Workspace {
     /// over a band of a few hundred frequencies stays below 1e-5).
     base: Vec<Complex32>,
     step: Vec<Complex32>,
-    pbase: Vec<Complex64>,
-    pstep: Vec<Complex64>,
+    /// Point-side phase per voxel and its per-frequency step (f32 recurrence, as for the kernel).
+    pbase: Vec<Complex32>,
+    pstep: Vec<Complex32>,
+    /// The camera-side field at the voxels for the current frequency.
+    field: Vec<Complex32>,
     tmp: Vec<Complex32>,
-    xrow: Vec<Complex32>,
 }
 
 impl Workspace {
@@ -317,10 +355,10 @@ impl Workspace {
             scratch: plan.fft.scratch(),
             base: vec![Complex32::default(); support],
             step: vec![Complex32::default(); support],
-            pbase: vec![Complex64::default(); nv],
-            pstep: vec![Complex64::default(); nv],
+            pbase: vec![Complex32::default(); nv],
+            pstep: vec![Complex32::default(); nv],
+            field: vec![Complex32::default(); nv],
             tmp: vec![Complex32::default(); plan.rx.len * plan.vol.y.n],
-            xrow: vec![Complex32::default(); plan.vol.y.n],
         }
     }
 }
