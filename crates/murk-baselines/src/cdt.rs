@@ -172,6 +172,32 @@ pub fn cdt(capture: &Capture, params: CdtParams) -> Result<Reconstruction> {
     CdtPlan::new(capture, params)?.run(capture)
 }
 
+/// The CDT forward model: a free-space confocal capture as seen through `slab`, i.e. convolved in
+/// (x, y, t) with the slab's round trip K ⊛ K on the capture's own bins (linear convolution; what
+/// is pushed past the last bin is dropped). For tests and simulations.
+pub fn through_slab(capture: &Capture, slab: &SlabParams) -> Result<Capture> {
+    slab.validate()?;
+    let mut c = capture.clone();
+    let g = ConfocalGeometry::new(&c, TimeGrid::Native)?;
+    if g.nt != c.time.bins {
+        return Err(Error::Unsupported(
+            "through_slab needs a capture whose time axis starts at the wall (no start offset or wall legs)".into(),
+        ));
+    }
+    let stolt = Stolt::new(&g);
+    let h = round_trip_spectrum(&g, slab, &stolt.fft);
+    let mut buf = stolt.padded(&g.sample(&c));
+    stolt.fft.forward(&mut buf, [g.nx, g.ny]);
+    buf.par_iter_mut().zip(&h).for_each(|(b, h)| *b *= h);
+    stolt.fft.inverse(&mut buf, [g.nx, g.ny]);
+    let m2 = stolt.fft.dims[2];
+    for (i, hist) in c.h.chunks_mut(g.nt).enumerate() {
+        let col = &buf[((i / g.ny) * 2 * g.ny + i % g.ny) * m2..][..g.nt];
+        hist.iter_mut().zip(col).for_each(|(d, s)| *d = s.re);
+    }
+    Ok(c)
+}
+
 /// Spectrum of K ⊛ K (circular) on the padded grid of `fft`.
 fn round_trip_spectrum(g: &ConfocalGeometry, slab: &SlabParams, fft: &Fft3) -> Vec<C32> {
     let full = [fft.dims[0], fft.dims[1]];
@@ -227,23 +253,6 @@ mod tests {
         }
     }
 
-    /// The capture seen through the slab: the free-space transient convolved with K ⊛ K.
-    fn through_slab(mut c: Capture) -> Capture {
-        let g = ConfocalGeometry::new(&c, TimeGrid::Native).unwrap();
-        let stolt = Stolt::new(&g);
-        let h = round_trip_spectrum(&g, &SlabParams::default(), &stolt.fft);
-        let mut buf = stolt.padded(&g.sample(&c));
-        stolt.fft.forward(&mut buf, [g.nx, g.ny]);
-        buf.iter_mut().zip(&h).for_each(|(b, h)| *b *= h);
-        stolt.fft.inverse(&mut buf, [g.nx, g.ny]);
-        let m2 = stolt.fft.dims[2];
-        for (i, hist) in c.h.chunks_mut(g.nt).enumerate() {
-            let col = &buf[((i / g.ny) * 2 * g.ny + i % g.ny) * m2..][..g.nt];
-            hist.iter_mut().zip(col).for_each(|(d, s)| *d = s.re);
-        }
-        c
-    }
-
     #[test]
     fn kernel_is_causal_and_delays_light() {
         let slab = SlabParams::default();
@@ -260,7 +269,7 @@ mod tests {
         // Scan point (8, 8) of 16² over 0.64 m is at (0.02, 0.02); z = 0.3 m is depth index 60.
         let mut c = confocal(16, 0.64, axis(0.0, 0.01, 128));
         add_point(&mut c, DVec3::new(0.02, 0.02, 0.3));
-        let c = through_slab(c);
+        let c = through_slab(&c, &SlabParams::default()).unwrap();
         let r = cdt(&c, native()).unwrap();
         let [ix, iy, k] = r.argmax();
         assert!(
@@ -278,7 +287,7 @@ mod tests {
         // the deconvolution turns into ringing at the far end of the volume.
         let mut c = confocal(16, 0.64, axis(0.0, 0.01, 192));
         add_plane(&mut c, 0.3, 0.48, 24);
-        let r = cdt(&through_slab(c), native()).unwrap();
+        let r = cdt(&through_slab(&c, &SlabParams::default()).unwrap(), native()).unwrap();
         assert_plane_depth(&r, 60, 4);
     }
 }

@@ -113,6 +113,14 @@ pub fn read_mat_v5_array(path: &Path, var: &str) -> Result<(Vec<usize>, Vec<f32>
     })?;
     let Some(arr) = mat.find_by_name(var) else {
         let names: Vec<String> = mat.arrays().iter().map(|a| a.name().to_string()).collect();
+        // matfile drops an array cut short instead of failing: data past the header but no
+        // complete variable means a truncated file.
+        if names.is_empty() && bytes.len() > 128 {
+            return Err(Error::format(
+                path,
+                "truncated or corrupt MATLAB v5 file (no complete variable)",
+            ));
+        }
         return Err(missing_var(path, var, &names));
     };
     use matfile::NumericData as D;
