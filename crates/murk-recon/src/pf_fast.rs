@@ -195,14 +195,26 @@ impl<'a> Plan<'a> {
         // Round trip for confocal data: both legs share the wall point.
         let legs = if src.is_none() { 2.0 } else { 1.0 };
         let (k0, dk) = (band.k(0), band.dk());
-        for p in 0..gx {
-            let dx = (p as i64 + self.rx.lo - (gnx as i64 - 1)) as f64 * dxs;
-            for q in 0..gy {
-                let dy = (q as i64 + self.ry.lo - (gny as i64 - 1)) as f64 * dys;
+        // The kernel depends on |dx| and |dy| only: evaluate the sines and cosines once per distinct
+        // pair (a quarter of the support when the lattice is centred on the wall) and copy.
+        let off_x = |p: usize| (p as i64 + self.rx.lo - (gnx as i64 - 1)).unsigned_abs() as usize;
+        let off_y = |q: usize| (q as i64 + self.ry.lo - (gny as i64 - 1)).unsigned_abs() as usize;
+        let (mx, my) = (off_x(0).max(off_x(gx - 1)) + 1, off_y(0).max(off_y(gy - 1)) + 1);
+        ws.table.resize(mx * my, (Complex32::default(), Complex32::default()));
+        for ax in 0..mx {
+            let dx = ax as f64 * dxs;
+            for ay in 0..my {
+                let dy = ay as f64 * dys;
                 let r = (dx * dx + dy * dy + dz * dz).sqrt();
                 let amp = amplitude(self.falloff, r).powf(legs);
-                ws.base[p * gy + q] = c32(Complex64::from_polar(amp, k0 * legs * r));
-                ws.step[p * gy + q] = c32(Complex64::from_polar(1.0, dk * legs * r));
+                ws.table[ax * my + ay] =
+                    (c32(Complex64::from_polar(amp, k0 * legs * r)), c32(Complex64::from_polar(1.0, dk * legs * r)));
+            }
+        }
+        for p in 0..gx {
+            let row = &ws.table[off_x(p) * my..(off_x(p) + 1) * my];
+            for q in 0..gy {
+                (ws.base[p * gy + q], ws.step[p * gy + q]) = row[off_y(q)];
             }
         }
         // Exact phase of the point-side leg, per voxel.
@@ -336,6 +348,8 @@ struct Workspace {
     /// over a band of a few hundred frequencies stays below 1e-5).
     base: Vec<Complex32>,
     step: Vec<Complex32>,
+    /// Kernel start value and step per distinct (|dx|, |dy|).
+    table: Vec<(Complex32, Complex32)>,
     /// Point-side phase per voxel and its per-frequency step (f32 recurrence, as for the kernel).
     pbase: Vec<Complex32>,
     pstep: Vec<Complex32>,
@@ -355,6 +369,7 @@ impl Workspace {
             scratch: plan.fft.scratch(),
             base: vec![Complex32::default(); support],
             step: vec![Complex32::default(); support],
+            table: Vec::new(),
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
