@@ -609,15 +609,51 @@ fn phasor_fields_match_tal_fbp() {
         wall_size_m: 1.0,
         grid: 32,
         point: DVec3::ZERO,
-        time: TimeAxis { start_m: 0.0, bin_width_m: 0.005, bins: 512 },
+        time: TimeAxis {
+            start_m: 0.0,
+            bin_width_m: 0.005,
+            bins: 512,
+        },
         laser_xyz: None,
         sensor_xyz: None,
     };
     let mut cap = layout.empty_capture().unwrap();
-    let t_letter = vec![[-0.25, 0.25], [0.25, 0.25], [0.25, 0.15], [0.05, 0.15], [0.05, -0.25], [-0.05, -0.25], [-0.05, 0.15], [-0.25, 0.15]];
-    let mut sc = Target::Polygon { outline: t_letter, offset: [0.0; 2], depth_m: 0.7, albedo: 1.0, spacing_m: 1.0 / 64.0 }.scatterers().unwrap();
-    sc.extend(Target::Point { pos: DVec3::new(0.3, -0.3, 0.6), albedo: 0.02 }.scatterers().unwrap());
-    add_first_bounce(&mut cap, &sc, &SynthOptions { cosines: true, ..SynthOptions::default() }).unwrap();
+    let t_letter = vec![
+        [-0.25, 0.25],
+        [0.25, 0.25],
+        [0.25, 0.15],
+        [0.05, 0.15],
+        [0.05, -0.25],
+        [-0.05, -0.25],
+        [-0.05, 0.15],
+        [-0.25, 0.15],
+    ];
+    let mut sc = Target::Polygon {
+        outline: t_letter,
+        offset: [0.0; 2],
+        depth_m: 0.7,
+        albedo: 1.0,
+        spacing_m: 1.0 / 64.0,
+    }
+    .scatterers()
+    .unwrap();
+    sc.extend(
+        Target::Point {
+            pos: DVec3::new(0.3, -0.3, 0.6),
+            albedo: 0.02,
+        }
+        .scatterers()
+        .unwrap(),
+    );
+    add_first_bounce(
+        &mut cap,
+        &sc,
+        &SynthOptions {
+            cosines: true,
+            ..SynthOptions::default()
+        },
+    )
+    .unwrap();
     let dir = tmpdir("pf-fbp");
     let file = dir.join("t_single.h5");
     murk_io::write_capture(&file, &cap).unwrap();
@@ -644,8 +680,19 @@ print(' '.join(repr(float(v)) for v in (np.abs(r) ** 2).ravel()))
         y: murk_core::Axis::new(-c, c, 32),
         z: murk_core::Axis::new(0.55, 0.85, 16),
     };
-    let params = murk_recon::PfParams { wavelength: murk_recon::Wavelength::Metres(lambda), cycles, ..Default::default() };
-    let rec = murk_recon::reconstruct(&murk_io::read_capture(&file).unwrap(), &vol, &params, murk_recon::Method::Fast, &murk_recon::NoProgress).unwrap();
+    let params = murk_recon::PfParams {
+        wavelength: murk_recon::Wavelength::Metres(lambda),
+        cycles,
+        ..Default::default()
+    };
+    let rec = murk_recon::reconstruct(
+        &murk_io::read_capture(&file).unwrap(),
+        &vol,
+        &params,
+        murk_recon::Method::Fast,
+        &murk_recon::NoProgress,
+    )
+    .unwrap();
     assert_eq!(tal_i.len(), rec.intensity.len());
     let murk_i: Vec<f64> = rec.intensity.iter().map(|&v| v as f64).collect();
     let corr = pearson(&murk_i, &tal_i);

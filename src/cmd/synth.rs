@@ -8,10 +8,13 @@ use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Targ
 use std::path::PathBuf;
 
 #[derive(Args, Clone)]
-#[command(allow_negative_numbers = true, after_help = "Examples:\n  \
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  \
 murk synth --out point.h5 --target point:0.1,-0.2,1.0\n  \
 murk synth --out z.h5 --kind laser-grid --wall-size 2 --grid 128 --bins 4096 --bin-width 0.0009 --start 3.5 --target z:2.0\n  \
-murk synth --out fog.h5 --target t:1.0 --mu-t 1.0 --jitter 0.003 --cosines")]
+murk synth --out fog.h5 --target t:1.0 --mu-t 1.0 --jitter 0.003 --cosines"
+)]
 pub struct SynthArgs {
     /// Output capture (y-tal HDF5).
     #[arg(long)]
