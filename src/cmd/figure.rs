@@ -1,7 +1,7 @@
 //! `murk figure real`: the paper's real-data comparison (its Fig. 5): the five CDT captures of
 //! Lindell & Wetzstein 2020 reconstructed with CDT and with confocal Phasor Fields (λ = 4Δc,
-//! 8 cycles), as a PNG grid (rows CDT, PF; a column per scene) and an index.html with parameters,
-//! depths and timings.
+//! 8 cycles, with λ read on the depth axis and, for comparison, on the path axis), as a PNG grid
+//! (rows CDT, PF, PF; a column per scene) and an index.html with parameters, depths and timings.
 
 use crate::cmd::import::{import, Format, ImportOptions, CDT_SCENES};
 use crate::cmd::pictures::{self, Plane};
@@ -85,7 +85,7 @@ struct Cell {
     secs: f64,
 }
 
-fn scene(path: &Path, snr: f64, runs: usize, pf: &PfParams) -> anyhow::Result<[Cell; 2]> {
+fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> anyhow::Result<Vec<Cell>> {
     let cap: Capture = import(
         path,
         &ImportOptions {
@@ -115,32 +115,40 @@ fn scene(path: &Path, snr: f64, runs: usize, pf: &PfParams) -> anyhow::Result<[C
         ..cdt.volume
     };
     let hidden = Bar::new("pf", true);
-    let (secs, r) = timed(runs, || {
-        Ok(murk_recon::reconstruct(
-            &shifted,
-            &vol,
-            pf,
-            Method::Fast,
-            &hidden,
-        )?)
-    })?;
-    let pf = Cell {
-        volume: r.volume,
-        intensity: r.intensity,
-        secs,
-    };
-    Ok([cdt, pf])
+    let mut cells = vec![cdt];
+    for pf in pfs {
+        let (secs, r) = timed(runs, || {
+            Ok(murk_recon::reconstruct(
+                &shifted,
+                &vol,
+                pf,
+                Method::Fast,
+                &hidden,
+            )?)
+        })?;
+        cells.push(Cell {
+            volume: r.volume,
+            intensity: r.intensity,
+            secs,
+        });
+    }
+    Ok(cells)
 }
 
 pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
     let Which::Real = a.which;
     std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
-    let pf = PfParams {
-        wavelength: Wavelength::WallFactor(4.0),
+    // The paper's "λ = 4Δc, 8 cycles" for these confocal captures, read two ways. On the depth axis
+    // (one-way distance, as confocal codes such as Lindell's define their wavelength) it is 8Δc of round-trip
+    // path; read on the path axis, the round-trip kernel e^{2ikr} puts λ/2 = 2Δc at the lateral Nyquist
+    // limit and the band's short end beyond it.
+    let pf_of = |factor: f64| PfParams {
+        wavelength: Wavelength::WallFactor(factor),
         cycles: 8.0,
         falloff: Falloff::None,
         compensation: murk_recon::Compensation::None,
     };
+    let pfs = [pf_of(8.0), pf_of(4.0)];
     let slab = CdtParams::default().slab;
     let mut rows = vec![
         (
@@ -153,7 +161,7 @@ pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
         (
             "PF".to_string(),
             format!(
-                "confocal round-trip kernel, λ = 4Δc, 8 cycles, no falloff, fast form; time shifted by the slab's round-trip peak delay {:.4} m of path; same voxels as CDT",
+                "confocal round-trip kernel, 8 cycles, no falloff, fast form; time shifted by the slab's round-trip peak delay {:.4} m of path; same voxels as CDT. Row 2: λ = 4Δc of depth (one-way distance) = 8Δc of path (--wavefactor 8). Row 3: λ = 4Δc of path (--wavefactor 4), at the Nyquist limit of the round-trip kernel",
                 slab_delay_m(&slab)
             ),
         ),
@@ -167,7 +175,7 @@ pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
         ),
         (
             "grid.png".to_string(),
-            "top row CDT, bottom row PF; columns: letter_s, mannequin, letter_t, cones, letters_ut; front views (from the wall, +y up, +x left), each normalised to its own maximum".to_string(),
+            "rows: CDT; PF λ = 4Δc of depth; PF λ = 4Δc of path. Columns: letter_s, mannequin, letter_t, cones, letters_ut; front views (from the wall, +y up, +x left), each normalised to its own range".to_string(),
         ),
     ];
     let mut cells = Vec::new();
@@ -178,8 +186,8 @@ pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
             .map(|s| s.2)
             .expect("every figure scene is a known CDT scene");
         let path = a.data.join(format!("{name}.mat"));
-        let pair = scene(&path, snr, a.runs, &pf).with_context(|| path.display().to_string())?;
-        for (label, c) in ["CDT", "PF"].iter().zip(&pair) {
+        let pair = scene(&path, snr, a.runs, &pfs).with_context(|| path.display().to_string())?;
+        for (label, c) in ["CDT", "PF", "PF (λ on path)"].iter().zip(&pair) {
             let (peak, median) = depths(&c.volume, &c.intensity);
             let line = format!(
                 "peak depth {peak:.3} m, median depth {median:.3} m, {:.1} ms",
@@ -200,7 +208,7 @@ pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
     pictures::write_png(&png, &grid, 0.0, 1.0)?;
     let index = pictures::write_index(
         &a.out,
-        "Real captures behind 2.54 cm of foam: CDT (top) vs Phasor Fields (bottom)",
+        "Real captures behind 2.54 cm of foam: CDT (top) vs Phasor Fields",
         &rows,
         &[(png, grid.extents.clone())],
     )?;
@@ -209,13 +217,14 @@ pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
 }
 
 /// Front views side by side, each normalised to [0, 1], NaN (black) between cells.
-fn grid_plane(cells: &[[Cell; 2]]) -> Plane {
+fn grid_plane(cells: &[Vec<Cell>]) -> Plane {
     let front = |c: &Cell| pictures::views(&c.volume, &c.intensity).front;
     let (cw, ch) = {
         let f = front(&cells[0][0]);
         (f.width * ZOOM, f.height * ZOOM)
     };
-    let (w, h) = (cells.len() * (cw + GAP) - GAP, 2 * ch + GAP);
+    let rows = cells[0].len();
+    let (w, h) = (cells.len() * (cw + GAP) - GAP, rows * (ch + GAP) - GAP);
     let mut values = vec![f32::NAN; w * h];
     for (col, pair) in cells.iter().enumerate() {
         for (row, c) in pair.iter().enumerate() {
@@ -235,6 +244,6 @@ fn grid_plane(cells: &[[Cell; 2]]) -> Plane {
         width: w,
         height: h,
         values,
-        extents: "rows: CDT, PF; columns: letter_s, mannequin, letter_t, cones, letters_ut; each a front view (from the wall, +y up, +x left), normalised to its own range".into(),
+        extents: "rows: CDT, PF (λ = 4Δc of depth), PF (λ = 4Δc of path); columns: letter_s, mannequin, letter_t, cones, letters_ut; each a front view (from the wall, +y up, +x left), normalised to its own range".into(),
     }
 }

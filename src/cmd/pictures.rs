@@ -143,9 +143,9 @@ pub fn write_png(path: &Path, plane: &Plane, lo: f32, hi: f32) -> Result<()> {
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
         let fail = |e: png::EncodingError| murk_core::Error::format(path, e.to_string());
-        enc.add_text_chunk("murk:extents".into(), plane.extents.clone())
+        enc.add_itxt_chunk("murk:extents".into(), plane.extents.clone())
             .map_err(fail)?;
-        enc.add_text_chunk("murk:range".into(), format!("{lo} .. {hi}"))
+        enc.add_itxt_chunk("murk:range".into(), format!("{lo} .. {hi}"))
             .map_err(fail)?;
         let mut wr = enc.write_header().map_err(fail)?;
         wr.write_image_data(&rgb).map_err(fail)?;

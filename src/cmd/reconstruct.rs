@@ -77,7 +77,9 @@ pub struct ReconstructArgs {
     /// Virtual wavelength λ in metres.
     #[arg(long, conflicts_with = "wavefactor")]
     pub wavelength: Option<f64>,
-    /// Virtual wavelength as a multiple of the wall spacing Δc (default 4, the paper's λ = 4Δc).
+    /// Virtual wavelength as a multiple of the wall spacing Δc. Default: 4 (the paper's λ = 4Δc); for
+    /// confocal captures 8, i.e. λ = 4Δc of depth (one-way distance), because their round-trip kernel
+    /// e^{2ikr} halves the lateral wavelength (4Δc of path sits at the Nyquist limit and speckles).
     #[arg(long)]
     pub wavefactor: Option<f64>,
     /// Pulse length in wavelengths: σ = cycles·λ/6 (paper: 4 for synthetic, 8 for real data).
@@ -144,11 +146,13 @@ impl SlabArgs {
 }
 
 impl ReconstructArgs {
-    pub fn params(&self) -> anyhow::Result<PfParams> {
+    /// Phasor Fields parameters for `cap` (the default wavelength depends on whether it is confocal).
+    pub fn params(&self, cap: &Capture) -> anyhow::Result<PfParams> {
+        let confocal = cap.kind() == murk_core::CaptureKind::Confocal;
         let wavelength = match (self.wavelength, self.wavefactor) {
             (Some(m), _) => Wavelength::Metres(m),
             (None, Some(f)) => Wavelength::WallFactor(f),
-            (None, None) => Wavelength::WallFactor(4.0),
+            (None, None) => Wavelength::WallFactor(if confocal { 8.0 } else { 4.0 }),
         };
         let mu = self.mu_t.unwrap_or(0.0);
         let compensation = match self.compensate {
@@ -414,8 +418,8 @@ pub fn reconstruct_any(
 
 pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     VolumeFormat::of(&a.out)?;
-    let params = a.params()?;
     let mut cap = murk_io::read_capture(&a.file)?;
+    let params = a.params(&cap)?;
     let offset = t_offset_m(a.t_offset.as_deref(), &a.slab.slab())?;
     cap.time.start_m -= offset;
     let volume = match &a.volume {
