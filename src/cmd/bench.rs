@@ -21,6 +21,12 @@ pub struct BenchArgs {
     /// Skip the paper-format Z-letter case.
     #[arg(long)]
     pub skip_z: bool,
+    /// Benchmark the renderer instead: the T-letter scenes next to mitransient, and the paper format.
+    #[arg(long)]
+    pub render: bool,
+    /// Where the renderer benchmark finds its scene files.
+    #[arg(long, default_value = "scenes")]
+    pub scenes: PathBuf,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -51,6 +57,9 @@ pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
             a.runs
         ),
     );
+    if a.render {
+        return crate::cmd::bench_render::run(&a.scenes, a.runs, quiet);
+    }
     if !a.skip_z {
         z_letter(a.runs, quiet)?;
     }

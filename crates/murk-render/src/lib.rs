@@ -5,10 +5,12 @@
 //! the other side (the laser spot is a point emitter, the SPAD point a point sensor), hidden-geometry
 //! sampling of the first direction mixed with cosine sampling (one-sample MIS with the exact mixture pdf),
 //! free-flight and Henyey–Greenstein sampling, equiangular sampling toward the wall points on every
-//! medium segment combined with free flight by the balance heuristic, Russian roulette and a depth cap.
+//! medium segment and target-side sampling of medium vertices from the wall points, all combined with free
+//! flight by the balance heuristic, Russian roulette and a depth cap.
 //! For many laser points and one SPAD point paths start at the laser points (reciprocity), so every
 //! vertex makes one connection instead of one per laser point.
 
+pub mod bench;
 mod geometry;
 mod integrator;
 mod medium;

@@ -107,6 +107,9 @@ pub struct RenderDef {
     /// Medium distances drawn so the connected path lands uniformly in the capture's time window (MIS-combined
     /// with equiangular and free flight); used where the medium's ior is 1.
     pub time_sampling: bool,
+    /// Medium vertices also drawn from the wall points' side (cosine lobe, equiangular toward the path
+    /// vertex), MIS-combined with the path side: removes the fireflies of fog paths passing near a wall point.
+    pub target_sampling: bool,
     pub trace_from: TraceFrom,
 }
 
@@ -120,6 +123,7 @@ impl Default for RenderDef {
             hidden_geometry_sampling: 0.8,
             equiangular: true,
             time_sampling: false,
+            target_sampling: true,
             trace_from: TraceFrom::Auto,
         }
     }

@@ -285,8 +285,8 @@ fn reciprocity_laser_and_sensor_tracing_agree() {
     );
 }
 
-/// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 256×-spp reference
-/// (accepted: 3.2–5.0, the reference's own noise and the error estimate's spread included).
+/// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 64 000-spp reference
+/// (expected 3.9 with the reference's own noise; accepted: 3.2–5.0).
 #[test]
 fn error_falls_as_inverse_sqrt_spp() {
     let s = scene(&format!(
@@ -320,7 +320,14 @@ fn error_falls_as_inverse_sqrt_spp() {
         let den: f64 = reference.iter().map(|r| (*r as f64).powi(2)).sum();
         (num / den).sqrt()
     };
-    let (e1, e16) = (err(250, 8), err(4000, 9));
+    // Medians of five seeds: one run's error of a path tracer in fog has a skewed spread (measured for
+    // single runs at 250 spp: 0.29–0.76).
+    let median = |spp: u64, seed0: u64| {
+        let mut e: Vec<f64> = (seed0..seed0 + 5).map(|seed| err(spp, seed)).collect();
+        e.sort_by(f64::total_cmp);
+        e[2]
+    };
+    let (e1, e16) = (median(250, 8), median(4000, 20));
     let ratio = e1 / e16;
     assert!(
         (3.2..5.0).contains(&ratio),

@@ -1,0 +1,133 @@
+//! `murk bench --render`: the renderer's efficiency on mitransient.md §7.2's T-letter scenes, next to
+//! mitransient 1.3.1's figures measured on this machine (§7.4), and the paper-format Z-letter capture.
+
+use crate::cmd::progress::say;
+use anyhow::Context;
+use murk_render::bench::{median, peak_rss_mib, rel_l2, split_rel_l2, timed_render, window_mask};
+use murk_render::{Overrides, Plan, Scene};
+use std::path::Path;
+
+/// One T-letter case: scene file, spp, reference spp, object window (m; `None`: all bins), and
+/// mitransient's relL2 and CPU seconds for it (mitransient.md §7.4: 10 000 spp against a 100 000-spp
+/// reference, 2 vCPU EPYC; `transient_nlos_path` without a medium, `transient_prbvolpath` with one).
+struct Case {
+    file: &'static str,
+    spp: u64,
+    ref_spp: u64,
+    window: Option<(f64, f64)>,
+    mitransient: (f64, f64),
+}
+
+const CASES: [Case; 3] = [
+    Case {
+        file: "t-wall-single.toml",
+        spp: 1000,
+        ref_spp: 16_000,
+        window: Some((1.98, 2.70)),
+        mitransient: (0.058, 2.64),
+    },
+    // §7.4 gives the confocal error over all bins only; compared over all bins.
+    Case {
+        file: "t-wall-confocal.toml",
+        spp: 1000,
+        ref_spp: 16_000,
+        window: None,
+        mitransient: (0.065, 2.42),
+    },
+    Case {
+        file: "t-wall-medium.toml",
+        spp: 256,
+        ref_spp: 4096,
+        window: Some((1.98, 2.70)),
+        mitransient: (0.624, 16.48),
+    },
+];
+
+pub fn run(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+    for c in &CASES {
+        t_case(scenes, c, runs, quiet)?;
+    }
+    paper_format(scenes, runs, quiet)
+}
+
+fn load(scenes: &Path, file: &str, ov: &Overrides) -> anyhow::Result<Scene> {
+    let path = scenes.join(file);
+    Scene::load(&path, ov).with_context(|| format!("{} (use --scenes DIR)", path.display()))
+}
+
+fn t_case(scenes: &Path, c: &Case, runs: usize, quiet: bool) -> anyhow::Result<()> {
+    let scene = load(scenes, c.file, &Overrides::default())?;
+    let plan = Plan::new(&scene);
+    let reference = timed_render(&plan, c.ref_spp, 1_000_000, None)?;
+    let mask = window_mask(
+        &scene.capture.time,
+        reference.h.len(),
+        c.window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY)),
+    );
+    let mut rows = Vec::new();
+    for seed in 0..runs as u64 {
+        let r = timed_render(&plan, c.spp, seed, None)?;
+        // The reference's own noise adds spp/ref_spp of the run's variance; take it out.
+        let e = rel_l2(&r.h, &reference.h, &mask) / (1.0 + c.spp as f64 / c.ref_spp as f64).sqrt();
+        rows.push((e, r.cpu_s, r.paths / r.cpu_s));
+    }
+    let (e, cpu, rate) = (
+        median(rows.iter().map(|r| r.0).collect()),
+        median(rows.iter().map(|r| r.1).collect()),
+        median(rows.iter().map(|r| r.2).collect()),
+    );
+    let (em, cm) = c.mitransient;
+    // CPU time to mitransient's error, by error ∝ CPU^−½.
+    let ours = cpu * (e / em).powi(2);
+    say(quiet, format!(
+        "{}: {} points × {} spp, median of {runs}: relL2 {e:.4} ({}), CPU {cpu:.2} s, {:.2} M paths/CPU-s; to mitransient's {em} we need {ours:.2} CPU-s vs its {cm} s: {:.1}× less CPU",
+        c.file,
+        plan.n_units(),
+        c.spp,
+        c.window.map_or("all bins".to_string(), |w| format!("object window {}–{} m", w.0, w.1)),
+        rate / 1e6,
+        cm / ours
+    ));
+    Ok(())
+}
+
+/// The paper's format (`scenes/z-letter.toml`: 128² laser grid, one SPAD point, 4096 bins, fog μt = 1/m,
+/// α = 0.5). A full render to 6 % takes hours here, so: the error of one run is measured on 256 central
+/// laser points (shard 32/64) from pairs of independent runs, and the CPU time to 6 % over the whole grid
+/// is extrapolated with error ∝ spp^−½ and CPU ∝ laser points × spp. Peak memory: a full-grid render.
+fn paper_format(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+    const SPP: u64 = 64;
+    // The Z's direct returns: 2 m + 2 m at the centre to 2.81 m + 2.08 m from a grid corner.
+    const WINDOW: (f64, f64) = (4.0, 4.9);
+    let scene = load(scenes, "z-letter.toml", &Overrides::default())?;
+    let plan = Plan::new(&scene);
+    let shard = Some((32, 64));
+    let pairs: Vec<_> = (0..runs.max(1) as u64)
+        .map(|p| {
+            let a = timed_render(&plan, SPP, 2 * p, shard)?;
+            let b = timed_render(&plan, SPP, 2 * p + 1, shard)?;
+            let mask = window_mask(&scene.capture.time, a.h.len(), WINDOW);
+            // Histograms outside the shard are zero in both runs and drop out of both sums.
+            let e = split_rel_l2(&a.h, &b.h, &mask);
+            Ok((e, (a.cpu_s + b.cpu_s) / (a.paths + b.paths)))
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let e = median(pairs.iter().map(|p| p.0).collect());
+    let cpu_per_path = median(pairs.iter().map(|p| p.1).collect());
+    let spp6 = SPP as f64 * (e / 0.06).powi(2);
+    let cpu6 = cpu_per_path * plan.n_units() as f64 * spp6;
+    // Peak memory of a whole render at 1 spp (the histograms do not grow with spp).
+    timed_render(&plan, 1, 0, None)?;
+    say(quiet, format!(
+        "paper format (z-letter.toml, {} laser points × {} bins): {SPP} spp gives object-window ({}–{} m) relL2 {e:.3} (median of {} pairs, 256 central laser points), {:.3} M paths/CPU-s; extrapolated (error ∝ spp^−½): 6 % needs {spp6:.0} spp = {:.2} CPU-hours; peak RSS of a full-grid render {:.0} MiB",
+        plan.n_units(),
+        scene.capture.time.bins,
+        WINDOW.0,
+        WINDOW.1,
+        pairs.len(),
+        1e-6 / cpu_per_path,
+        cpu6 / 3600.0,
+        peak_rss_mib().unwrap_or(f64::NAN)
+    ));
+    Ok(())
+}
