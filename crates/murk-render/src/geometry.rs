@@ -1,5 +1,5 @@
-//! Hidden-scene geometry: rectangles and triangles behind a brute-force per-object bounding-box test.
-//! Surfaces are two-sided Lambertian reflectors.
+//! Hidden-scene geometry: rectangles and triangles in a bounding volume hierarchy. Surfaces are two-sided
+//! Lambertian reflectors.
 
 use murk_core::DVec3;
 
@@ -129,7 +129,10 @@ impl Aabb {
     }
     /// The part `[t0, t1]` of the ray inside the box, clipped to `[0, t_max]`; `None` if empty.
     pub fn clip(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
-        let inv = d.recip();
+        self.clip_inv(o, d.recip(), t_max)
+    }
+    /// `clip` with the ray direction's reciprocal precomputed.
+    fn clip_inv(&self, o: DVec3, inv: DVec3, t_max: f64) -> Option<(f64, f64)> {
         let ta = (self.min - o) * inv;
         let tb = (self.max - o) * inv;
         let lo = ta.min(tb);
@@ -191,13 +194,155 @@ pub struct Hit {
     pub albedo: f64,
 }
 
+/// What a BVH walk does after a primitive hit.
+pub enum Step {
+    /// Keep looking with the same range.
+    Continue,
+    /// Keep looking for hits closer than this one.
+    Shrink,
+    /// Done.
+    Stop,
+}
+
+#[derive(Clone, Debug)]
+struct Node {
+    bounds: Aabb,
+    /// A leaf's primitive range, or an interior node's two children.
+    a: u32,
+    b: u32,
+    leaf: bool,
+}
+
+/// A bounding volume hierarchy over primitives, each with a caller's tag (median split on the longest
+/// axis of the centroids, at most 4 primitives per leaf), so a ray costs O(log n) box tests on OBJ meshes.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    prims: Vec<Shape>,
+    tags: Vec<u32>,
+}
+
+impl Bvh {
+    pub fn new(items: Vec<(Shape, u32)>) -> Self {
+        let mut bvh = Bvh::default();
+        let mut items: Vec<(Shape, u32, Aabb)> = items
+            .into_iter()
+            .map(|(s, t)| {
+                let b = s.bounds();
+                (s, t, b)
+            })
+            .collect();
+        if !items.is_empty() {
+            bvh.build(&mut items, 0);
+        }
+        for (s, t, _) in items {
+            bvh.prims.push(s);
+            bvh.tags.push(t);
+        }
+        bvh
+    }
+
+    /// Builds the subtree over `items`, which start at `offset` in the final primitive order (they are
+    /// reordered in place), and returns its node.
+    fn build(&mut self, items: &mut [(Shape, u32, Aabb)], offset: usize) -> u32 {
+        let bounds = items.iter().fold(Aabb::empty(), |b, i| b.union(i.2));
+        let id = self.nodes.len() as u32;
+        self.nodes.push(Node {
+            bounds,
+            a: offset as u32,
+            b: (offset + items.len()) as u32,
+            leaf: true,
+        });
+        if items.len() <= 4 {
+            return id;
+        }
+        let centre = |b: &Aabb| (b.min + b.max) * 0.5;
+        let cb = items
+            .iter()
+            .fold(Aabb::empty(), |b, i| b.grow(centre(&i.2)));
+        let ext = cb.max - cb.min;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        let mid = items.len() / 2;
+        items.select_nth_unstable_by(mid, |p, q| {
+            centre(&p.2)[axis].total_cmp(&centre(&q.2)[axis])
+        });
+        let (lo, hi) = items.split_at_mut(mid);
+        let a = self.build(lo, offset);
+        let b = self.build(hi, offset + mid);
+        self.nodes[id as usize] = Node {
+            bounds,
+            a,
+            b,
+            leaf: false,
+        };
+        id
+    }
+
+    /// Visits the primitives hit by `o + t·d`, t ∈ (EPS, t_max), calling `hit(primitive, tag, t)`.
+    pub fn walk(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        mut t_max: f64,
+        mut hit: impl FnMut(&Shape, u32, f64) -> Step,
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let inv = d.recip();
+        // Depth ≤ log2(n) + 1 for a median split, and each level leaves at most one node on the stack.
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = &self.nodes[stack[top] as usize];
+            if n.bounds.clip_inv(o, inv, t_max).is_none() {
+                continue;
+            }
+            if n.leaf {
+                for i in n.a as usize..n.b as usize {
+                    if let Some(t) = self.prims[i].intersect(o, d, t_max) {
+                        match hit(&self.prims[i], self.tags[i], t) {
+                            Step::Continue => {}
+                            Step::Shrink => t_max = t,
+                            Step::Stop => return,
+                        }
+                    }
+                }
+            } else {
+                stack[top] = n.a;
+                stack[top + 1] = n.b;
+                top += 2;
+            }
+        }
+    }
+}
+
 /// All hidden geometry (the relay surface is handled separately by the integrator).
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     pub objects: Vec<Object>,
+    bvh: Bvh,
 }
 
 impl Geometry {
+    pub fn new(objects: Vec<Object>) -> Self {
+        let bvh = Bvh::new(
+            objects
+                .iter()
+                .enumerate()
+                .flat_map(|(k, o)| o.prims.iter().map(move |p| (p.clone(), k as u32)))
+                .collect(),
+        );
+        Geometry { objects, bvh }
+    }
+
     pub fn is_empty(&self) -> bool {
         self.objects.iter().all(|o| o.prims.is_empty())
     }
@@ -209,34 +354,26 @@ impl Geometry {
     }
 
     pub fn intersect(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let mut t_best = t_max;
-        for obj in &self.objects {
-            if obj.bounds.clip(o, d, t_best).is_none() {
-                continue;
-            }
-            for p in &obj.prims {
-                if let Some(t) = p.intersect(o, d, t_best) {
-                    t_best = t;
-                    let n = p.normal();
-                    best = Some(Hit {
-                        t,
-                        n: if n.dot(d) > 0.0 { -n } else { n },
-                        albedo: obj.albedo,
-                    });
-                }
-            }
-        }
-        best
+        let mut best = None;
+        self.bvh.walk(o, d, t_max, |p, k, t| {
+            best = Some((p.normal(), k, t));
+            Step::Shrink
+        });
+        best.map(|(n, k, t)| Hit {
+            t,
+            n: if n.dot(d) > 0.0 { -n } else { n },
+            albedo: self.objects[k as usize].albedo,
+        })
     }
 
     /// Whether anything blocks the open segment `o + t·d`, t ∈ (EPS, t_max − EPS).
     pub fn occluded(&self, o: DVec3, d: DVec3, t_max: f64) -> bool {
-        let t_max = t_max - EPS;
-        self.objects.iter().any(|obj| {
-            obj.bounds.clip(o, d, t_max).is_some()
-                && obj.prims.iter().any(|p| p.intersect(o, d, t_max).is_some())
-        })
+        let mut hit = false;
+        self.bvh.walk(o, d, t_max - EPS, |_, _, _| {
+            hit = true;
+            Step::Stop
+        });
+        hit
     }
 }
 
@@ -309,6 +446,64 @@ mod tests {
             .sum();
         // Exact up to rounding: the ears tile the polygon.
         assert!((sum - shoelace).abs() < 1e-12, "{sum} vs {shoelace}");
+    }
+
+    /// The BVH answers exactly as brute force over the same primitives: nearest hit (same t), occlusion and
+    /// the set of all hits, for 2000 random rays through 500 random triangles and rectangles.
+    #[test]
+    fn bvh_matches_brute_force() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        fn v3(rnd: &mut impl FnMut() -> f64, s: f64) -> DVec3 {
+            DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * s
+        }
+        let prims: Vec<Shape> = (0..500)
+            .map(|i| {
+                let p0 = v3(&mut rnd, 4.0) + DVec3::new(0.0, 0.0, 3.0);
+                let (e1, e2) = (v3(&mut rnd, 0.6), v3(&mut rnd, 0.6));
+                if i % 2 == 0 {
+                    Shape::Triangle { p0, e1, e2 }
+                } else {
+                    // Rectangles need e1 ⟂ e2.
+                    let e2 = e2 - e1 * (e2.dot(e1) / e1.length_squared());
+                    Shape::Rect { p0, e1, e2 }
+                }
+            })
+            .collect();
+        let bvh = Bvh::new(prims.iter().cloned().zip(0..).collect());
+        let mut hits = 0;
+        for _ in 0..2000 {
+            let o = v3(&mut rnd, 2.0);
+            let d = (v3(&mut rnd, 1.0) + DVec3::new(0.0, 0.0, 0.7)).normalize();
+            let t_max = 1.0 + 6.0 * rnd();
+            let brute: Vec<(u32, f64)> = prims
+                .iter()
+                .zip(0..)
+                .filter_map(|(p, k)| p.intersect(o, d, t_max).map(|t| (k, t)))
+                .collect();
+            let mut all = Vec::new();
+            bvh.walk(o, d, t_max, |_, k, t| {
+                all.push((k, t));
+                Step::Continue
+            });
+            all.sort_by_key(|h| h.0);
+            assert_eq!(all, brute);
+            let mut nearest = None;
+            bvh.walk(o, d, t_max, |_, _, t| {
+                nearest = Some(t);
+                Step::Shrink
+            });
+            let want = brute.iter().map(|h| h.1).min_by(f64::total_cmp);
+            assert_eq!(nearest, want);
+            hits += brute.len();
+        }
+        // The rays do meet the geometry (measured: 755 hits), so the comparison is not between empty sets.
+        assert!(hits > 500, "{hits} hits");
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! W(ω) = cos θ/π. H(x_l → x_s, t) is the response per unit laser power, binned by optical path.
 //! Relay reflectance at the two endpoints is not applied (it is one constant factor per capture).
 
-use crate::geometry::{Hit, Shape, EPS};
+use crate::geometry::{Bvh, Hit, Shape, Step, EPS};
 use crate::medium::Medium;
 use crate::scene::Scene;
 use murk_core::DVec3;
@@ -57,6 +57,8 @@ struct HiddenSampler {
     prims: Vec<Shape>,
     cdf: Vec<f64>,
     total: f64,
+    /// The same primitives, for the density's all-hits ray queries.
+    bvh: Bvh,
 }
 
 impl HiddenSampler {
@@ -77,6 +79,7 @@ impl HiddenSampler {
             })
             .collect();
         HiddenSampler {
+            bvh: Bvh::new(prims.iter().map(|p| (p.clone(), 0)).collect()),
             prims,
             cdf,
             total: acc,
@@ -99,13 +102,12 @@ impl HiddenSampler {
     /// Solid-angle density of directions from `o` produced by `sample`: every point along the ray counts,
     /// occluded or not, because sampling ignores visibility.
     fn pdf(&self, o: DVec3, d: DVec3) -> f64 {
-        self.prims
-            .iter()
-            .filter_map(|p| {
-                p.intersect(o, d, f64::INFINITY)
-                    .map(|t| t * t / (self.total * p.normal().dot(d).abs().max(1e-12)))
-            })
-            .sum()
+        let mut sum = 0.0;
+        self.bvh.walk(o, d, f64::INFINITY, |p, _, t| {
+            sum += t * t / (self.total * p.normal().dot(d).abs().max(1e-12));
+            Step::Continue
+        });
+        sum
     }
 }
 

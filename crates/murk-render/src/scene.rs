@@ -661,7 +661,7 @@ impl Scene {
             }
             objects.push(obj);
         }
-        let geometry = Geometry { objects };
+        let geometry = Geometry::new(objects);
 
         let scene = Scene {
             relay,
