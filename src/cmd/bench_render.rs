@@ -92,16 +92,16 @@ fn t_case(scenes: &Path, c: &Case, runs: usize, quiet: bool) -> anyhow::Result<(
 }
 
 /// The paper's format (`scenes/z-letter.toml`: 128² laser grid, one SPAD point, 4096 bins, fog μt = 1/m,
-/// α = 0.5). A full render to 6 % takes hours here, so: the error of one run is measured on 256 central
-/// laser points (shard 32/64) from pairs of independent runs, and the CPU time to 6 % over the whole grid
+/// α = 0.5). A full render to 6 % takes hours here, so: the error of one run is measured on 1024 central
+/// laser points (shard 8/16: rows 64–71) from pairs of independent runs, and the CPU time to 6 % over the whole grid
 /// is extrapolated with error ∝ spp^−½ and CPU ∝ laser points × spp. Peak memory: a full-grid render.
 fn paper_format(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
-    const SPP: u64 = 64;
+    const SPP: u64 = 128;
     // The Z's direct returns: 2 m + 2 m at the centre to 2.81 m + 2.08 m from a grid corner.
     const WINDOW: (f64, f64) = (4.0, 4.9);
     let scene = load(scenes, "z-letter.toml", &Overrides::default())?;
     let plan = Plan::new(&scene);
-    let shard = Some((32, 64));
+    let shard = Some((8, 16));
     let pairs: Vec<_> = (0..runs.max(1) as u64)
         .map(|p| {
             let a = timed_render(&plan, SPP, 2 * p, shard)?;
@@ -119,7 +119,7 @@ fn paper_format(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
     // Peak memory of a whole render at 1 spp (the histograms do not grow with spp).
     timed_render(&plan, 1, 0, None)?;
     say(quiet, format!(
-        "paper format (z-letter.toml, {} laser points × {} bins): {SPP} spp gives object-window ({}–{} m) relL2 {e:.3} (median of {} pairs, 256 central laser points), {:.3} M paths/CPU-s; extrapolated (error ∝ spp^−½): 6 % needs {spp6:.0} spp = {:.2} CPU-hours; peak RSS of a full-grid render {:.0} MiB",
+        "paper format (z-letter.toml, {} laser points × {} bins): {SPP} spp gives object-window ({}–{} m) relL2 {e:.3} (median of {} pairs, 1024 central laser points), {:.3} M paths/CPU-s; extrapolated (error ∝ spp^−½): 6 % needs {spp6:.0} spp = {:.2} CPU-hours; peak RSS of a full-grid render {:.0} MiB",
         plan.n_units(),
         scene.capture.time.bins,
         WINDOW.0,

@@ -448,7 +448,11 @@ impl<'a> Tracer<'a> {
     /// path side can only cancel along its own segment: there, the equiangular weight still grows as 1/d
     /// for segments passing at distance d from the target, the fireflies of multiply scattered fog near the
     /// laser spot (measured: the largest object-window samples had d = 1–15 cm). Balance heuristic against
-    /// the path side's densities (free flight, equiangular, time window) for the same vertex.
+    /// the path side's densities (free flight, equiangular, time window) for the same vertex. Measured on
+    /// t-wall-medium (64 spp, variance over 16 seeds): object-window relL2 9.7 → 4.6 at 2.3× the CPU time
+    /// (1.9× the efficiency); the largest in-window samples drop from ~700× to ~200× the mean one. What is
+    /// left is mostly relay vertices a few cm from the laser spot joined to it through the fog, whose
+    /// contribution grows as 1/distance (a log-divergent variance no connection technique removes).
     fn sample_from_target(
         &self,
         m: &Medium,
