@@ -285,12 +285,12 @@ impl Bvh {
     }
 
     /// Visits the primitives hit by `o + t·d`, t ∈ (EPS, t_max), calling `hit(primitive, tag, t)`.
-    pub fn walk(
-        &self,
+    pub fn walk<'a>(
+        &'a self,
         o: DVec3,
         d: DVec3,
         mut t_max: f64,
-        mut hit: impl FnMut(&Shape, u32, f64) -> Step,
+        mut hit: impl FnMut(&'a Shape, u32, f64) -> Step,
     ) {
         if self.nodes.is_empty() {
             return;
@@ -356,13 +356,16 @@ impl Geometry {
     pub fn intersect(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<Hit> {
         let mut best = None;
         self.bvh.walk(o, d, t_max, |p, k, t| {
-            best = Some((p.normal(), k, t));
+            best = Some((p, k, t));
             Step::Shrink
         });
-        best.map(|(n, k, t)| Hit {
-            t,
-            n: if n.dot(d) > 0.0 { -n } else { n },
-            albedo: self.objects[k as usize].albedo,
+        best.map(|(p, k, t)| {
+            let n = p.normal();
+            Hit {
+                t,
+                n: if n.dot(d) > 0.0 { -n } else { n },
+                albedo: self.objects[k as usize].albedo,
+            }
         })
     }
 

@@ -35,7 +35,9 @@ impl Sampler {
             ^ 0x5851_F42D_4C95_7F2D;
         Sampler(Pcg64::new(state, unit as u128))
     }
+    /// The next uniform number (not an iterator: the stream never ends).
     #[inline]
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> f64 {
         (self.0.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }

@@ -432,7 +432,10 @@ impl Scene {
                     ));
                 }
                 check_albedo(m.albedo, "medium.albedo", &bad)?;
-                if !(m.g.abs() < 1.0) {
+                // Written so that NaN fails too.
+                #[allow(clippy::neg_cmp_op_on_partial_ord)]
+                let bad_g = !(m.g.abs() < 1.0);
+                if bad_g {
                     return Err(bad(
                         "medium.g",
                         format!("must satisfy |g| < 1, got {}", m.g),
