@@ -23,10 +23,12 @@ fn main() {
             f()
         }
     };
-    // BP/FBP volume: the scan grid × 128 depths over 0.1–1.0 m.
+    // BP/FBP volume: the scan grid's own columns (as `murk reconstruct` defaults to) × 128 depths
+    // over 0.1–1.0 m.
+    let edge = 0.32 - 0.32 / n as f64;
     let vol = Volume {
-        x: Axis::new(-0.31, 0.31, n),
-        y: Axis::new(-0.31, 0.31, n),
+        x: Axis::new(-edge, edge, n),
+        y: Axis::new(-edge, edge, n),
         z: Axis::new(0.1, 1.0, 128),
     };
     let bp_name = format!("bp ({n}×{n}×128 voxels)");

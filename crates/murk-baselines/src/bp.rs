@@ -7,7 +7,7 @@
 //! truncates it, too) biases every depth by half a bin of path.
 
 use crate::Reconstruction;
-use murk_core::{Capture, CaptureKind, DVec3, Error, Pairing, Result, Volume};
+use murk_core::{Capture, CaptureKind, DVec3, Error, Result, Volume};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -24,71 +24,72 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
         return Err(Error::param("the volume has no voxels"));
     }
     let t = capture.time;
-    let (nl, ns, nz) = (capture.illum.len(), capture.sensor.len(), volume.z.n);
-    let e_l: Vec<f64> = (0..nl).map(|l| capture.first_bounce_m(l)).collect();
-    let e_s: Vec<f64> = (0..ns).map(|s| capture.last_bounce_m(s)).collect();
+    let nz = volume.z.n;
+    let e_l: Vec<f64> = (0..capture.illum.len())
+        .map(|l| capture.first_bounce_m(l))
+        .collect();
+    let e_s: Vec<f64> = (0..capture.sensor.len())
+        .map(|s| capture.last_bounce_m(s))
+        .collect();
     let z: Vec<f64> = volume.z.values();
-    // Continuous bin index of path p is p·inv − offset.
     let inv = 1.0 / t.bin_width_m;
     let offset = t.start_m * inv + 0.5;
-
-    // Confocal scans need one distance per voxel and scan point, not two.
     let confocal = capture.kind() == CaptureKind::Confocal;
+    let table = if confocal {
+        LegTable::new(capture, volume)
+    } else {
+        None
+    };
+    let pairs: Vec<(usize, usize)> = (0..capture.n_hist())
+        .map(|i| capture.hist_pair(i))
+        .collect();
+    let ncols = volume.x.n * volume.y.n;
     let mut data = vec![0.0f32; volume.len()];
-    data.par_chunks_mut(nz).enumerate().for_each_init(
-        || ColumnScratch::new(nz, ns),
-        |sc, (col, out)| {
-            let (x, y) = (volume.x.at(col / volume.y.n), volume.y.at(col % volume.y.n));
-            // Distance from wall point p to voxel (x, y, z_k), for every k of this column.
-            let legs = |p: DVec3, out: &mut [f64]| {
-                let rho2 = (p.x - x).powi(2) + (p.y - y).powi(2);
-                for (o, &zk) in out.iter_mut().zip(&z) {
-                    *o = (rho2 + (zk - p.z).powi(2)).sqrt();
-                }
-            };
-            sc.acc.fill(0.0);
-            match capture.pairing {
-                Pairing::Paired => {
-                    for i in 0..nl {
-                        legs(capture.illum.points[i], &mut sc.leg);
-                        if !confocal {
-                            legs(capture.sensor.points[i], &mut sc.sensor_legs[..nz]);
+    // Histogram-outer over a tile of voxel columns: each histogram is read once per tile while the
+    // tile's accumulators stay in cache (column-outer re-read every histogram for every column).
+    data.par_chunks_mut(nz * TILE).enumerate().for_each_init(
+        || ColumnScratch::new(nz, capture.time.bins),
+        |sc, (tile, out)| {
+            let cols = tile * TILE..((tile + 1) * TILE).min(ncols);
+            sc.acc.clear();
+            sc.acc.resize(cols.len() * nz, 0.0);
+            for (h, &(l, s)) in pairs.iter().enumerate() {
+                sc.padded[1..=capture.time.bins].copy_from_slice(capture.histogram(h));
+                let hist = &sc.padded;
+                for (k, col) in cols.clone().enumerate() {
+                    let (ix, iy) = (col / volume.y.n, col % volume.y.n);
+                    let (x, y) = (volume.x.at(ix), volume.y.at(iy));
+                    let legs = |p: DVec3, out: &mut [f64]| {
+                        let rho2 = (p.x - x).powi(2) + (p.y - y).powi(2);
+                        for (o, &zk) in out.iter_mut().zip(&z) {
+                            *o = (rho2 + (zk - p.z).powi(2)).sqrt();
                         }
-                        let ds = if confocal {
-                            &sc.leg
-                        } else {
-                            &sc.sensor_legs[..nz]
-                        };
-                        paths(
-                            &mut sc.path,
-                            &mut sc.weight,
-                            &sc.leg,
-                            ds,
-                            e_l[i] + e_s[i],
-                            opts,
-                        );
-                        sc.accumulate(capture.histogram(i), inv, offset, opts);
+                    };
+                    match &table {
+                        Some(t) => sc.leg.copy_from_slice(t.legs(ix, iy, l)),
+                        None => legs(capture.illum.points[l], &mut sc.leg),
                     }
-                }
-                Pairing::Product => {
-                    for (s, dst) in sc.sensor_legs.chunks_mut(nz).enumerate() {
-                        legs(capture.sensor.points[s], dst);
+                    if !confocal {
+                        legs(capture.sensor.points[s], &mut sc.sensor_leg);
                     }
-                    for l in 0..nl {
-                        legs(capture.illum.points[l], &mut sc.leg);
-                        for s in 0..ns {
-                            let ds = &sc.sensor_legs[s * nz..][..nz];
-                            paths(
-                                &mut sc.path,
-                                &mut sc.weight,
-                                &sc.leg,
-                                ds,
-                                e_l[l] + e_s[s],
-                                opts,
-                            );
-                            sc.accumulate(capture.histogram(l * ns + s), inv, offset, opts);
-                        }
-                    }
+                    let ds = if confocal { &sc.leg } else { &sc.sensor_leg };
+                    paths(
+                        &mut sc.path,
+                        &mut sc.weight,
+                        &sc.leg,
+                        ds,
+                        e_l[l] + e_s[s],
+                        opts,
+                    );
+                    accumulate(
+                        &mut sc.acc[k * nz..(k + 1) * nz],
+                        &sc.path,
+                        &sc.weight,
+                        hist,
+                        inv,
+                        offset,
+                        opts,
+                    );
                 }
             }
             for (o, a) in out.iter_mut().zip(&sc.acc) {
@@ -102,7 +103,70 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
     })
 }
 
-/// Full paths `e + d_l + d_s` and, if asked, the weights (d_l·d_s)².
+/// Voxel columns per parallel task (their f64 accumulators: TILE × nz × 8 bytes).
+const TILE: usize = 16;
+
+/// Confocal scans on a regular grid with voxel columns on that grid: the distance from scan point
+/// (sx, sy) to voxel (ix, iy, iz) depends only on (|gx(ix) − sx|, |gy(iy) − sy|, iz), so the square
+/// roots are taken once per lattice offset instead of once per (voxel, scan point).
+struct LegTable {
+    /// Grid index of each voxel column along x and along y.
+    gx: Vec<usize>,
+    gy: Vec<usize>,
+    grid_ny: usize,
+    /// Offsets span [0, span_y) along y.
+    span_y: usize,
+    nz: usize,
+    d: Vec<f64>,
+}
+
+impl LegTable {
+    fn new(capture: &Capture, volume: &Volume) -> Option<LegTable> {
+        let g = capture.illum.regular_grid()?;
+        let along = |v: DVec3, axis: DVec3| {
+            v.dot(axis) > 0.0 && (v - axis * v.dot(axis)).length() <= 1e-9 * v.length()
+        };
+        if !along(g.step_x, DVec3::X) || !along(g.step_y, DVec3::Y) {
+            return None;
+        }
+        let on_grid = |axis: &murk_core::Axis, o: f64, d: f64, n: usize| -> Option<Vec<usize>> {
+            axis.values()
+                .iter()
+                .map(|x| {
+                    let t = (x - o) / d;
+                    (t.round() >= 0.0 && (t.round() as usize) < n && (t - t.round()).abs() < 1e-6)
+                        .then_some(t.round() as usize)
+                })
+                .collect()
+        };
+        let gx = on_grid(&volume.x, g.origin.x, g.step_x.x, g.nx)?;
+        let gy = on_grid(&volume.y, g.origin.y, g.step_y.y, g.ny)?;
+        let (span_x, span_y, nz) = (g.nx, g.ny, volume.z.n);
+        let mut d = Vec::with_capacity(span_x * span_y * nz);
+        for ax in 0..span_x {
+            for ay in 0..span_y {
+                let rho2 = (ax as f64 * g.step_x.x).powi(2) + (ay as f64 * g.step_y.y).powi(2);
+                d.extend((0..nz).map(|k| (rho2 + (volume.z.at(k) - g.origin.z).powi(2)).sqrt()));
+            }
+        }
+        Some(LegTable {
+            gx,
+            gy,
+            grid_ny: g.ny,
+            span_y,
+            nz,
+            d,
+        })
+    }
+
+    /// Distances from scan point `i` to the voxels of column (ix, iy), one per depth.
+    fn legs(&self, ix: usize, iy: usize, i: usize) -> &[f64] {
+        let (sx, sy) = (i / self.grid_ny, i % self.grid_ny);
+        let (ax, ay) = (self.gx[ix].abs_diff(sx), self.gy[iy].abs_diff(sy));
+        &self.d[(ax * self.span_y + ay) * self.nz..][..self.nz]
+    }
+}
+
 fn paths(path: &mut [f64], weight: &mut [f64], dl: &[f64], ds: &[f64], e: f64, opts: BpOptions) {
     for ((p, &l), &s) in path.iter_mut().zip(dl).zip(ds) {
         *p = e + l + s;
@@ -117,47 +181,51 @@ fn paths(path: &mut [f64], weight: &mut [f64], dl: &[f64], ds: &[f64], e: f64, o
 /// Per-thread buffers for one voxel column.
 struct ColumnScratch {
     acc: Vec<f64>,
-    /// Illumination leg d_l per depth.
     leg: Vec<f64>,
-    /// Sensor legs d_s per depth, for every sensor point (product captures) or the current one.
-    sensor_legs: Vec<f64>,
+    sensor_leg: Vec<f64>,
     path: Vec<f64>,
     weight: Vec<f64>,
+    /// The current histogram between two zeros.
+    padded: Vec<f32>,
 }
 
 impl ColumnScratch {
-    fn new(nz: usize, ns: usize) -> Self {
+    fn new(nz: usize, bins: usize) -> Self {
         ColumnScratch {
-            acc: vec![0.0; nz],
+            padded: vec![0.0; bins + 2],
+            acc: Vec::with_capacity(TILE * nz),
             leg: vec![0.0; nz],
-            sensor_legs: vec![0.0; ns * nz],
+            sensor_leg: vec![0.0; nz],
             path: vec![0.0; nz],
             weight: vec![0.0; nz],
         }
     }
+}
 
-    /// Adds H read at `path[k]` (index path·inv − offset, linear interpolation, zero outside) to `acc[k]`.
-    fn accumulate(&mut self, h: &[f32], inv: f64, offset: f64, opts: BpOptions) {
-        let last = h.len() - 1;
-        for (k, (a, &p)) in self.acc.iter_mut().zip(&self.path).enumerate() {
-            let u = p * inv - offset;
-            let v = if u >= 0.0 && u < last as f64 {
-                let n = u as usize;
-                let f = (u - n as f64) as f32;
-                h[n] + f * (h[n + 1] - h[n])
-            } else if u > -1.0 && u < 0.0 {
-                (u + 1.0) as f32 * h[0]
-            } else if u >= last as f64 && u < h.len() as f64 {
-                (h.len() as f64 - u) as f32 * h[last]
-            } else {
-                continue;
-            };
-            *a += if opts.inverse_square {
-                v as f64 * self.weight[k]
-            } else {
-                v as f64
-            };
-        }
+/// Adds H read at each path (linear interpolation between bin centres, fading to zero over half a
+/// bin beyond the window's ends) into `acc`. `padded` is H with one zero on each side, so every read
+/// is in bounds and the loop has no branches.
+fn accumulate(
+    acc: &mut [f64],
+    path: &[f64],
+    weight: &[f64],
+    padded: &[f32],
+    inv: f64,
+    offset: f64,
+    opts: BpOptions,
+) {
+    let hi = (padded.len() - 1) as f64;
+    for (k, (a, &p)) in acc.iter_mut().zip(path).enumerate() {
+        // Index into `padded` (shifted by its leading zero), clamped onto the zero padding.
+        let u = (p * inv - offset + 1.0).clamp(0.0, hi - 1e-9);
+        let n = u as usize;
+        let f = (u - n as f64) as f32;
+        let v = padded[n] + f * (padded[n + 1] - padded[n]);
+        *a += if opts.inverse_square {
+            v as f64 * weight[k]
+        } else {
+            v as f64
+        };
     }
 }
 
@@ -165,6 +233,7 @@ impl ColumnScratch {
 mod tests {
     use super::*;
     use crate::testutil::{add_point, axis, confocal};
+    use murk_core::Pairing;
     use murk_core::{Axis, DVec3, PointSet};
 
     #[test]
@@ -227,6 +296,36 @@ mod tests {
                 (centroid - z0).abs() < 0.05 * ds,
                 "depth centroid {centroid} for a point at {z0}"
             );
+        }
+    }
+
+    /// Voxel columns on the scan grid use the lattice distance table; a volume shifted off the grid by
+    /// 1e-5 of a step takes the direct path. Both must agree to f32 precision.
+    #[test]
+    fn lattice_table_matches_direct_distances() {
+        let mut c = confocal(16, 0.6, axis(0.0, 0.01, 160));
+        add_point(&mut c, DVec3::new(0.05, -0.1, 0.5));
+        add_point(&mut c, DVec3::new(-0.2, 0.15, 0.35));
+        let step = 0.6 / 16.0;
+        let first = -0.3 + step / 2.0;
+        let on = Volume {
+            x: Axis::new(first + 2.0 * step, first + 13.0 * step, 12),
+            y: Axis::new(first, first + 15.0 * step, 16),
+            z: Axis::new(0.3, 0.6, 31),
+        };
+        let nudge = 1e-5 * step;
+        let off = Volume {
+            x: Axis::new(on.x.start + nudge, on.x.end + nudge, 12),
+            ..on
+        };
+        assert!(LegTable::new(&c, &on).is_some() && LegTable::new(&c, &off).is_none());
+        let (a, b) = (
+            backproject(&c, &on, BpOptions::default()).unwrap(),
+            backproject(&c, &off, BpOptions::default()).unwrap(),
+        );
+        let max = a.data.iter().copied().fold(0.0, f32::max);
+        for (x, y) in a.data.iter().zip(&b.data) {
+            assert!((x - y).abs() <= 1e-3 * max, "{x} vs {y}");
         }
     }
 
