@@ -199,16 +199,22 @@ impl<'a> Plan<'a> {
         // pair (a quarter of the support when the lattice is centred on the wall) and copy.
         let off_x = |p: usize| (p as i64 + self.rx.lo - (gnx as i64 - 1)).unsigned_abs() as usize;
         let off_y = |q: usize| (q as i64 + self.ry.lo - (gny as i64 - 1)).unsigned_abs() as usize;
-        let (mx, my) = (off_x(0).max(off_x(gx - 1)) + 1, off_y(0).max(off_y(gy - 1)) + 1);
-        ws.table.resize(mx * my, (Complex32::default(), Complex32::default()));
+        let (mx, my) = (
+            off_x(0).max(off_x(gx - 1)) + 1,
+            off_y(0).max(off_y(gy - 1)) + 1,
+        );
+        ws.table
+            .resize(mx * my, (Complex32::default(), Complex32::default()));
         for ax in 0..mx {
             let dx = ax as f64 * dxs;
             for ay in 0..my {
                 let dy = ay as f64 * dys;
                 let r = (dx * dx + dy * dy + dz * dz).sqrt();
                 let amp = amplitude(self.falloff, r).powf(legs);
-                ws.table[ax * my + ay] =
-                    (c32(Complex64::from_polar(amp, k0 * legs * r)), c32(Complex64::from_polar(1.0, dk * legs * r)));
+                ws.table[ax * my + ay] = (
+                    c32(Complex64::from_polar(amp, k0 * legs * r)),
+                    c32(Complex64::from_polar(1.0, dk * legs * r)),
+                );
             }
         }
         for p in 0..gx {

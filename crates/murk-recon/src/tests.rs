@@ -457,19 +457,54 @@ fn ballistic_compensation_restores_an_attenuated_point() {
     let clear = capture(LayoutKind::LaserGridSinglePoint, 0.0, false);
     let mut foggy = clear.clone();
     foggy.h.iter_mut().for_each(|v| *v = 0.0);
-    let sc = Target::Point { pos: POINT, albedo: 1.0 }.scatterers().unwrap();
-    add_first_bounce(&mut foggy, &sc, &SynthOptions { mu_t_per_m: 1.0, ..SynthOptions::default() }).unwrap();
+    let sc = Target::Point {
+        pos: POINT,
+        albedo: 1.0,
+    }
+    .scatterers()
+    .unwrap();
+    add_first_bounce(
+        &mut foggy,
+        &sc,
+        &SynthOptions {
+            mu_t_per_m: 1.0,
+            ..SynthOptions::default()
+        },
+    )
+    .unwrap();
     let vol = aligned_volume();
     let peak = |cap: &Capture, compensation| {
-        let r = reconstruct(cap, &vol, &PfParams { compensation, ..PfParams::default() }, Method::Fast, &NoProgress).unwrap();
-        (r.intensity.iter().cloned().fold(0.0, f32::max) as f64, argmax(&r))
+        let r = reconstruct(
+            cap,
+            &vol,
+            &PfParams {
+                compensation,
+                ..PfParams::default()
+            },
+            Method::Fast,
+            &NoProgress,
+        )
+        .unwrap();
+        (
+            r.intensity.iter().cloned().fold(0.0, f32::max) as f64,
+            argmax(&r),
+        )
     };
     let (i0, at0) = peak(&clear, Compensation::None);
     let (raw, _) = peak(&foggy, Compensation::None);
     let (fixed, at) = peak(&foggy, Compensation::Ballistic { mu_t_per_m: 1.0 });
-    assert!(raw < 0.5 * i0, "the medium should dim the point: {raw} vs {i0}");
-    assert!((fixed / i0 - 1.0).abs() <= 0.15, "compensated peak {fixed} vs clear {i0}");
+    assert!(
+        raw < 0.5 * i0,
+        "the medium should dim the point: {raw} vs {i0}"
+    );
+    assert!(
+        (fixed / i0 - 1.0).abs() <= 0.15,
+        "compensated peak {fixed} vs clear {i0}"
+    );
     for k in 0..3 {
-        assert!(at[k].abs_diff(at0[k]) <= 1, "peak moved from {at0:?} to {at:?}");
+        assert!(
+            at[k].abs_diff(at0[k]) <= 1,
+            "peak moved from {at0:?} to {at:?}"
+        );
     }
 }
