@@ -65,31 +65,25 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
                             *o = (rho2 + (zk - p.z).powi(2)).sqrt();
                         }
                     };
-                    match &table {
-                        Some(t) => sc.leg.copy_from_slice(t.legs(ix, iy, l)),
-                        None => legs(capture.illum.points[l], &mut sc.leg),
-                    }
-                    if !confocal {
+                    let dl: &[f64] = match &table {
+                        Some(t) => t.legs(ix, iy, l),
+                        None => {
+                            legs(capture.illum.points[l], &mut sc.leg);
+                            &sc.leg
+                        }
+                    };
+                    let ds: &[f64] = if confocal {
+                        dl
+                    } else {
                         legs(capture.sensor.points[s], &mut sc.sensor_leg);
-                    }
-                    let ds = if confocal { &sc.leg } else { &sc.sensor_leg };
-                    paths(
-                        &mut sc.path,
-                        &mut sc.weight,
-                        &sc.leg,
-                        ds,
-                        e_l[l] + e_s[s],
-                        opts,
-                    );
-                    accumulate(
-                        &mut sc.acc[k * nz..(k + 1) * nz],
-                        &sc.path,
-                        &sc.weight,
-                        hist,
+                        &sc.sensor_leg
+                    };
+                    let read = Read {
                         inv,
-                        offset,
+                        offset: offset - (e_l[l] + e_s[s]) * inv,
                         opts,
-                    );
+                    };
+                    read.accumulate(&mut sc.acc[k * nz..(k + 1) * nz], dl, ds, hist);
                 }
             }
             for (o, a) in out.iter_mut().zip(&sc.acc) {
@@ -167,24 +161,11 @@ impl LegTable {
     }
 }
 
-fn paths(path: &mut [f64], weight: &mut [f64], dl: &[f64], ds: &[f64], e: f64, opts: BpOptions) {
-    for ((p, &l), &s) in path.iter_mut().zip(dl).zip(ds) {
-        *p = e + l + s;
-    }
-    if opts.inverse_square {
-        for ((w, &l), &s) in weight.iter_mut().zip(dl).zip(ds) {
-            *w = (l * s).powi(2);
-        }
-    }
-}
-
 /// Per-thread buffers for one voxel column.
 struct ColumnScratch {
     acc: Vec<f64>,
     leg: Vec<f64>,
     sensor_leg: Vec<f64>,
-    path: Vec<f64>,
-    weight: Vec<f64>,
     /// The current histogram between two zeros.
     padded: Vec<f32>,
 }
@@ -196,36 +177,39 @@ impl ColumnScratch {
             acc: Vec::with_capacity(TILE * nz),
             leg: vec![0.0; nz],
             sensor_leg: vec![0.0; nz],
-            path: vec![0.0; nz],
-            weight: vec![0.0; nz],
         }
     }
 }
 
-/// Adds H read at each path (linear interpolation between bin centres, fading to zero over half a
-/// bin beyond the window's ends) into `acc`. `padded` is H with one zero on each side, so every read
-/// is in bounds and the loop has no branches.
-fn accumulate(
-    acc: &mut [f64],
-    path: &[f64],
-    weight: &[f64],
-    padded: &[f32],
+/// How one histogram is read: path p = e + d_l + d_s sits at index p·inv − offset of the bin centres
+/// (`offset` already includes the pair's first- and last-bounce legs e).
+struct Read {
     inv: f64,
     offset: f64,
     opts: BpOptions,
-) {
-    let hi = (padded.len() - 1) as f64;
-    for (k, (a, &p)) in acc.iter_mut().zip(path).enumerate() {
-        // Index into `padded` (shifted by its leading zero), clamped onto the zero padding.
-        let u = (p * inv - offset + 1.0).clamp(0.0, hi - 1e-9);
-        let n = u as usize;
-        let f = (u - n as f64) as f32;
-        let v = padded[n] + f * (padded[n + 1] - padded[n]);
-        *a += if opts.inverse_square {
-            v as f64 * weight[k]
-        } else {
-            v as f64
-        };
+}
+
+impl Read {
+    /// Adds H read at the path of each depth (linear interpolation between bin centres, fading to
+    /// zero over half a bin beyond the window's ends) into `acc`. `padded` is H with one zero on each
+    /// side, so every read is in bounds and the loop has no branches.
+    fn accumulate(&self, acc: &mut [f64], dl: &[f64], ds: &[f64], padded: &[f32]) {
+        // f32 indices (within 1e-3 bin below 2^14 bins) and an i32 conversion: the saturating
+        // f64 → usize conversion costs more than the interpolation itself.
+        let top = padded.len() - 2;
+        for ((a, &l), &s) in acc.iter_mut().zip(dl).zip(ds) {
+            // Index into `padded` (shifted by its leading zero), clamped onto the zero padding.
+            let u =
+                (((l + s) * self.inv - self.offset + 1.0) as f32).clamp(0.0, top as f32 + 0.999_9);
+            let n = (u as i32 as usize).min(top);
+            let f = u - n as f32;
+            let v = (padded[n] + f * (padded[n + 1] - padded[n])) as f64;
+            *a += if self.opts.inverse_square {
+                v * (l * s) * (l * s)
+            } else {
+                v
+            };
+        }
     }
 }
 
