@@ -618,16 +618,7 @@ fn phasor_fields_match_tal_fbp() {
         sensor_xyz: None,
     };
     let mut cap = layout.empty_capture().unwrap();
-    let t_letter = vec![
-        [-0.25, 0.25],
-        [0.25, 0.25],
-        [0.25, 0.15],
-        [0.05, 0.15],
-        [0.05, -0.25],
-        [-0.05, -0.25],
-        [-0.05, 0.15],
-        [-0.25, 0.15],
-    ];
+    let t_letter = murk_synth::t_letter_outline();
     let mut sc = Target::Polygon {
         outline: t_letter,
         offset: [0.0; 2],

@@ -85,21 +85,6 @@ fn parse_xyz(s: &str) -> Result<DVec3, String> {
     parse_floats::<3>(s).map(DVec3::from_array)
 }
 
-/// The letter T of the project's benchmark scene: bar 0.5 × 0.1 m centred at (0, 0.20), stem 0.1 × 0.4 m
-/// centred at (0, −0.05).
-fn t_letter_outline() -> Vec<[f64; 2]> {
-    vec![
-        [-0.25, 0.25],
-        [0.25, 0.25],
-        [0.25, 0.15],
-        [0.05, 0.15],
-        [0.05, -0.25],
-        [-0.05, -0.25],
-        [-0.05, 0.15],
-        [-0.25, 0.15],
-    ]
-}
-
 pub fn parse_target(spec: &str, spacing_m: f64) -> anyhow::Result<Target> {
     let (kind, rest) = spec
         .split_once(':')
@@ -127,7 +112,7 @@ pub fn parse_target(spec: &str, spacing_m: f64) -> anyhow::Result<Target> {
             albedo: 1.0,
         },
         "z" => polygon(murk_synth::z_letter_outline(), depth(rest)?),
-        "t" => polygon(t_letter_outline(), depth(rest)?),
+        "t" => polygon(murk_synth::t_letter_outline(), depth(rest)?),
         "polygon" => {
             let (d, pts) = rest.split_once(':').with_context(|| {
                 format!("--target '{spec}': expected polygon:DEPTH:x,y;x,y;...")

@@ -10,7 +10,7 @@ mod layout;
 mod targets;
 
 pub use layout::{CaptureLayout, LayoutKind};
-pub use targets::{z_letter_outline, Scatterer, Target};
+pub use targets::{t_letter_outline, z_letter_outline, Scatterer, Target};
 
 use murk_core::{Capture, DVec3, Error, Result};
 use rayon::prelude::*;

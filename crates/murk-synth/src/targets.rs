@@ -127,6 +127,21 @@ pub fn z_letter_outline() -> Vec<[f64; 2]> {
     ]
 }
 
+/// The letter T of the project's benchmark scene (mitransient.md §7.2): bar 0.5 × 0.1 m centred at
+/// (0, 0.20), stem 0.1 × 0.4 m centred at (0, −0.05).
+pub fn t_letter_outline() -> Vec<[f64; 2]> {
+    vec![
+        [-0.25, 0.25],
+        [0.25, 0.25],
+        [0.25, 0.15],
+        [0.05, 0.15],
+        [0.05, -0.25],
+        [-0.05, -0.25],
+        [-0.05, 0.15],
+        [-0.25, 0.15],
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
