@@ -262,7 +262,7 @@ impl<'a> Plan<'a> {
             }
             self.fft
                 .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
-            self.resample(ws, ny, nx, vx, vy, gnx, gny, fy);
+            self.resample(ws, ny, nx, vy, gnx, gny, fy);
             // Exact phase of the point-side leg; straight loops over f32 so they vectorise.
             for ((a, f), (pb, ps)) in acc
                 .iter_mut()
@@ -287,7 +287,6 @@ impl Plan<'_> {
         ws: &mut Workspace,
         ny: usize,
         nx: usize,
-        vx: usize,
         vy: usize,
         gnx: usize,
         gny: usize,
@@ -306,29 +305,25 @@ impl Plan<'_> {
             }
             return;
         }
-        for a in 0..vx {
-            let row = &ws.g[lattice(a)..][..vy];
-            for iy in 0..ny {
-                let st = self.ry.starts[iy];
-                ws.tmp[a * ny + iy] = row[st..st + self.ry.taps]
+        // Along x first: whole lattice rows weighted and summed, contiguous, so it vectorises; then
+        // along y at the voxels only (the gathering pass touches nx·ny·taps, not vx·ny·taps, values).
+        for ix in 0..nx {
+            let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
+            let out = &mut ws.tmp[ix * vy..(ix + 1) * vy];
+            out.iter_mut().for_each(|v| *v = Complex32::default());
+            for (k, wk) in w.iter().enumerate() {
+                for (x, g) in out.iter_mut().zip(&ws.g[lattice(st + k)..][..vy]) {
+                    *x += g * wk;
+                }
+            }
+            let row = &ws.tmp[ix * vy..(ix + 1) * vy];
+            for (iy, f) in ws.field[ix * ny..(ix + 1) * ny].iter_mut().enumerate() {
+                let sy = self.ry.starts[iy];
+                *f = row[sy..sy + self.ry.taps]
                     .iter()
                     .zip(self.ry.weights_of(iy))
                     .map(|(v, w)| v * w)
                     .sum();
-            }
-        }
-        for ix in 0..nx {
-            let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
-            // Contiguous over y so the tap loop vectorises.
-            let out = &mut ws.field[ix * ny..(ix + 1) * ny];
-            out.iter_mut().for_each(|v| *v = Complex32::default());
-            for (k, wk) in w.iter().enumerate() {
-                for (x, t) in out
-                    .iter_mut()
-                    .zip(&ws.tmp[(st + k) * ny..(st + k + 1) * ny])
-                {
-                    *x += t * wk;
-                }
             }
         }
     }
@@ -379,7 +374,7 @@ impl Workspace {
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
-            tmp: vec![Complex32::default(); plan.rx.len * plan.vol.y.n],
+            tmp: vec![Complex32::default(); plan.vol.x.n * plan.ry.len],
         }
     }
 }
