@@ -34,16 +34,6 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Peak resident memory of this process so far (Linux), in MiB.
-fn peak_rss_mib() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    line.split_whitespace()
-        .nth(1)?
-        .parse::<f64>()
-        .ok()
-        .map(|kb| kb / 1024.0)
-}
 
 pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
     if a.runs == 0 {
@@ -140,7 +130,7 @@ fn z_letter(runs: usize, quiet: bool) -> anyhow::Result<()> {
         times.iter().map(|t| (t * 1000.0).round() / 1000.0).collect::<Vec<_>>(),
         synth_s,
         p[2],
-        peak_rss_mib().unwrap_or(f64::NAN)
+        murk_render::bench::peak_rss_mib().unwrap_or(f64::NAN)
     ));
     Ok(())
 }
