@@ -34,7 +34,6 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-
 pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
     if a.runs == 0 {
         bail!("--runs must be at least 1");
