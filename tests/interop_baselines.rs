@@ -8,22 +8,10 @@
 //! reads bin n at its start (murk at its centre, half a bin later), which moves every depth by
 //! half a sample.
 
-use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn python() -> Result<PathBuf, String> {
-    let py = std::env::var_os("MURK_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
-    let out = Command::new(&py)
-        .args(["-c", "import tal, numpy"])
-        .output()
-        .map_err(|e| format!("cannot run {}: {e}", py.display()))?;
-    if !out.status.success() {
-        return Err(format!("{} cannot import tal", py.display()));
-    }
-    Ok(py)
-}
+mod common;
+use common::python;
 
 fn murk(args: &[&str]) {
     let out = Command::new(env!("CARGO_BIN_EXE_murk"))
