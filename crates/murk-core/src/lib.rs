@@ -12,6 +12,7 @@
 mod capture;
 mod error;
 mod points;
+pub mod simd;
 mod volume;
 
 pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};

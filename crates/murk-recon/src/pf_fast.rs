@@ -8,6 +8,7 @@ use crate::fft2::Fft2;
 use crate::resample::Resampler;
 use crate::spectrum::{next_fast_len, Spectra};
 use crate::{Falloff, Progress};
+use murk_core::simd::wide;
 use murk_core::{Capture, CaptureKind, DVec3, RegularGrid, Volume};
 use rayon::prelude::*;
 use rustfft::num_complex::{Complex32, Complex64};
@@ -195,32 +196,23 @@ impl<'a> Plan<'a> {
         // Round trip for confocal data: both legs share the wall point.
         let legs = if src.is_none() { 2.0 } else { 1.0 };
         let (k0, dk) = (band.k(0), band.dk());
-        // The kernel depends on |dx| and |dy| only: evaluate the sines and cosines once per distinct
-        // pair (a quarter of the support when the lattice is centred on the wall) and copy.
-        let off_x = |p: usize| (p as i64 + self.rx.lo - (gnx as i64 - 1)).unsigned_abs() as usize;
-        let off_y = |q: usize| (q as i64 + self.ry.lo - (gny as i64 - 1)).unsigned_abs() as usize;
-        let (mx, my) = (
-            off_x(0).max(off_x(gx - 1)) + 1,
-            off_y(0).max(off_y(gy - 1)) + 1,
-        );
-        ws.table
-            .resize(mx * my, (Complex32::default(), Complex32::default()));
+        // The kernel depends on |dx| and |dy| only: its sines, cosines and per-frequency recurrence
+        // live in a table over the distinct (|dx|, |dy|) (a quarter of the support when the volume is
+        // centred on the wall) that is mirrored into the FFT input.
+        let cx = gnx as i64 - 1 - self.rx.lo;
+        let cy = gny as i64 - 1 - self.ry.lo;
+        let (mx, my) = (reach(cx, gx), reach(cy, gy));
+        ws.tcur.clear();
+        ws.tstep.clear();
         for ax in 0..mx {
             let dx = ax as f64 * dxs;
             for ay in 0..my {
                 let dy = ay as f64 * dys;
                 let r = (dx * dx + dy * dy + dz * dz).sqrt();
                 let amp = amplitude(self.falloff, r).powf(legs);
-                ws.table[ax * my + ay] = (
-                    c32(Complex64::from_polar(amp, k0 * legs * r)),
-                    c32(Complex64::from_polar(1.0, dk * legs * r)),
-                );
-            }
-        }
-        for p in 0..gx {
-            let row = &ws.table[off_x(p) * my..(off_x(p) + 1) * my];
-            for q in 0..gy {
-                (ws.base[p * gy + q], ws.step[p * gy + q]) = row[off_y(q)];
+                ws.tcur.push(c32(Complex64::from_polar(amp, k0 * legs * r)));
+                ws.tstep
+                    .push(c32(Complex64::from_polar(1.0, dk * legs * r)));
             }
         }
         // Exact phase of the point-side leg, per voxel.
@@ -242,24 +234,44 @@ impl<'a> Plan<'a> {
                 }
             }
         }
+        // Confocal data has no point-side phase, so the sum over frequencies commutes with the inverse
+        // FFT and the resampling: accumulate spectra and transform back once per plane.
+        let confocal = src.is_none();
+        if confocal {
+            ws.spec_acc
+                .iter_mut()
+                .for_each(|v| *v = Complex32::default());
+        }
         let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
-            ws.g.iter_mut().for_each(|v| *v = Complex32::default());
-            for p in 0..gx {
-                let (row, base, step) = (
-                    &mut ws.g[p * fy..p * fy + gy],
-                    &mut ws.base[p * gy..(p + 1) * gy],
-                    &ws.step[p * gy..(p + 1) * gy],
-                );
-                for ((g, b), s) in row.iter_mut().zip(base.iter_mut()).zip(step) {
-                    *g = *b;
-                    *b *= s;
+            for p in 0..fx {
+                let row = &mut ws.g[p * fy..(p + 1) * fy];
+                if p < gx {
+                    let ax = (p as i64 - cx).unsigned_abs() as usize;
+                    mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
+                    row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
+                } else {
+                    row.iter_mut().for_each(|v| *v = Complex32::default());
                 }
             }
-            self.fft.forward(&mut ws.g, &mut ws.t, &mut ws.scratch);
-            for (t, h) in ws.t.iter_mut().zip(&hspec[j * fx * fy..(j + 1) * fx * fy]) {
-                *t *= h;
+            for (c, s) in ws.tcur.iter_mut().zip(&ws.tstep) {
+                *c *= s;
             }
+            self.fft.forward(&mut ws.g, &mut ws.t, &mut ws.scratch);
+            let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
+            if confocal {
+                wide(|| {
+                    for ((a, t), h) in ws.spec_acc.iter_mut().zip(&ws.t).zip(h) {
+                        *a += t * h;
+                    }
+                });
+                continue;
+            }
+            wide(|| {
+                for (t, h) in ws.t.iter_mut().zip(h) {
+                    *t *= h;
+                }
+            });
             self.fft
                 .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
             self.resample(ws, ny, nx, vy, gnx, gny, fy);
@@ -273,8 +285,30 @@ impl<'a> Plan<'a> {
                 *pb *= ps;
             }
         }
+        if confocal {
+            self.fft
+                .inverse_rows(&mut ws.spec_acc, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
+            self.resample(ws, ny, nx, vy, gnx, gny, fy);
+            acc.copy_from_slice(&ws.field);
+        }
         acc
     }
+}
+
+/// Number of distinct |q − c| for q ∈ [0, len).
+fn reach(c: i64, len: usize) -> usize {
+    c.unsigned_abs().max((len as i64 - 1 - c).unsigned_abs()) as usize + 1
+}
+
+/// `dst[q] = src[|q − c|]`: a reversed run down to |·| = 0, then a forward run.
+fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
+    let split = c.clamp(0, dst.len() as i64) as usize;
+    let (down, up) = dst.split_at_mut(split);
+    for (d, s) in down.iter_mut().rev().zip(&src[1..]) {
+        *d = *s;
+    }
+    let first = (-c).max(0) as usize;
+    up.copy_from_slice(&src[first..first + up.len()]);
 }
 
 impl Plan<'_> {
@@ -345,12 +379,13 @@ struct Workspace {
     g: Vec<Complex32>,
     t: Vec<Complex32>,
     scratch: Vec<Complex32>,
-    /// Kernel at the current frequency and its per-frequency phase step (f32 recurrence: the drift
-    /// over a band of a few hundred frequencies stays below 1e-5).
-    base: Vec<Complex32>,
-    step: Vec<Complex32>,
-    /// Kernel start value and step per distinct (|dx|, |dy|).
-    table: Vec<(Complex32, Complex32)>,
+    /// Kernel value at the current frequency and its per-frequency phase step, per distinct
+    /// (|dx|, |dy|) (f32 recurrence: the drift over a band of a few hundred frequencies stays below
+    /// 1e-5).
+    tcur: Vec<Complex32>,
+    tstep: Vec<Complex32>,
+    /// Confocal: the plane's spectrum summed over frequencies.
+    spec_acc: Vec<Complex32>,
     /// Point-side phase per voxel and its per-frequency step (f32 recurrence, as for the kernel).
     pbase: Vec<Complex32>,
     pstep: Vec<Complex32>,
@@ -362,15 +397,14 @@ struct Workspace {
 impl Workspace {
     fn new(plan: &Plan) -> Self {
         let (fx, fy) = (plan.fft.fx, plan.fft.fy);
-        let support = (plan.grid.nx + plan.rx.len - 1) * (plan.grid.ny + plan.ry.len - 1);
         let nv = plan.vol.x.n * plan.vol.y.n;
         Workspace {
             g: vec![Complex32::default(); fx * fy],
             t: vec![Complex32::default(); fx * fy],
             scratch: plan.fft.scratch(),
-            base: vec![Complex32::default(); support],
-            step: vec![Complex32::default(); support],
-            table: Vec::new(),
+            tcur: Vec::new(),
+            tstep: Vec::new(),
+            spec_acc: vec![Complex32::default(); fx * fy],
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
