@@ -7,7 +7,8 @@
 //! truncates it, too) biases every depth by half a bin of path.
 
 use crate::Reconstruction;
-use murk_core::{Capture, CaptureKind, DVec3, Error, Result, Volume};
+use murk_core::simd::wide;
+use murk_core::{Capture, CaptureKind, DVec3, Error, RegularGrid, Result, Volume};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -34,12 +35,25 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
     let z: Vec<f64> = volume.z.values();
     let inv = 1.0 / t.bin_width_m;
     let offset = t.start_m * inv + 0.5;
-    let confocal = capture.kind() == CaptureKind::Confocal;
-    let table = if confocal {
-        LegTable::new(capture, volume)
-    } else {
-        None
+    let read_of = |h: usize| {
+        let (l, s) = capture.hist_pair(h);
+        Read {
+            inv,
+            offset: offset - (e_l[l] + e_s[s]) * inv,
+            opts,
+        }
     };
+    if let Some(lattice) = Lattice::new(capture, volume) {
+        // One wall-leg offset for every scan point keeps the sum shift-invariant.
+        let first = read_of(0);
+        if (0..capture.n_hist()).all(|h| read_of(h).offset == first.offset) {
+            return Ok(Reconstruction {
+                volume: *volume,
+                data: lattice.backproject(capture, volume, &first),
+            });
+        }
+    }
+    let confocal = capture.kind() == CaptureKind::Confocal;
     let pairs: Vec<(usize, usize)> = (0..capture.n_hist())
         .map(|i| capture.hist_pair(i))
         .collect();
@@ -65,25 +79,14 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
                             *o = (rho2 + (zk - p.z).powi(2)).sqrt();
                         }
                     };
-                    let dl: &[f64] = match &table {
-                        Some(t) => t.legs(ix, iy, l),
-                        None => {
-                            legs(capture.illum.points[l], &mut sc.leg);
-                            &sc.leg
-                        }
-                    };
+                    legs(capture.illum.points[l], &mut sc.leg);
                     let ds: &[f64] = if confocal {
-                        dl
+                        &sc.leg
                     } else {
                         legs(capture.sensor.points[s], &mut sc.sensor_leg);
                         &sc.sensor_leg
                     };
-                    let read = Read {
-                        inv,
-                        offset: offset - (e_l[l] + e_s[s]) * inv,
-                        opts,
-                    };
-                    read.accumulate(&mut sc.acc[k * nz..(k + 1) * nz], dl, ds, hist);
+                    read_of(h).accumulate(&mut sc.acc[k * nz..(k + 1) * nz], &sc.leg, ds, hist);
                 }
             }
             for (o, a) in out.iter_mut().zip(&sc.acc) {
@@ -101,21 +104,21 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
 const TILE: usize = 16;
 
 /// Confocal scans on a regular grid with voxel columns on that grid: the distance from scan point
-/// (sx, sy) to voxel (ix, iy, iz) depends only on (|gx(ix) − sx|, |gy(iy) − sy|, iz), so the square
-/// roots are taken once per lattice offset instead of once per (voxel, scan point).
-struct LegTable {
+/// (sx, sy) to voxel (ix, iy, iz) depends only on the lattice offset (|dx|, |dy|) and iz. Every depth
+/// plane is then a sum over offsets of whole time planes of H, shifted by the offset and read at that
+/// offset's path: long contiguous multiply-adds instead of one gather per (voxel, scan point).
+struct Lattice {
+    grid: RegularGrid,
     /// Grid index of each voxel column along x and along y.
     gx: Vec<usize>,
     gy: Vec<usize>,
-    grid_ny: usize,
-    /// Offsets span [0, span_y) along y.
-    span_y: usize,
-    nz: usize,
-    d: Vec<f64>,
 }
 
-impl LegTable {
-    fn new(capture: &Capture, volume: &Volume) -> Option<LegTable> {
+impl Lattice {
+    fn new(capture: &Capture, volume: &Volume) -> Option<Lattice> {
+        if capture.kind() != CaptureKind::Confocal {
+            return None;
+        }
         let g = capture.illum.regular_grid()?;
         let along = |v: DVec3, axis: DVec3| {
             v.dot(axis) > 0.0 && (v - axis * v.dot(axis)).length() <= 1e-9 * v.length()
@@ -133,32 +136,87 @@ impl LegTable {
                 })
                 .collect()
         };
-        let gx = on_grid(&volume.x, g.origin.x, g.step_x.x, g.nx)?;
-        let gy = on_grid(&volume.y, g.origin.y, g.step_y.y, g.ny)?;
-        let (span_x, span_y, nz) = (g.nx, g.ny, volume.z.n);
-        let mut d = Vec::with_capacity(span_x * span_y * nz);
-        for ax in 0..span_x {
-            for ay in 0..span_y {
-                let rho2 = (ax as f64 * g.step_x.x).powi(2) + (ay as f64 * g.step_y.y).powi(2);
-                d.extend((0..nz).map(|k| (rho2 + (volume.z.at(k) - g.origin.z).powi(2)).sqrt()));
-            }
-        }
-        Some(LegTable {
-            gx,
-            gy,
-            grid_ny: g.ny,
-            span_y,
-            nz,
-            d,
+        Some(Lattice {
+            gx: on_grid(&volume.x, g.origin.x, g.step_x.x, g.nx)?,
+            gy: on_grid(&volume.y, g.origin.y, g.step_y.y, g.ny)?,
+            grid: g,
         })
     }
 
-    /// Distances from scan point `i` to the voxels of column (ix, iy), one per depth.
-    fn legs(&self, ix: usize, iy: usize, i: usize) -> &[f64] {
-        let (sx, sy) = (i / self.grid_ny, i % self.grid_ny);
-        let (ax, ay) = (self.gx[ix].abs_diff(sx), self.gy[iy].abs_diff(sy));
-        &self.d[(ax * self.span_y + ay) * self.nz..][..self.nz]
+    fn backproject(&self, capture: &Capture, volume: &Volume, read: &Read) -> Vec<f32> {
+        let (gnx, gny) = (self.grid.nx, self.grid.ny);
+        let bins = capture.time.bins;
+        // Time planes of H with a zero plane before and after (reads fade out past the window).
+        // Each plane has rows of w = 2·gny − 1 values, the scan row in the last gny of them and
+        // zeros before it, plus one zero row at the end: a read shifted past a row's end by up to
+        // gny − 1 lands in the next row's zeros, so a whole shifted plane is one contiguous slice.
+        let (w, pad) = (2 * gny - 1, gny - 1);
+        let plane = (gnx + 1) * w;
+        let mut planes = vec![0.0f32; (bins + 2) * plane];
+        for (cell, h) in capture.h.chunks(bins).enumerate() {
+            let at = (cell / gny) * w + pad + cell % gny;
+            for (t, v) in h.iter().enumerate() {
+                planes[(t + 1) * plane + at] = *v;
+            }
+        }
+        let (sx, sy) = (self.grid.step_x.x, self.grid.step_y.y);
+        let per_depth: Vec<Vec<f32>> = (0..volume.z.n)
+            .into_par_iter()
+            .map(|iz| {
+                let dz = volume.z.at(iz) - self.grid.origin.z;
+                // Output rows use the same stride w; columns ≥ gny collect garbage and are dropped.
+                let mut out = vec![0.0f32; gnx * w];
+                for ax in 0..gnx {
+                    for ay in 0..gny {
+                        let d =
+                            ((ax as f64 * sx).powi(2) + (ay as f64 * sy).powi(2) + dz * dz).sqrt();
+                        let (n, f) = read.index(2.0 * d, bins);
+                        let weight = if read.opts.inverse_square {
+                            d.powi(4) as f32
+                        } else {
+                            1.0
+                        };
+                        let (w0, w1) = ((1.0 - f) * weight, f * weight);
+                        for dx in mirrored(ax) {
+                            let r0 = (-dx).max(0) as usize;
+                            let r1 = (gnx as i64 - dx.max(0)) as usize;
+                            for dy in mirrored(ay) {
+                                let src = n * plane + (r0 as i64 + dx) as usize * w;
+                                let src = (src as i64 + pad as i64 + dy) as usize;
+                                let len = (r1 - r0) * w;
+                                let (a, b) = (
+                                    &planes[src..src + len],
+                                    &planes[src + plane..src + plane + len],
+                                );
+                                let o = &mut out[r0 * w..r0 * w + len];
+                                wide(|| {
+                                    for ((o, a), b) in o.iter_mut().zip(a).zip(b) {
+                                        *o += w0 * a + w1 * b;
+                                    }
+                                });
+                            }
+                        }
+                    }
+                }
+                out
+            })
+            .collect();
+        let nz = volume.z.n;
+        let mut data = vec![0.0f32; volume.len()];
+        for (col, voxels) in data.chunks_mut(nz).enumerate() {
+            let at = self.gx[col / volume.y.n] * w + self.gy[col % volume.y.n];
+            for (v, plane) in voxels.iter_mut().zip(&per_depth) {
+                *v = plane[at];
+            }
+        }
+        data
     }
+}
+
+/// The signed offsets with absolute value `a`: ±a, or just 0.
+fn mirrored(a: usize) -> impl Iterator<Item = i64> {
+    let a = a as i64;
+    [a, -a].into_iter().take(if a == 0 { 1 } else { 2 })
 }
 
 /// Per-thread buffers for one voxel column.
@@ -190,19 +248,24 @@ struct Read {
 }
 
 impl Read {
+    /// Where `path` is read in H padded with one zero on each side (`bins + 2` values): index n and
+    /// weight f of a linear read (1 − f)·H[n] + f·H[n + 1], clamped onto the zero padding. f32
+    /// indices (within 1e-3 bin below 2^14 bins) and an i32 conversion: the saturating f64 → usize
+    /// conversion costs more than the interpolation itself.
+    #[inline]
+    fn index(&self, path: f64, bins: usize) -> (usize, f32) {
+        let u = ((path * self.inv - self.offset + 1.0) as f32).clamp(0.0, bins as f32 + 0.999_9);
+        let n = (u as i32 as usize).min(bins);
+        (n, u - n as f32)
+    }
+
     /// Adds H read at the path of each depth (linear interpolation between bin centres, fading to
     /// zero over half a bin beyond the window's ends) into `acc`. `padded` is H with one zero on each
     /// side, so every read is in bounds and the loop has no branches.
     fn accumulate(&self, acc: &mut [f64], dl: &[f64], ds: &[f64], padded: &[f32]) {
-        // f32 indices (within 1e-3 bin below 2^14 bins) and an i32 conversion: the saturating
-        // f64 → usize conversion costs more than the interpolation itself.
-        let top = padded.len() - 2;
+        let bins = padded.len() - 2;
         for ((a, &l), &s) in acc.iter_mut().zip(dl).zip(ds) {
-            // Index into `padded` (shifted by its leading zero), clamped onto the zero padding.
-            let u =
-                (((l + s) * self.inv - self.offset + 1.0) as f32).clamp(0.0, top as f32 + 0.999_9);
-            let n = (u as i32 as usize).min(top);
-            let f = u - n as f32;
+            let (n, f) = self.index(l + s, bins);
             let v = (padded[n] + f * (padded[n + 1] - padded[n])) as f64;
             *a += if self.opts.inverse_square {
                 v * (l * s) * (l * s)
@@ -283,8 +346,8 @@ mod tests {
         }
     }
 
-    /// Voxel columns on the scan grid use the lattice distance table; a volume shifted off the grid by
-    /// 1e-5 of a step takes the direct path. Both must agree to f32 precision.
+    /// Voxel columns on the scan grid take the lattice path (shifted time planes); a volume shifted
+    /// off the grid by 1e-5 of a step takes the direct path. Both must agree to 1e-3 of the maximum.
     #[test]
     fn lattice_table_matches_direct_distances() {
         let mut c = confocal(16, 0.6, axis(0.0, 0.01, 160));
@@ -302,14 +365,17 @@ mod tests {
             x: Axis::new(on.x.start + nudge, on.x.end + nudge, 12),
             ..on
         };
-        assert!(LegTable::new(&c, &on).is_some() && LegTable::new(&c, &off).is_none());
-        let (a, b) = (
-            backproject(&c, &on, BpOptions::default()).unwrap(),
-            backproject(&c, &off, BpOptions::default()).unwrap(),
-        );
-        let max = a.data.iter().copied().fold(0.0, f32::max);
-        for (x, y) in a.data.iter().zip(&b.data) {
-            assert!((x - y).abs() <= 1e-3 * max, "{x} vs {y}");
+        assert!(Lattice::new(&c, &on).is_some() && Lattice::new(&c, &off).is_none());
+        for inverse_square in [false, true] {
+            let opts = BpOptions { inverse_square };
+            let (a, b) = (
+                backproject(&c, &on, opts).unwrap(),
+                backproject(&c, &off, opts).unwrap(),
+            );
+            let max = a.data.iter().copied().fold(0.0, f32::max);
+            for (x, y) in a.data.iter().zip(&b.data) {
+                assert!((x - y).abs() <= 1e-3 * max, "{x} vs {y} ({opts:?})");
+            }
         }
     }
 
