@@ -24,12 +24,16 @@ pub struct BenchArgs {
     /// Benchmark the renderer instead: the T-letter scenes next to mitransient, and the paper format.
     #[arg(long)]
     pub render: bool,
+    /// Benchmark every reconstruction method on the real captures in this folder instead
+    /// (letter_s.mat … letters_ut.mat of Lindell & Wetzstein 2020).
+    #[arg(long)]
+    pub real: Option<PathBuf>,
     /// Where the renderer benchmark finds its scene files.
     #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
@@ -46,6 +50,9 @@ pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
             a.runs
         ),
     );
+    if let Some(dir) = &a.real {
+        return crate::cmd::bench_real::run(dir, a.runs, quiet);
+    }
     if a.render {
         return crate::cmd::bench_render::run(&a.scenes, a.runs, quiet);
     }

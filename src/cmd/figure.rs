@@ -38,7 +38,7 @@ pub struct FigureArgs {
 }
 
 /// Scene order of the figure (the paper's: S, mannequin, diffuse T, cones, then U+T).
-const ORDER: [&str; 5] = ["letter_s", "mannequin", "letter_t", "cones", "letters_ut"];
+pub const ORDER: [&str; 5] = ["letter_s", "mannequin", "letter_t", "cones", "letters_ut"];
 /// Screen pixels per voxel in grid.png, and the gap between cells.
 const ZOOM: usize = 6;
 const GAP: usize = 6;

@@ -1,0 +1,117 @@
+//! `murk bench --real DIR`: every reconstruction method on each of the real 32 × 32 × 512 confocal
+//! captures (Lindell & Wetzstein 2020), as `murk reconstruct` runs them: plan and run together, the
+//! default volume for the voxel methods, the median of several runs per scene.
+
+use crate::cmd::figure::ORDER;
+use crate::cmd::import::{import, Format, ImportOptions};
+use crate::cmd::progress::say;
+use crate::cmd::reconstruct::{default_volume, slab_delay_m};
+use anyhow::Context;
+use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams};
+use murk_core::{Axis, Capture, Volume};
+use murk_recon::{Method, NoProgress, PfParams, Wavelength};
+use std::path::Path;
+use std::time::Instant;
+
+/// Median seconds of `runs` calls of `f`.
+fn median_secs(runs: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow::Result<f64> {
+    let mut secs = Vec::with_capacity(runs);
+    for _ in 0..runs {
+        let t0 = Instant::now();
+        f()?;
+        secs.push(t0.elapsed().as_secs_f64());
+    }
+    Ok(super::bench::median(secs))
+}
+
+pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+    // The paper's confocal Phasor Fields: λ = 4Δc of depth (8Δc of path), 8 cycles.
+    let pf = PfParams {
+        wavelength: Wavelength::WallFactor(8.0),
+        cycles: 8.0,
+        ..PfParams::default()
+    };
+    let cdt = CdtParams::default();
+    let delay = slab_delay_m(&cdt.slab);
+    let mut table: Vec<(&str, Vec<f64>)> = Vec::new();
+    let mut record = |name: &'static str, s: f64| match table.iter_mut().find(|r| r.0 == name) {
+        Some(r) => r.1.push(s),
+        None => table.push((name, vec![s])),
+    };
+    for scene in ORDER {
+        let path = dir.join(format!("{scene}.mat"));
+        let cap: Capture = import(
+            &path,
+            &ImportOptions {
+                format: Format::Cdt,
+                wall_size_m: None,
+                bin_width_ps: None,
+                gate_bins: None,
+            },
+        )?;
+        let ctx = || path.display().to_string();
+        let vol = default_volume(&cap)?;
+        let mut shifted = cap.clone();
+        shifted.time.start_m -= delay;
+        // CDT's own voxels (minus its z = 0 plane), as `murk figure real` compares them.
+        let cdt_grid = murk_baselines::cdt(&cap, cdt).with_context(ctx)?.volume;
+        let pf_grid = Volume {
+            z: Axis::new(cdt_grid.z.at(1), cdt_grid.z.end, cdt_grid.z.n - 1),
+            ..cdt_grid
+        };
+        let mut line = format!("{scene}:");
+        let mut time = |name: &'static str, f: &mut dyn FnMut() -> anyhow::Result<()>| {
+            let s = median_secs(runs, f).with_context(ctx)?;
+            line += &format!(" {name} {:.1} ms,", s * 1e3);
+            record(name, s);
+            anyhow::Ok(())
+        };
+        let pf_on = |v: &Volume| {
+            murk_recon::reconstruct(&shifted, v, &pf, Method::Fast, &NoProgress)?;
+            anyhow::Ok(())
+        };
+        time("bp", &mut || {
+            murk_baselines::backproject(&cap, &vol, Default::default())?;
+            Ok(())
+        })?;
+        time("fbp", &mut || {
+            murk_baselines::fbp(&cap, &vol, FbpOptions::default())?;
+            Ok(())
+        })?;
+        time("lct", &mut || {
+            murk_baselines::lct(&cap, LctParams::default())?;
+            Ok(())
+        })?;
+        time("fk", &mut || {
+            murk_baselines::fk(&cap, FkParams::default())?;
+            Ok(())
+        })?;
+        time("cdt", &mut || {
+            murk_baselines::cdt(&cap, cdt)?;
+            Ok(())
+        })?;
+        time("pf", &mut || pf_on(&vol))?;
+        time("pf-cdt-voxels", &mut || pf_on(&pf_grid))?;
+        say(quiet, line.trim_end_matches(',').to_string());
+        if scene == ORDER[0] {
+            say(
+                quiet,
+                format!(
+                    "  (voxels: bp, fbp, pf {}×{}×{}; pf-cdt-voxels {}×{}×{})",
+                    vol.x.n, vol.y.n, vol.z.n, pf_grid.x.n, pf_grid.y.n, pf_grid.z.n
+                ),
+            );
+        }
+    }
+    for (name, secs) in table {
+        say(
+            quiet,
+            format!(
+                "{name:>14}: median over scenes {:.1} ms (worst {:.1} ms)",
+                super::bench::median(secs.clone()) * 1e3,
+                secs.iter().copied().fold(0.0, f64::max) * 1e3
+            ),
+        );
+    }
+    Ok(())
+}
