@@ -244,19 +244,21 @@ impl<'a> Plan<'a> {
         }
         let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
-            for p in 0..fx {
-                let row = &mut ws.g[p * fy..(p + 1) * fy];
-                if p < gx {
-                    let ax = (p as i64 - cx).unsigned_abs() as usize;
-                    mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
-                    row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
-                } else {
-                    row.iter_mut().for_each(|v| *v = Complex32::default());
+            wide(|| {
+                for p in 0..fx {
+                    let row = &mut ws.g[p * fy..(p + 1) * fy];
+                    if p < gx {
+                        let ax = (p as i64 - cx).unsigned_abs() as usize;
+                        mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
+                        row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
+                    } else {
+                        row.iter_mut().for_each(|v| *v = Complex32::default());
+                    }
                 }
-            }
-            for (c, s) in ws.tcur.iter_mut().zip(&ws.tstep) {
-                *c *= s;
-            }
+                for (c, s) in ws.tcur.iter_mut().zip(&ws.tstep) {
+                    *c *= s;
+                }
+            });
             self.fft.forward(&mut ws.g, &mut ws.t, &mut ws.scratch);
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
             if confocal {
@@ -276,14 +278,16 @@ impl<'a> Plan<'a> {
                 .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
             self.resample(ws, ny, nx, vy, gnx, gny, fy);
             // Exact phase of the point-side leg; straight loops over f32 so they vectorise.
-            for ((a, f), (pb, ps)) in acc
-                .iter_mut()
-                .zip(&ws.field)
-                .zip(ws.pbase.iter_mut().zip(&ws.pstep))
-            {
-                *a += f * *pb;
-                *pb *= ps;
-            }
+            wide(|| {
+                for ((a, f), (pb, ps)) in acc
+                    .iter_mut()
+                    .zip(&ws.field)
+                    .zip(ws.pbase.iter_mut().zip(&ws.pstep))
+                {
+                    *a += f * *pb;
+                    *pb *= ps;
+                }
+            });
         }
         if confocal {
             self.fft
@@ -301,6 +305,7 @@ fn reach(c: i64, len: usize) -> usize {
 }
 
 /// `dst[q] = src[|q − c|]`: a reversed run down to |·| = 0, then a forward run.
+#[inline(always)]
 fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
     let split = c.clamp(0, dst.len() as i64) as usize;
     let (down, up) = dst.split_at_mut(split);
@@ -341,6 +346,19 @@ impl Plan<'_> {
         }
         // Along x first: whole lattice rows weighted and summed, contiguous, so it vectorises; then
         // along y at the voxels only (the gathering pass touches nx·ny·taps, not vx·ny·taps, values).
+        wide(|| self.resample_off_lattice(ws, ny, nx, vy, lattice));
+    }
+
+    /// Windowed-sinc reads of [`Plan::resample`], kept in one function so it is compiled for AVX2.
+    #[inline(always)]
+    fn resample_off_lattice(
+        &self,
+        ws: &mut Workspace,
+        ny: usize,
+        nx: usize,
+        vy: usize,
+        lattice: impl Fn(usize) -> usize,
+    ) {
         for ix in 0..nx {
             let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
             let out = &mut ws.tmp[ix * vy..(ix + 1) * vy];
