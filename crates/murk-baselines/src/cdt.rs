@@ -118,7 +118,8 @@ pub struct CdtPlan {
     geom: ConfocalGeometry,
     params: CdtParams,
     stolt: Stolt,
-    /// Wiener filter of the slab round trip, conj(H)/(|H|² + 1/snr), on the padded grid.
+    /// Wiener filter of the slab round trip, conj(H)/(|H|² + 1/snr), on the padded grid's
+    /// spectrum (Hermitian, as H is that of a real kernel).
     filter: Vec<C32>,
 }
 
@@ -150,20 +151,17 @@ impl CdtPlan {
         self.geom.check_same(capture, self.params.grid)?;
         let g = &self.geom;
         let fft = &self.stolt.fft;
-        let full = [fft.dims[0], fft.dims[1]];
-        let mut buf = self.stolt.padded(&g.sample(capture));
-        fft.forward(&mut buf, [g.nx, g.ny]);
-        buf.par_iter_mut()
+        let mut spec = self.stolt.transform(&g.sample(capture), |_, v| v);
+        spec.par_iter_mut()
             .zip(&self.filter)
             .for_each(|(b, f)| *b *= f);
         // The deconvolved transient spills out of the first octant (the kernel is acausal after
         // regularisation), so the whole padded volume is kept and migrated, as the reference does.
-        fft.inverse(&mut buf, full);
+        let mut tau = vec![0.0f32; fft.dims.iter().product()];
+        fft.inverse(&mut spec, [fft.dims[0], fft.dims[1]], &mut tau);
         // Wavefield amplitude √τ. No t² scaling: the reference CDT omits it.
-        buf.par_iter_mut()
-            .for_each(|v| *v = C32::new(v.re.max(0.0).sqrt(), 0.0));
-        fft.forward(&mut buf, full);
-        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(buf)))
+        let spec = forward_full(fft, &tau, |v| v.max(0.0).sqrt());
+        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(spec)))
     }
 }
 
@@ -186,33 +184,34 @@ pub fn through_slab(capture: &Capture, slab: &SlabParams) -> Result<Capture> {
     }
     let stolt = Stolt::new(&g);
     let h = round_trip_spectrum(&g, slab, &stolt.fft);
-    let mut buf = stolt.padded(&g.sample(&c));
-    stolt.fft.forward(&mut buf, [g.nx, g.ny]);
-    buf.par_iter_mut().zip(&h).for_each(|(b, h)| *b *= h);
-    stolt.fft.inverse(&mut buf, [g.nx, g.ny]);
-    let m2 = stolt.fft.dims[2];
-    for (i, hist) in c.h.chunks_mut(g.nt).enumerate() {
-        let col = &buf[((i / g.ny) * 2 * g.ny + i % g.ny) * m2..][..g.nt];
-        hist.iter_mut().zip(col).for_each(|(d, s)| *d = s.re);
-    }
+    let mut spec = stolt.transform(&g.sample(&c), |_, v| v);
+    spec.par_iter_mut().zip(&h).for_each(|(b, h)| *b *= h);
+    // The histograms are [nx][ny][nt] in scan order, the shape of the kept octant.
+    stolt.fft.inverse(&mut spec, [g.nx, g.ny], &mut c.h);
     Ok(c)
 }
 
 /// Spectrum of K ⊛ K (circular) on the padded grid of `fft`.
 fn round_trip_spectrum(g: &ConfocalGeometry, slab: &SlabParams, fft: &Fft3) -> Vec<C32> {
-    let full = [fft.dims[0], fft.dims[1]];
-    let mut h = slab_kernel(g, slab, fft.dims);
-    fft.forward(&mut h, full);
+    let mut k = slab_kernel(g, slab, fft.dims);
+    let mut h = forward_full(fft, &k, |v| v);
     h.par_iter_mut().for_each(|v| *v = *v * *v);
-    fft.inverse(&mut h, full);
-    // |·| as the reference: removes the rounding noise's imaginary part and sign.
-    h.par_iter_mut().for_each(|v| *v = C32::new(v.norm(), 0.0));
-    fft.forward(&mut h, full);
-    h
+    fft.inverse(&mut h, [fft.dims[0], fft.dims[1]], &mut k);
+    // |·| as the reference: removes the rounding noise's sign.
+    forward_full(fft, &k, f32::abs)
+}
+
+/// Spectrum of the real volume `data` on the whole grid of `fft`, each value mapped through `f`.
+fn forward_full(fft: &Fft3, data: &[f32], f: impl Fn(f32) -> f32 + Sync) -> Vec<C32> {
+    let [nx2, ny2, m2] = fft.dims;
+    fft.forward([nx2, ny2], |ix, iy, line| {
+        let src = &data[(ix * ny2 + iy) * m2..][..m2];
+        line.iter_mut().zip(src).for_each(|(d, &s)| *d = f(s));
+    })
 }
 
 /// K on the padded grid, lateral origin at index 0 (negative offsets wrap), normalised to sum 1.
-fn slab_kernel(g: &ConfocalGeometry, slab: &SlabParams, dims: [usize; 3]) -> Vec<C32> {
+fn slab_kernel(g: &ConfocalGeometry, slab: &SlabParams, dims: [usize; 3]) -> Vec<f32> {
     let [nx2, ny2, m2] = dims;
     let [dx, dy] = g.spacing();
     let dt = g.ds / SPEED_OF_LIGHT_M_PER_S;
@@ -233,9 +232,7 @@ fn slab_kernel(g: &ConfocalGeometry, slab: &SlabParams, dims: [usize; 3]) -> Vec
         }
     });
     let s = 1.0 / k.iter().sum::<f64>();
-    k.into_par_iter()
-        .map(|v| C32::new((v * s) as f32, 0.0))
-        .collect()
+    k.into_par_iter().map(|v| (v * s) as f32).collect()
 }
 
 #[cfg(test)]

@@ -1,79 +1,182 @@
-//! 3-D FFT on a C-order `[nx][ny][nt]` complex buffer (t contiguous), planned once, with pruning:
-//! the confocal methods zero-pad the data into one octant and keep one octant of the result, so the
-//! forward transform skips the all-zero lines and the inverse skips lines that are cropped away.
+//! 3-D FFT of real C-order `[nx][ny][nt]` data (t contiguous), planned once. Real-to-complex along
+//! t keeps only the `nt/2 + 1` non-negative temporal frequencies (the rest is their conjugate
+//! mirror), so the x and y passes transform half as many lines; the spectrum is `[nx][ny][nt/2 + 1]`.
+//! With pruning: the confocal methods zero-pad the data into one octant and keep one octant of the
+//! result, so the forward transform skips the all-zero lines and the inverse skips lines that are
+//! cropped away.
 
 use rayon::prelude::*;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
 use std::sync::Arc;
 
 pub(crate) type C32 = Complex32;
 
-/// Lines along t are batched in blocks of this many when transforming along x or y, so the
-/// gathered block stays in cache.
+/// Along x or y, this many temporal frequencies are gathered and transformed as one block, so the
+/// block stays in cache.
 const T_BLOCK: usize = 32;
 
 pub(crate) struct Fft3 {
+    /// Real-domain shape.
     pub dims: [usize; 3],
-    fwd: [Arc<dyn Fft<f32>>; 3],
-    inv: [Arc<dyn Fft<f32>>; 3],
+    r2c: Arc<dyn RealToComplex<f32>>,
+    c2r: Arc<dyn ComplexToReal<f32>>,
+    /// Complex inverse along t, for spectra that are not Hermitian.
+    inv_t: Arc<dyn Fft<f32>>,
+    /// Along x and along y.
+    fwd: [Arc<dyn Fft<f32>>; 2],
+    inv: [Arc<dyn Fft<f32>>; 2],
 }
 
 impl Fft3 {
     pub fn new(dims: [usize; 3]) -> Self {
         let mut planner = FftPlanner::new();
-        let fwd = dims.map(|n| planner.plan_fft_forward(n));
-        let inv = dims.map(|n| planner.plan_fft_inverse(n));
-        Fft3 { dims, fwd, inv }
+        let mut real = RealFftPlanner::new();
+        let [nx, ny, nt] = dims;
+        Fft3 {
+            dims,
+            r2c: real.plan_fft_forward(nt),
+            c2r: real.plan_fft_inverse(nt),
+            inv_t: planner.plan_fft_inverse(nt),
+            fwd: [nx, ny].map(|n| planner.plan_fft_forward(n)),
+            inv: [nx, ny].map(|n| planner.plan_fft_inverse(n)),
+        }
     }
 
-    pub fn len(&self) -> usize {
+    /// Samples per spectrum line: the non-negative temporal frequencies.
+    pub fn half(&self) -> usize {
+        self.dims[2] / 2 + 1
+    }
+
+    /// Unnormalised forward transform of the real data that is zero outside x < `support[0]`,
+    /// y < `support[1]`; `fill(x, y, line)` writes line (x, y) into a zeroed buffer of nt samples.
+    pub fn forward(
+        &self,
+        support: [usize; 2],
+        fill: impl Fn(usize, usize, &mut [f32]) + Sync,
+    ) -> Vec<C32> {
+        let [nx, ny, nt] = self.dims;
+        let nh = self.half();
+        let mut spec = vec![C32::default(); nx * ny * nh];
+        spec.par_chunks_mut(ny * nh)
+            .take(support[0])
+            .enumerate()
+            .for_each_init(
+                || (vec![0.0f32; nt], self.r2c.make_scratch_vec()),
+                |(line, scratch), (ix, slab)| {
+                    for (iy, out) in slab.chunks_mut(nh).take(support[1]).enumerate() {
+                        line.fill(0.0);
+                        fill(ix, iy, line);
+                        self.r2c
+                            .process_with_scratch(line, out, scratch)
+                            .expect("realfft lengths match their plan");
+                    }
+                },
+            );
+        self.along_y(&mut spec, &self.fwd[1], support[0]);
+        self.along_x(&mut spec, &self.fwd[0]);
+        spec
+    }
+
+    /// Inverse transform of a Hermitian spectrum (that of real data), scaled by 1/len, into `out`
+    /// = `[keep[0]][keep[1]][n]`: the first n ≤ nt samples of the lines x < `keep[0]`,
+    /// y < `keep[1]`. `spec` is used as scratch.
+    pub fn inverse(&self, spec: &mut [C32], keep: [usize; 2], out: &mut [f32]) {
+        let nt = self.dims[2];
+        let s = 1.0 / self.len() as f32;
+        self.inverse_lines(
+            spec,
+            keep,
+            out,
+            || (vec![0.0f32; nt], self.c2r.make_scratch_vec()),
+            |(line, scratch), freq, o| {
+                // The imaginary parts at DC (and Nyquist) of a Hermitian spectrum are zero; what is
+                // there is rounding noise, which realfft would reject.
+                freq[0].im = 0.0;
+                if nt.is_multiple_of(2) {
+                    freq[nt / 2].im = 0.0;
+                }
+                self.c2r
+                    .process_with_scratch(freq, line, scratch)
+                    .expect("realfft lengths match their plan");
+                o.iter_mut().zip(line.iter()).for_each(|(o, v)| *o = v * s);
+            },
+        );
+    }
+
+    /// |inverse transform|², scaled by 1/len², of a spectrum that is zero at negative temporal
+    /// frequencies (an analytic signal: `spec` holds its non-negative half); output and scratch as
+    /// in [`Fft3::inverse`].
+    pub fn inverse_power_one_sided(&self, spec: &mut [C32], keep: [usize; 2], out: &mut [f32]) {
+        let nt = self.dims[2];
+        let nh = self.half();
+        let s2 = (1.0 / self.len() as f32).powi(2);
+        self.inverse_lines(
+            spec,
+            keep,
+            out,
+            || {
+                let scratch = vec![C32::default(); self.inv_t.get_inplace_scratch_len()];
+                (vec![C32::default(); nt], scratch)
+            },
+            |(line, scratch), freq, o| {
+                line[..nh].copy_from_slice(freq);
+                line[nh..].fill(C32::default());
+                self.inv_t.process_with_scratch(line, scratch);
+                o.iter_mut()
+                    .zip(line.iter())
+                    .for_each(|(o, v)| *o = v.norm_sqr() * s2);
+            },
+        );
+    }
+
+    fn len(&self) -> usize {
         self.dims.iter().product()
     }
 
-    /// Unnormalised forward transform of data that is zero outside x < `support[0]`, y < `support[1]`.
-    pub fn forward(&self, buf: &mut [C32], support: [usize; 2]) {
-        self.along_t(buf, &self.fwd[2], support);
-        self.along_y(buf, &self.fwd[1], support[0]);
-        self.along_x(buf, &self.fwd[0]);
+    /// The lateral inverse passes (exact on x < `keep[0]`), then `along_t(scratch, spectrum line,
+    /// output line)` on every kept line.
+    fn inverse_lines<S>(
+        &self,
+        spec: &mut [C32],
+        keep: [usize; 2],
+        out: &mut [f32],
+        scratch: impl Fn() -> S + Sync + Send,
+        along_t: impl Fn(&mut S, &mut [C32], &mut [f32]) + Sync + Send,
+    ) {
+        let [_, ny, nt] = self.dims;
+        let nh = self.half();
+        let n = out.len() / (keep[0] * keep[1]);
+        assert!(n <= nt && n * keep[0] * keep[1] == out.len());
+        self.along_x(spec, &self.inv[0]);
+        self.along_y(spec, &self.inv[1], keep[0]);
+        spec.par_chunks_mut(ny * nh)
+            .zip(out.par_chunks_mut(keep[1] * n))
+            .for_each_init(scratch, |s, (slab, o)| {
+                slab.chunks_mut(nh)
+                    .zip(o.chunks_mut(n))
+                    .for_each(|(freq, o)| along_t(s, freq, o))
+            });
     }
 
-    /// Inverse transform scaled by 1/len, exact only on x < `keep[0]`, y < `keep[1]` (the rest of the
-    /// buffer is left partially transformed).
-    pub fn inverse(&self, buf: &mut [C32], keep: [usize; 2]) {
-        self.along_x(buf, &self.inv[0]);
-        self.along_y(buf, &self.inv[1], keep[0]);
-        self.along_t(buf, &self.inv[2], keep);
-        let s = 1.0 / self.len() as f32;
-        let [_, ny, nt] = self.dims;
-        buf.par_chunks_mut(ny * nt)
-            .take(keep[0])
-            .for_each(|slab| slab[..keep[1] * nt].iter_mut().for_each(|v| *v *= s));
-    }
-
-    fn along_t(&self, buf: &mut [C32], fft: &Arc<dyn Fft<f32>>, lines: [usize; 2]) {
-        let [_, ny, nt] = self.dims;
-        buf.par_chunks_mut(ny * nt).take(lines[0]).for_each_init(
-            || vec![C32::default(); fft.get_inplace_scratch_len()],
-            |scratch, slab| fft.process_with_scratch(&mut slab[..lines[1] * nt], scratch),
-        );
-    }
-
-    fn along_y(&self, buf: &mut [C32], fft: &Arc<dyn Fft<f32>>, x_lines: usize) {
-        let [_, ny, nt] = self.dims;
-        buf.par_chunks_mut(ny * nt).take(x_lines).for_each_init(
+    fn along_y(&self, spec: &mut [C32], fft: &Arc<dyn Fft<f32>>, x_lines: usize) {
+        let ny = self.dims[1];
+        let nh = self.half();
+        spec.par_chunks_mut(ny * nh).take(x_lines).for_each_init(
             || Scratch::new(fft, ny),
-            |s, slab| s.across_rows(fft, slab.chunks_mut(nt).collect()),
+            |s, slab| s.across_rows(fft, slab.chunks_mut(nh).collect()),
         );
     }
 
-    fn along_x(&self, buf: &mut [C32], fft: &Arc<dyn Fft<f32>>) {
-        let [nx, ny, nt] = self.dims;
-        // rows[y][x] borrows the t-line at (x, y): groups of rows with equal y are disjoint and
-        // can be transformed in parallel without unsafe code.
+    fn along_x(&self, spec: &mut [C32], fft: &Arc<dyn Fft<f32>>) {
+        let [nx, ny, _] = self.dims;
+        let nh = self.half();
+        // rows[y][x] borrows the spectrum line at (x, y): groups of rows with equal y are disjoint
+        // and can be transformed in parallel without unsafe code.
         let mut rows: Vec<Vec<&mut [C32]>> = (0..ny).map(|_| Vec::with_capacity(nx)).collect();
-        for slab in buf.chunks_mut(ny * nt) {
-            for (y, line) in slab.chunks_mut(nt).enumerate() {
+        for slab in spec.chunks_mut(ny * nh) {
+            for (y, line) in slab.chunks_mut(nh).enumerate() {
                 rows[y].push(line);
             }
         }
@@ -97,21 +200,21 @@ impl Scratch {
         }
     }
 
-    /// Transforms across the rows (element t of every row forms one signal), a block of t at a time.
+    /// Transforms across the rows (element j of every row forms one signal), a block of j at a time.
     fn across_rows(&mut self, fft: &Arc<dyn Fft<f32>>, mut rows: Vec<&mut [C32]>) {
         let n = rows.len();
-        let nt = rows[0].len();
-        for t0 in (0..nt).step_by(T_BLOCK) {
-            let tb = T_BLOCK.min(nt - t0);
-            let block = &mut self.block[..tb * n];
+        let len = rows[0].len();
+        for j0 in (0..len).step_by(T_BLOCK) {
+            let jb = T_BLOCK.min(len - j0);
+            let block = &mut self.block[..jb * n];
             for (r, row) in rows.iter().enumerate() {
-                for (j, v) in row[t0..t0 + tb].iter().enumerate() {
+                for (j, v) in row[j0..j0 + jb].iter().enumerate() {
                     block[j * n + r] = *v;
                 }
             }
             fft.process_with_scratch(block, &mut self.fft);
             for (r, row) in rows.iter_mut().enumerate() {
-                for (j, v) in row[t0..t0 + tb].iter_mut().enumerate() {
+                for (j, v) in row[j0..j0 + jb].iter_mut().enumerate() {
                     *v = block[j * n + r];
                 }
             }
@@ -149,30 +252,60 @@ mod tests {
     #[test]
     fn pruned_transforms_match_the_direct_dft() {
         let d = [6, 4, 40];
+        let (nt, n_out) = (d[2], 30);
         let plan = Fft3::new(d);
-        let mut x = vec![C32::default(); plan.len()];
+        let nh = plan.half();
+        let value =
+            |ix: usize, iy: usize, t: usize| ((ix * 7 + iy * 3 + t) % 11) as f32 - 0.1 * t as f32;
+        let mut x = vec![C32::default(); d.iter().product()];
         for ix in 0..3 {
             for iy in 0..2 {
-                for t in 0..40 {
-                    x[(ix * 4 + iy) * 40 + t] = C32::new(((ix * 7 + iy * 3 + t) % 11) as f32, 0.5);
+                for t in 0..nt {
+                    x[(ix * 4 + iy) * nt + t] = C32::new(value(ix, iy, t), 0.0);
                 }
             }
         }
         let want = dft3(&x, d, -1.0);
-        let mut y = x.clone();
-        plan.forward(&mut y, [3, 2]);
+        let spec = plan.forward([3, 2], |ix, iy, line| {
+            line.iter_mut()
+                .enumerate()
+                .for_each(|(t, v)| *v = value(ix, iy, t))
+        });
+        // Relative to the largest value, f32 rounding: 1e-5 for the spectrum, 1e-5 after the
+        // round trip, 1e-4 for the squared magnitudes.
         let scale = want.iter().map(|v| v.norm()).fold(0.0, f32::max);
-        for (a, b) in y.iter().zip(&want) {
+        for (i, a) in spec.iter().enumerate() {
+            let b = want[i / nh * nt + i % nh];
             assert!((a - b).norm() < 1e-5 * scale, "{a} vs {b}");
         }
-        plan.inverse(&mut y, [3, 2]);
-        for ix in 0..3 {
-            for iy in 0..2 {
-                for t in 0..40 {
-                    let i = (ix * 4 + iy) * 40 + t;
-                    assert!((y[i] - x[i]).norm() < 1e-4, "{} vs {}", y[i], x[i]);
+        let kept = |out: &[f32], f: &dyn Fn(usize, usize, usize) -> f32, tol: f32| {
+            for ix in 0..3 {
+                for iy in 0..2 {
+                    for t in 0..n_out {
+                        let (a, b) = (out[(ix * 2 + iy) * n_out + t], f(ix, iy, t));
+                        assert!((a - b).abs() < tol, "({ix}, {iy}, {t}): {a} vs {b}");
+                    }
                 }
             }
-        }
+        };
+        let mut out = vec![0.0f32; 3 * 2 * n_out];
+        plan.inverse(&mut spec.clone(), [3, 2], &mut out);
+        let peak = x.iter().map(|v| v.re.abs()).fold(0.0, f32::max);
+        kept(&out, &|ix, iy, t| value(ix, iy, t), 1e-5 * peak);
+        // The analytic signal: the direct inverse of the spectrum without negative frequencies.
+        let mut one_sided = want.clone();
+        one_sided
+            .iter_mut()
+            .enumerate()
+            .filter(|(i, _)| i % nt >= nh)
+            .for_each(|(_, v)| *v = C32::default());
+        let len = x.len() as f32;
+        let z: Vec<f32> = dft3(&one_sided, d, 1.0)
+            .iter()
+            .map(|v| (v / len).norm_sqr())
+            .collect();
+        plan.inverse_power_one_sided(&mut spec.clone(), [3, 2], &mut out);
+        let peak = z.iter().copied().fold(0.0, f32::max);
+        kept(&out, &|ix, iy, t| z[(ix * 4 + iy) * nt + t], 1e-4 * peak);
     }
 }

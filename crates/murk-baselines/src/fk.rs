@@ -4,8 +4,8 @@
 //! (2M × 2N × 2N) zero-padded data, the spectrum at temporal frequency k_z′ = √(a²(k_x² + k_y²) + k_z²)
 //! is moved to k_z, with the Jacobian |k_z|/k_z′, for k_z > 0 only. With the normalised grids
 //! k_z = m/M and k_x = j/N, a = Δs/(2Δx) (per axis, so Δx ≠ Δy is fine).
-//! Memory: two buffers of the padded size (one complex f32, one output), no voxel × sensor tensors;
-//! 64² × 512 takes 134 MB of complex data.
+//! Memory: the non-negative temporal half of the padded spectrum ((2N)² × (M+1) complex f32) and the
+//! output, no voxel × sensor tensors; 64² × 512 takes 67 MB of spectrum.
 
 use crate::confocal::{ConfocalGeometry, TimeGrid};
 use crate::fft3::{Fft3, C32};
@@ -46,18 +46,12 @@ impl FkPlan {
     pub fn run(&self, capture: &Capture) -> Result<Reconstruction> {
         self.geom.check_same(capture, self.params.grid)?;
         let g = &self.geom;
-        let tau = g.sample(capture);
-        let mut buf = self.stolt.padded(&tau);
         // √(τ·ẑ²), ẑ = k/M: the amplitude of the wavefield, with the t² falloff undone.
         let m = g.nt as f32;
-        buf.par_chunks_mut(self.stolt.fft.dims[2]).for_each(|col| {
-            col[..g.nt]
-                .iter_mut()
-                .enumerate()
-                .for_each(|(k, v)| *v = C32::new(v.re.max(0.0).sqrt() * k as f32 / m, 0.0))
-        });
-        self.stolt.fft.forward(&mut buf, [g.nx, g.ny]);
-        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(buf)))
+        let spec = self
+            .stolt
+            .transform(&g.sample(capture), |k, v| v.max(0.0).sqrt() * k as f32 / m);
+        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(spec)))
     }
 }
 
@@ -66,7 +60,7 @@ pub fn fk(capture: &Capture, params: FkParams) -> Result<Reconstruction> {
     FkPlan::new(capture, params)?.run(capture)
 }
 
-/// The Stolt step on the padded [2nx][2ny][2m] spectrum, shared with CDT.
+/// The Stolt step on the spectrum of the padded [2nx][2ny][2m] grid, shared with CDT.
 pub(crate) struct Stolt {
     pub fft: Fft3,
     nx: usize,
@@ -88,28 +82,23 @@ impl Stolt {
         }
     }
 
-    /// `tau` ([nx][ny][m], real) zero-padded into the first octant of a complex buffer.
-    pub fn padded(&self, tau: &[f32]) -> Vec<C32> {
-        let [_, ny2, m2] = self.fft.dims;
-        let mut buf = vec![C32::default(); self.fft.len()];
-        buf.par_chunks_mut(ny2 * m2)
-            .take(self.nx)
-            .enumerate()
-            .for_each(|(ix, slab)| {
-                for iy in 0..self.ny {
-                    let src = &tau[(ix * self.ny + iy) * self.m..][..self.m];
-                    slab[iy * m2..][..self.m]
-                        .iter_mut()
-                        .zip(src)
-                        .for_each(|(d, s)| *d = C32::new(*s, 0.0));
-                }
-            });
-        buf
+    /// Spectrum of `tau` ([nx][ny][m]) zero-padded into the first octant, sample k of each line
+    /// mapped through `f(k, value)` first.
+    pub fn transform(&self, tau: &[f32], f: impl Fn(usize, f32) -> f32 + Sync) -> Vec<C32> {
+        self.fft.forward([self.nx, self.ny], |ix, iy, line| {
+            let src = &tau[(ix * self.ny + iy) * self.m..][..self.m];
+            line.iter_mut()
+                .zip(src)
+                .enumerate()
+                .for_each(|(k, (d, &s))| *d = f(k, s));
+        })
     }
 
-    /// Stolt-maps the spectrum `buf`, inverse-transforms it and returns |·|² of the first octant.
-    pub fn migrate_and_crop(&self, mut buf: Vec<C32>) -> Vec<f32> {
-        let [nx2, ny2, m2] = self.fft.dims;
+    /// Stolt-maps the spectrum `spec`, inverse-transforms it and returns |·|² of the first octant.
+    /// The map fills only positive temporal frequencies, so the migrated spectrum is not Hermitian:
+    /// the inverse is complex, but the stored non-negative half is all there is.
+    pub fn migrate_and_crop(&self, mut spec: Vec<C32>) -> Vec<f32> {
+        let [nx2, ny2, _] = self.fft.dims;
         let (m, mf) = (self.m, self.m as f64);
         // Signed normalised frequency of FFT index j on an axis of 2n samples.
         let freq = |j: usize, n: usize| {
@@ -119,42 +108,41 @@ impl Stolt {
                 j as f64 - 2.0 * n as f64
             }) / n as f64
         };
-        buf.par_chunks_mut(m2).enumerate().for_each(|(i, col)| {
-            let kx = freq(i / ny2, nx2 / 2);
-            let ky = freq(i % ny2, ny2 / 2);
-            let lateral = self.a2[0] * kx * kx + self.a2[1] * ky * ky;
-            // Source samples exist for k_z′ ≤ (M−1)/M; beyond, and for all larger k_z, it is zero.
-            let mut end = m;
-            // Output m reads the source at index ≥ m, so ascending order never reads a sample that
-            // was already overwritten: the mapping is done in place.
-            for mo in 1..m {
-                let kz = mo as f64 / mf;
-                // max() guards the in-place order against rounding when k_x = k_y = 0.
-                let u = ((lateral + kz * kz).sqrt() * mf).max(mo as f64);
-                if u > (m - 1) as f64 {
-                    end = mo;
-                    break;
+        spec.par_chunks_mut(self.fft.half())
+            .enumerate()
+            .for_each(|(i, col)| {
+                let kx = freq(i / ny2, nx2 / 2);
+                let ky = freq(i % ny2, ny2 / 2);
+                let lateral = self.a2[0] * kx * kx + self.a2[1] * ky * ky;
+                // Source samples exist for k_z′ ≤ (M−1)/M; beyond, and for all larger k_z, it is zero.
+                let mut end = m;
+                // Output m reads the source at index ≥ m, so ascending order never reads a sample that
+                // was already overwritten: the mapping is done in place.
+                for mo in 1..m {
+                    let kz = mo as f64 / mf;
+                    // max() guards the in-place order against rounding when k_x = k_y = 0.
+                    let u = ((lateral + kz * kz).sqrt() * mf).max(mo as f64);
+                    if u > (m - 1) as f64 {
+                        end = mo;
+                        break;
+                    }
+                    // u ≥ 0, so the cast is the floor (f64::floor is a libm call without SSE4.1).
+                    let n = u as usize;
+                    let f = (u - n as f64) as f32;
+                    let hi = if n + 1 < m {
+                        col[n + 1]
+                    } else {
+                        C32::default()
+                    };
+                    col[mo] = (col[n] * (1.0 - f) + hi * f) * (mo as f64 / u) as f32;
                 }
-                // u ≥ 0, so the cast is the floor (f64::floor is a libm call without SSE4.1).
-                let n = u as usize;
-                let f = (u - n as f64) as f32;
-                let hi = if n + 1 < m {
-                    col[n + 1]
-                } else {
-                    C32::default()
-                };
-                col[mo] = (col[n] * (1.0 - f) + hi * f) * (mo as f64 / u) as f32;
-            }
-            // Only k_z > 0 survives: the wavefield travels towards the wall.
-            col[0] = C32::default();
-            col[end..].iter_mut().for_each(|v| *v = C32::default());
-        });
-        self.fft.inverse(&mut buf, [self.nx, self.ny]);
+                // Only k_z > 0 survives: the wavefield travels towards the wall.
+                col[0] = C32::default();
+                col[end..].iter_mut().for_each(|v| *v = C32::default());
+            });
         let mut out = vec![0.0f32; self.nx * self.ny * m];
-        out.par_chunks_mut(m).enumerate().for_each(|(i, o)| {
-            let src = &buf[((i / self.ny) * ny2 + i % self.ny) * m2..][..m];
-            o.iter_mut().zip(src).for_each(|(o, v)| *o = v.norm_sqr());
-        });
+        self.fft
+            .inverse_power_one_sided(&mut spec, [self.nx, self.ny], &mut out);
         out
     }
 }

@@ -63,8 +63,13 @@ impl LctPlan {
         let m = geom.nt.next_power_of_two();
         let (nx, ny) = (geom.nx, geom.ny);
         let fft = Fft3::new([2 * nx, 2 * ny, 2 * m]);
-        let mut filter = light_cone(&geom, m);
-        fft.forward(&mut filter, [2 * nx, 2 * ny]);
+        let (delay, norm) = light_cone(&geom, m);
+        let mut filter = fft.forward([2 * nx, 2 * ny], |jx, jy, line| {
+            if let Some(k) = delay[jx * 2 * ny + jy] {
+                line[k] = norm;
+            }
+        });
+        // conj(F)/(|F|² + c) of a real PSF's spectrum stays Hermitian, so the real transform applies.
         let inv_snr = (1.0 / params.snr) as f32;
         filter
             .par_iter_mut()
@@ -83,7 +88,6 @@ impl LctPlan {
     pub fn run(&self, capture: &Capture) -> Result<Reconstruction> {
         self.geom.check_same(capture, self.params.grid)?;
         let (g, m) = (&self.geom, self.m);
-        let [_, ny2, m2] = self.fft.dims;
         let tau = g.sample(capture);
         let power = match self.params.reflectance {
             Reflectance::Diffuse => 4,
@@ -92,42 +96,38 @@ impl LctPlan {
         let scale: Vec<f32> = (0..g.nt)
             .map(|k| (k as f32 / m as f32).powi(power))
             .collect();
-        let mut buf = vec![C32::default(); self.fft.len()];
-        buf.par_chunks_mut(ny2 * m2)
-            .take(g.nx)
-            .enumerate()
-            .for_each_init(
-                || vec![0.0f32; m],
-                |col, (ix, slab)| {
-                    for iy in 0..g.ny {
-                        let src = &tau[(ix * g.ny + iy) * g.nt..][..g.nt];
-                        col.fill(0.0);
-                        col[..g.nt]
-                            .iter_mut()
-                            .zip(src)
-                            .zip(&scale)
-                            .for_each(|((c, s), w)| *c = s * w);
-                        self.resampler.t_to_v(col, &mut slab[iy * m2..][..m]);
-                    }
-                },
-            );
-        self.fft.forward(&mut buf, [g.nx, g.ny]);
-        buf.par_iter_mut()
+        // Scaled and zero-padded to m samples, the resampler's input.
+        let mut scaled = vec![0.0f32; g.nx * g.ny * m];
+        scaled
+            .par_chunks_mut(m)
+            .zip(tau.par_chunks(g.nt))
+            .for_each(|(d, src)| {
+                d.iter_mut()
+                    .zip(src.iter().zip(&scale))
+                    .for_each(|(d, (s, w))| *d = s * w)
+            });
+        let mut spec = self.fft.forward([g.nx, g.ny], |ix, iy, line| {
+            let col = &scaled[(ix * g.ny + iy) * m..][..m];
+            self.resampler.t_to_v(col, &mut line[..m]);
+        });
+        spec.par_iter_mut()
             .zip(&self.filter)
             .for_each(|(b, f)| *b *= f);
-        self.fft.inverse(&mut buf, [g.nx, g.ny]);
+        // The v-domain result, reusing the buffer of the same shape.
+        let mut v = scaled;
+        self.fft.inverse(&mut spec, [g.nx, g.ny], &mut v);
         let mut data = vec![0.0f32; g.nx * g.ny * g.nt];
-        data.par_chunks_mut(g.nt).enumerate().for_each_init(
-            || vec![0.0f32; m],
-            |col, (i, out)| {
-                let (ix, iy) = (i / g.ny, i % g.ny);
-                self.resampler
-                    .v_to_t(&buf[(ix * ny2 + iy) * m2..][..m], col);
-                out.iter_mut()
-                    .zip(col.iter())
-                    .for_each(|(o, v)| *o = v.max(0.0));
-            },
-        );
+        data.par_chunks_mut(g.nt)
+            .zip(v.par_chunks(m))
+            .for_each_init(
+                || vec![0.0f32; m],
+                |col, (out, v)| {
+                    self.resampler.v_to_t(v, col);
+                    out.iter_mut()
+                        .zip(col.iter())
+                        .for_each(|(o, v)| *o = v.max(0.0));
+                },
+            );
         Ok(g.reconstruction(g.nt, data))
     }
 }
@@ -138,14 +138,14 @@ pub fn lct(capture: &Capture, params: LctParams) -> Result<Reconstruction> {
 }
 
 /// The binary light cone on the padded [2nx][2ny][2m] grid, apex at index 0 (negative lateral
-/// offsets wrap), normalised to unit L2 norm.
-fn light_cone(g: &ConfocalGeometry, m: usize) -> Vec<C32> {
+/// offsets wrap): the depth sample of its one non-zero value per line [wx][wy] (none where the cone
+/// leaves the grid), and the value that normalises it to unit L2 norm.
+fn light_cone(g: &ConfocalGeometry, m: usize) -> (Vec<Option<usize>>, f32) {
     let (nx2, ny2, m2) = (2 * g.nx, 2 * g.ny, 2 * m);
     let [dx, dy] = g.spacing();
     // A scatterer at lateral distance r appears 4r²/R² later in v̂ = (path/R)², i.e. 4r²·M/R² samples.
     let r_total = m as f64 * g.ds;
-    let mut psf = vec![C32::default(); nx2 * ny2 * m2];
-    let mut count = 0usize;
+    let mut delay = vec![None; nx2 * ny2];
     for jx in 0..nx2 {
         for jy in 0..ny2 {
             let ox = (jx as f64 - g.nx as f64) * dx;
@@ -153,14 +153,12 @@ fn light_cone(g: &ConfocalGeometry, m: usize) -> Vec<C32> {
             let k = (4.0 * (ox * ox + oy * oy) * m as f64 / (r_total * r_total)).round() as usize;
             if k < m2 {
                 let (wx, wy) = ((jx + g.nx) % nx2, (jy + g.ny) % ny2);
-                psf[(wx * ny2 + wy) * m2 + k] = C32::new(1.0, 0.0);
-                count += 1;
+                delay[wx * ny2 + wy] = Some(k);
             }
         }
     }
-    let norm = 1.0 / (count as f32).sqrt();
-    psf.iter_mut().for_each(|v| *v *= norm);
-    psf
+    let count = delay.iter().flatten().count();
+    (delay, 1.0 / (count as f32).sqrt())
 }
 
 /// O'Toole's t → v = t² resampling matrix as a sparse M×M operator (M a power of two): fine row
@@ -189,18 +187,18 @@ impl Resampler {
         Resampler { rows }
     }
 
-    fn t_to_v(&self, t: &[f32], v: &mut [C32]) {
+    fn t_to_v(&self, t: &[f32], v: &mut [f32]) {
         for (row, out) in self.rows.iter().zip(v.iter_mut()) {
-            *out = C32::new(row.iter().map(|&(c, w)| w * t[c]).sum(), 0.0);
+            *out = row.iter().map(|&(c, w)| w * t[c]).sum();
         }
     }
 
-    /// Real part of the transpose applied to `v`.
-    fn v_to_t(&self, v: &[C32], t: &mut [f32]) {
+    /// The transpose applied to `v`.
+    fn v_to_t(&self, v: &[f32], t: &mut [f32]) {
         t.fill(0.0);
         for (row, x) in self.rows.iter().zip(v) {
             for &(c, w) in row {
-                t[c] += w * x.re;
+                t[c] += w * x;
             }
         }
     }
