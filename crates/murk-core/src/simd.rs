@@ -3,7 +3,9 @@
 //! every vectorised loop on the machines murk targets.
 
 /// Runs `f`, vectorised for AVX2 + FMA when this CPU supports them. Keep `f` small and self-contained
-/// (plain loops over slices): only what is inlined into it gets the wider instructions.
+/// (plain loops over slices) and mark it `#[inline(always)]` (`wide(#[inline(always)] || …)`): only
+/// code inlined into the AVX2 copy gets the wider instructions, and LLVM does not always inline a
+/// closure on its own.
 #[inline]
 pub fn wide<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]

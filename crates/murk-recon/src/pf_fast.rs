@@ -244,7 +244,7 @@ impl<'a> Plan<'a> {
         }
         let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
-            wide(|| {
+            wide(#[inline(always)] || {
                 for p in 0..fx {
                     let row = &mut ws.g[p * fy..(p + 1) * fy];
                     if p < gx {
@@ -262,14 +262,14 @@ impl<'a> Plan<'a> {
             self.fft.forward(&mut ws.g, &mut ws.t, &mut ws.scratch);
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
             if confocal {
-                wide(|| {
+                wide(#[inline(always)] || {
                     for ((a, t), h) in ws.spec_acc.iter_mut().zip(&ws.t).zip(h) {
                         *a += t * h;
                     }
                 });
                 continue;
             }
-            wide(|| {
+            wide(#[inline(always)] || {
                 for (t, h) in ws.t.iter_mut().zip(h) {
                     *t *= h;
                 }
@@ -278,7 +278,7 @@ impl<'a> Plan<'a> {
                 .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
             self.resample(ws, ny, nx, vy, gnx, gny, fy);
             // Exact phase of the point-side leg; straight loops over f32 so they vectorise.
-            wide(|| {
+            wide(#[inline(always)] || {
                 for ((a, f), (pb, ps)) in acc
                     .iter_mut()
                     .zip(&ws.field)
@@ -346,7 +346,7 @@ impl Plan<'_> {
         }
         // Along x first: whole lattice rows weighted and summed, contiguous, so it vectorises; then
         // along y at the voxels only (the gathering pass touches nx·ny·taps, not vx·ny·taps, values).
-        wide(|| self.resample_off_lattice(ws, ny, nx, vy, lattice));
+        wide(#[inline(always)] || self.resample_off_lattice(ws, ny, nx, vy, lattice));
     }
 
     /// Windowed-sinc reads of [`Plan::resample`], kept in one function so it is compiled for AVX2.
