@@ -267,7 +267,7 @@ fn max_at(info: &str) -> (usize, usize) {
 }
 
 #[test]
-fn lct_import_maps_rows_to_y_and_columns_to_minus_x() {
+fn lct_import_follows_the_reference_front_view() {
     let dir = tmpdir("lct");
     let (n, t) = (4usize, 700usize);
     // One count at row i = 0, column j = 1, bin 650 (after the 600 gated bins), column-major.
@@ -285,8 +285,10 @@ fn lct_import_maps_rows_to_y_and_columns_to_minus_x() {
     let cap = dir.join("scan.h5");
     ok(&["import", "-q", s(&mat), "--format", "lct", "--out", s(&cap)]);
     let info = ok(&["info", s(&cap)]);
-    // Row a = 0 (top) is the largest y, column b = 1 is x index n − 2: grid point (2, 3).
-    assert_eq!(max_at(&info), (2 * n + 3, 650), "{info}");
+    // O'Toole's front view shows j as the row (top → bottom) and i reversed as the column, so
+    // (i, j) = (0, 1) is row 1 (second from the top: y index n − 2) and the rightmost column
+    // (x index 0, murk's front view having +x on the left): grid point (0, 2).
+    assert_eq!(max_at(&info), (2, 650), "{info}");
     assert!(
         info.contains("x -0.400..+0.400") && info.contains("bins of 0.001200 m"),
         "{info}"

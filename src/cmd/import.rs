@@ -5,7 +5,9 @@
 //! wall into the scene with +y up and +x on the left, so scan row a becomes y (decreasing with a) and
 //! scan column b becomes x (decreasing with b): grid point (ix, iy) = (B − 1 − b, A − 1 − a), on a
 //! regular grid with its first axis along +x and its second along +y (what the fast paths need).
-//! LCT's `rect_data(i, j, t)` is read the same way (i as a, j as b).
+//! LCT's `rect_data(i, j, t)`: O'Toole's reference code permutes it to (t, j, i), reverses i and
+//! shows the front view with row = j and column = reversed i, so a = j and b = N − 1 − i: grid point
+//! (ix, iy) = (i, N − 1 − j).
 
 use crate::cmd::progress::say;
 use anyhow::{bail, Context};
@@ -139,7 +141,7 @@ pub fn import(path: &Path, o: &ImportOptions) -> anyhow::Result<Capture> {
                     2.0 * w[0] as f64
                 }
             };
-            // MATLAB N × N × T (i, j, t) → (t, a, b) with a = i, b = j.
+            // MATLAB N × N × T (i, j, t) → (t, a, b) with a = j, b = N − 1 − i.
             let [ni, nj, nt] = shape[..] else {
                 bail!(
                     "{}: 'rect_data' should be N × N × T, got shape {shape:?}",
@@ -148,12 +150,12 @@ pub fn import(path: &Path, o: &ImportOptions) -> anyhow::Result<Capture> {
             };
             let mut tab = vec![0f32; data.len()];
             for (k, &v) in data.iter().enumerate() {
-                let (ij, t) = (k / nt, k % nt);
-                tab[t * ni * nj + ij] = v;
+                let (i, j, t) = (k / (nj * nt), k / nt % nj, k % nt);
+                tab[(t * nj + j) * ni + ni - 1 - i] = v;
             }
             (
                 "rect_data",
-                vec![nt, ni, nj],
+                vec![nt, nj, ni],
                 tab,
                 side,
                 o.bin_width_ps.unwrap_or(4.0),
