@@ -150,17 +150,14 @@ impl CdtPlan {
     pub fn run(&self, capture: &Capture) -> Result<Reconstruction> {
         self.geom.check_same(capture, self.params.grid)?;
         let g = &self.geom;
-        let fft = &self.stolt.fft;
         let mut spec = self.stolt.transform(&g.sample(capture), |_, v| v);
         spec.par_iter_mut()
             .zip(&self.filter)
             .for_each(|(b, f)| *b *= f);
         // The deconvolved transient spills out of the first octant (the kernel is acausal after
         // regularisation), so the whole padded volume is kept and migrated, as the reference does.
-        let mut tau = vec![0.0f32; fft.dims.iter().product()];
-        fft.inverse(&mut spec, [fft.dims[0], fft.dims[1]], &mut tau);
         // Wavefield amplitude √τ. No t² scaling: the reference CDT omits it.
-        let spec = forward_full(fft, &tau, |v| v.max(0.0).sqrt());
+        self.stolt.fft.map_real(&mut spec, |v| v.max(0.0).sqrt());
         Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(spec)))
     }
 }
@@ -193,21 +190,15 @@ pub fn through_slab(capture: &Capture, slab: &SlabParams) -> Result<Capture> {
 
 /// Spectrum of K ⊛ K (circular) on the padded grid of `fft`.
 fn round_trip_spectrum(g: &ConfocalGeometry, slab: &SlabParams, fft: &Fft3) -> Vec<C32> {
-    let mut k = slab_kernel(g, slab, fft.dims);
-    let mut h = forward_full(fft, &k, |v| v);
-    h.par_iter_mut().for_each(|v| *v = *v * *v);
-    fft.inverse(&mut h, [fft.dims[0], fft.dims[1]], &mut k);
-    // |·| as the reference: removes the rounding noise's sign.
-    forward_full(fft, &k, f32::abs)
-}
-
-/// Spectrum of the real volume `data` on the whole grid of `fft`, each value mapped through `f`.
-fn forward_full(fft: &Fft3, data: &[f32], f: impl Fn(f32) -> f32 + Sync) -> Vec<C32> {
     let [nx2, ny2, m2] = fft.dims;
-    fft.forward([nx2, ny2], |ix, iy, line| {
-        let src = &data[(ix * ny2 + iy) * m2..][..m2];
-        line.iter_mut().zip(src).for_each(|(d, &s)| *d = f(s));
-    })
+    let k = slab_kernel(g, slab, fft.dims);
+    let mut h = fft.forward([nx2, ny2], |ix, iy, line| {
+        line.copy_from_slice(&k[(ix * ny2 + iy) * m2..][..m2])
+    });
+    h.par_iter_mut().for_each(|v| *v = *v * *v);
+    // |·| as the reference: removes the rounding noise's sign.
+    fft.map_real(&mut h, f32::abs);
+    h
 }
 
 /// K on the padded grid, lateral origin at index 0 (negative offsets wrap), normalised to sum 1.

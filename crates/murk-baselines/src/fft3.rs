@@ -91,18 +91,32 @@ impl Fft3 {
             out,
             || (vec![0.0f32; nt], self.c2r.make_scratch_vec()),
             |(line, scratch), freq, o| {
-                // The imaginary parts at DC (and Nyquist) of a Hermitian spectrum are zero; what is
-                // there is rounding noise, which realfft would reject.
-                freq[0].im = 0.0;
-                if nt.is_multiple_of(2) {
-                    freq[nt / 2].im = 0.0;
-                }
-                self.c2r
-                    .process_with_scratch(freq, line, scratch)
-                    .expect("realfft lengths match their plan");
+                self.to_real(freq, line, scratch);
                 o.iter_mut().zip(line.iter()).for_each(|(o, v)| *o = v * s);
             },
         );
+    }
+
+    /// Replaces the Hermitian spectrum `spec` by that of f(x), x its inverse transform (scaled by
+    /// 1/len), on the whole grid: the inverse and forward transforms without a real volume between.
+    pub fn map_real(&self, spec: &mut [C32], f: impl Fn(f32) -> f32 + Sync) {
+        let [nx, _, nt] = self.dims;
+        let s = 1.0 / self.len() as f32;
+        self.along_x(spec, &self.inv[0]);
+        self.along_y(spec, &self.inv[1], nx);
+        let scratch_len = self.c2r.get_scratch_len().max(self.r2c.get_scratch_len());
+        spec.par_chunks_mut(self.half()).for_each_init(
+            || (vec![0.0f32; nt], vec![C32::default(); scratch_len]),
+            |(line, scratch), freq| {
+                self.to_real(freq, line, scratch);
+                line.iter_mut().for_each(|v| *v = f(*v * s));
+                self.r2c
+                    .process_with_scratch(line, freq, scratch)
+                    .expect("realfft lengths match their plan");
+            },
+        );
+        self.along_y(spec, &self.fwd[1], nx);
+        self.along_x(spec, &self.fwd[0]);
     }
 
     /// |inverse transform|², scaled by 1/len², of a spectrum that is zero at negative temporal
@@ -133,6 +147,20 @@ impl Fft3 {
 
     fn len(&self) -> usize {
         self.dims.iter().product()
+    }
+
+    /// Unnormalised complex-to-real transform of one line of a Hermitian spectrum (used as scratch).
+    fn to_real(&self, freq: &mut [C32], line: &mut [f32], scratch: &mut [C32]) {
+        // The imaginary parts at DC (and Nyquist) of a Hermitian spectrum are zero; what is there
+        // is rounding noise, which realfft would reject.
+        freq[0].im = 0.0;
+        let nt = self.dims[2];
+        if nt.is_multiple_of(2) {
+            freq[nt / 2].im = 0.0;
+        }
+        self.c2r
+            .process_with_scratch(freq, line, scratch)
+            .expect("realfft lengths match their plan");
     }
 
     /// The lateral inverse passes (exact on x < `keep[0]`), then `along_t(scratch, spectrum line,
@@ -271,8 +299,8 @@ mod tests {
                 .enumerate()
                 .for_each(|(t, v)| *v = value(ix, iy, t))
         });
-        // Relative to the largest value, f32 rounding: 1e-5 for the spectrum, 1e-5 after the
-        // round trip, 1e-4 for the squared magnitudes.
+        // Relative to the largest value, f32 rounding: 1e-5 for spectra, 1e-5 after the round
+        // trip, 1e-4 for the squared magnitudes.
         let scale = want.iter().map(|v| v.norm()).fold(0.0, f32::max);
         for (i, a) in spec.iter().enumerate() {
             let b = want[i / nh * nt + i % nh];
@@ -307,5 +335,15 @@ mod tests {
         plan.inverse_power_one_sided(&mut spec.clone(), [3, 2], &mut out);
         let peak = z.iter().copied().fold(0.0, f32::max);
         kept(&out, &|ix, iy, t| z[(ix * 4 + iy) * nt + t], 1e-4 * peak);
+        // A pointwise map between the inverse and forward transforms: the spectrum of x².
+        let mut squared = spec;
+        plan.map_real(&mut squared, |v| v * v);
+        let x2: Vec<C32> = x.iter().map(|v| v * v).collect();
+        let want = dft3(&x2, d, -1.0);
+        let scale = want.iter().map(|v| v.norm()).fold(0.0, f32::max);
+        for (i, a) in squared.iter().enumerate() {
+            let b = want[i / nh * nt + i % nh];
+            assert!((a - b).norm() < 1e-5 * scale, "{a} vs {b}");
+        }
     }
 }
