@@ -52,6 +52,16 @@ impl Fft2 {
         self.fwd_x.process_with_scratch(t, scratch);
     }
 
+    /// Forward 1-D transforms along y of consecutive rows of length `fy`.
+    pub fn rows_y(&self, rows: &mut [Complex32], scratch: &mut [Complex32]) {
+        self.fwd_y.process_with_scratch(rows, scratch);
+    }
+
+    /// Forward 1-D transforms along x of consecutive lines of length `fx`.
+    pub fn rows_x(&self, lines: &mut [Complex32], scratch: &mut [Complex32]) {
+        self.fwd_x.process_with_scratch(lines, scratch);
+    }
+
     /// Inverse of [`Fft2::forward`] (unnormalised) into `a` as [x][y], transforming along y only the
     /// rows x ∈ [x0, x0 + rows) that the caller reads. `t` is clobbered; other rows of `a` are garbage.
     pub fn inverse_rows(

@@ -30,6 +30,36 @@ pub struct Plan<'a> {
     rx: Resampler,
     ry: Resampler,
     fft: Fft2,
+    /// Lattice index, within the kernel's support, of the zero offset along x and y.
+    cx: i64,
+    cy: i64,
+    /// Phases that fold a symmetric kernel's spectrum onto its non-negative frequencies.
+    fold: Option<Fold>,
+}
+
+/// A kernel K(|dx|, |dy|) whose support is symmetric about its centre (volume columns spanning the
+/// wall lattice symmetrically) has K̂(N − k) = e^{4πi·k·c/N}·K̂(k) along each axis, so only the
+/// non-negative frequencies k ≤ N/2 need transforming: about half the row and column FFTs. The
+/// phases for k > N/2 are folded into the data's spectra once, and the kernel's spectrum is unfolded
+/// by mirroring.
+struct Fold {
+    px: Vec<Complex32>,
+    py: Vec<Complex32>,
+}
+
+impl Fold {
+    fn phases(n: usize, c: i64) -> Vec<Complex32> {
+        (0..n)
+            .map(|k| {
+                if k <= n / 2 {
+                    Complex32::new(1.0, 0.0)
+                } else {
+                    let turns = 2.0 * ((n - k) as i64 * c) as f64 / n as f64;
+                    c32(Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * turns))
+                }
+            })
+            .collect()
+    }
 }
 
 impl<'a> Plan<'a> {
@@ -78,6 +108,13 @@ impl<'a> Plan<'a> {
                 fft.fx, fft.fy
             ));
         }
+        let cx = grid.nx as i64 - 1 - rx.lo;
+        let cy = grid.ny as i64 - 1 - ry.lo;
+        let (gx, gy) = (grid.nx + rx.len - 1, grid.ny + ry.len - 1);
+        let fold = (2 * cx + 1 == gx as i64 && 2 * cy + 1 == gy as i64).then(|| Fold {
+            px: Fold::phases(fft.fx, cx),
+            py: Fold::phases(fft.fy, cy),
+        });
         Ok(Plan {
             cap,
             vol: *vol,
@@ -87,6 +124,9 @@ impl<'a> Plan<'a> {
             rx,
             ry,
             fft,
+            cx,
+            cy,
+            fold,
         })
     }
 
@@ -171,6 +211,13 @@ impl<'a> Plan<'a> {
                     // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
                     let norm = 1.0 / (fx * fy) as f32;
                     t.iter_mut().for_each(|v| *v *= norm);
+                    if let Some(f) = &self.fold {
+                        for (row, py) in t.chunks_mut(fx).zip(&f.py) {
+                            for (v, px) in row.iter_mut().zip(&f.px) {
+                                *v *= px * py;
+                            }
+                        }
+                    }
                 },
             );
         out
@@ -199,8 +246,7 @@ impl<'a> Plan<'a> {
         // The kernel depends on |dx| and |dy| only: its sines, cosines and per-frequency recurrence
         // live in a table over the distinct (|dx|, |dy|) (a quarter of the support when the volume is
         // centred on the wall) that is mirrored into the FFT input.
-        let cx = gnx as i64 - 1 - self.rx.lo;
-        let cy = gny as i64 - 1 - self.ry.lo;
+        let (cx, cy) = (self.cx, self.cy);
         let (mx, my) = (reach(cx, gx), reach(cy, gy));
         ws.tcur.clear();
         ws.tstep.clear();
@@ -244,22 +290,34 @@ impl<'a> Plan<'a> {
         }
         let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
-            wide(#[inline(always)] || {
-                for p in 0..fx {
-                    let row = &mut ws.g[p * fy..(p + 1) * fy];
-                    if p < gx {
-                        let ax = (p as i64 - cx).unsigned_abs() as usize;
-                        mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
-                        row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
-                    } else {
-                        row.iter_mut().for_each(|v| *v = Complex32::default());
+            if self.fold.is_some() {
+                self.folded_kernel_spectrum(ws, gx, gy, my);
+            } else {
+                wide(
+                    #[inline(always)]
+                    || {
+                        for p in 0..fx {
+                            let row = &mut ws.g[p * fy..(p + 1) * fy];
+                            if p < gx {
+                                let ax = (p as i64 - cx).unsigned_abs() as usize;
+                                mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
+                                row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
+                            } else {
+                                row.iter_mut().for_each(|v| *v = Complex32::default());
+                            }
+                        }
+                    },
+                );
+                self.fft.forward(&mut ws.g, &mut ws.t, &mut ws.scratch);
+            }
+            wide(
+                #[inline(always)]
+                || {
+                    for (c, s) in ws.tcur.iter_mut().zip(&ws.tstep) {
+                        *c *= s;
                     }
-                }
-                for (c, s) in ws.tcur.iter_mut().zip(&ws.tstep) {
-                    *c *= s;
-                }
-            });
-            self.fft.forward(&mut ws.g, &mut ws.t, &mut ws.scratch);
+                },
+            );
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
             if confocal {
                 wide(#[inline(always)] || {
@@ -304,6 +362,19 @@ fn reach(c: i64, len: usize) -> usize {
     c.unsigned_abs().max((len as i64 - 1 - c).unsigned_abs()) as usize + 1
 }
 
+/// `dst[k] = src[k]` for k < src.len(), then `dst[k] = src[dst.len() − k]`: a spectrum over
+/// k ≤ N/2 extended to all k by symmetry.
+#[inline(always)]
+fn unfold(dst: &mut [Complex32], src: &[Complex32]) {
+    let n = dst.len();
+    let (lo, hi) = dst.split_at_mut(src.len());
+    lo.copy_from_slice(src);
+    for (d, s) in hi.iter_mut().rev().zip(&src[1..]) {
+        *d = *s;
+    }
+    debug_assert!(n - src.len() < src.len());
+}
+
 /// `dst[q] = src[|q − c|]`: a reversed run down to |·| = 0, then a forward run.
 #[inline(always)]
 fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
@@ -317,6 +388,54 @@ fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
 }
 
 impl Plan<'_> {
+    /// The kernel's spectrum at the current frequency into `ws.t` ([ky][kx]) for a symmetric support
+    /// (see [`Fold`]): transforms along y only the distinct rows |dx| ≤ cx, keeps ky ≤ fy/2, transforms
+    /// those columns along x, keeps kx ≤ fx/2, and unfolds by mirroring (the phases live in the data).
+    fn folded_kernel_spectrum(&self, ws: &mut Workspace, gx: usize, gy: usize, my: usize) {
+        let (fx, fy) = (self.fft.fx, self.fft.fy);
+        let (hx, hy) = (fx / 2 + 1, fy / 2 + 1);
+        let rows = self.cx as usize + 1;
+        let (cx, cy) = (self.cx, self.cy);
+        let g = &mut ws.g;
+        wide(
+            #[inline(always)]
+            || {
+                for ax in 0..rows {
+                    let row = &mut g[ax * fy..(ax + 1) * fy];
+                    mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
+                    row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
+                }
+            },
+        );
+        self.fft.rows_y(&mut g[..rows * fy], &mut ws.scratch);
+        ws.cols.resize(hy * rows, Complex32::default());
+        for ax in 0..rows {
+            for ky in 0..hy {
+                ws.cols[ky * rows + ax] = g[ax * fy + ky];
+            }
+        }
+        wide(
+            #[inline(always)]
+            || {
+                for ky in 0..hy {
+                    let line = &mut g[ky * fx..(ky + 1) * fx];
+                    mirror(&mut line[..gx], &ws.cols[ky * rows..(ky + 1) * rows], cx);
+                    line[gx..].iter_mut().for_each(|v| *v = Complex32::default());
+                }
+            },
+        );
+        self.fft.rows_x(&mut g[..hy * fx], &mut ws.scratch);
+        wide(
+            #[inline(always)]
+            || {
+                for ky in 0..fy {
+                    let src = if ky < hy { ky } else { fy - ky };
+                    unfold(&mut ws.t[ky * fx..(ky + 1) * fx], &g[src * fx..src * fx + hx]);
+                }
+            },
+        );
+    }
+
     /// Reads the convolution (lattice rows x ∈ [gnx−1, gnx−1+vx), columns [gny−1, gny−1+vy) of `ws.g`)
     /// at the voxels into `ws.field`: a plain gather on the wall lattice, else windowed sinc along y
     /// for every lattice row, then along x.
@@ -404,6 +523,8 @@ struct Workspace {
     tstep: Vec<Complex32>,
     /// Confocal: the plane's spectrum summed over frequencies.
     spec_acc: Vec<Complex32>,
+    /// Folded kernel spectrum: the y-transformed distinct rows, transposed.
+    cols: Vec<Complex32>,
     /// Point-side phase per voxel and its per-frequency step (f32 recurrence, as for the kernel).
     pbase: Vec<Complex32>,
     pstep: Vec<Complex32>,
@@ -423,6 +544,7 @@ impl Workspace {
             tcur: Vec::new(),
             tstep: Vec::new(),
             spec_acc: vec![Complex32::default(); fx * fy],
+            cols: Vec::new(),
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
