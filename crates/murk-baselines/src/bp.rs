@@ -189,11 +189,14 @@ impl Lattice {
                                     &planes[src + plane..src + plane + len],
                                 );
                                 let o = &mut out[r0 * w..r0 * w + len];
-                                wide(#[inline(always)] || {
-                                    for ((o, a), b) in o.iter_mut().zip(a).zip(b) {
-                                        *o += w0 * a + w1 * b;
-                                    }
-                                });
+                                wide(
+                                    #[inline(always)]
+                                    || {
+                                        for ((o, a), b) in o.iter_mut().zip(a).zip(b) {
+                                            *o += w0 * a + w1 * b;
+                                        }
+                                    },
+                                );
                             }
                         }
                     }

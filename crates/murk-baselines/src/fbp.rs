@@ -92,11 +92,14 @@ pub fn convolve_same(data: &[f32], shape: [usize; 3], kernel: &[f32], ks: [usize
                         (0, shift as usize)
                     };
                     let n = nz.saturating_sub(d0.max(s0));
-                    wide(#[inline(always)] || {
-                        for (d, s) in dst[d0..d0 + n].iter_mut().zip(&src[s0..s0 + n]) {
-                            *d += k * s;
-                        }
-                    });
+                    wide(
+                        #[inline(always)]
+                        || {
+                            for (d, s) in dst[d0..d0 + n].iter_mut().zip(&src[s0..s0 + n]) {
+                                *d += k * s;
+                            }
+                        },
+                    );
                 }
             }
         }

@@ -55,7 +55,10 @@ impl Fold {
                     Complex32::new(1.0, 0.0)
                 } else {
                     let turns = 2.0 * ((n - k) as i64 * c) as f64 / n as f64;
-                    c32(Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * turns))
+                    c32(Complex64::from_polar(
+                        1.0,
+                        2.0 * std::f64::consts::PI * turns,
+                    ))
                 }
             })
             .collect()
@@ -320,32 +323,41 @@ impl<'a> Plan<'a> {
             );
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
             if confocal {
-                wide(#[inline(always)] || {
-                    for ((a, t), h) in ws.spec_acc.iter_mut().zip(&ws.t).zip(h) {
-                        *a += t * h;
-                    }
-                });
+                wide(
+                    #[inline(always)]
+                    || {
+                        for ((a, t), h) in ws.spec_acc.iter_mut().zip(&ws.t).zip(h) {
+                            *a += t * h;
+                        }
+                    },
+                );
                 continue;
             }
-            wide(#[inline(always)] || {
-                for (t, h) in ws.t.iter_mut().zip(h) {
-                    *t *= h;
-                }
-            });
+            wide(
+                #[inline(always)]
+                || {
+                    for (t, h) in ws.t.iter_mut().zip(h) {
+                        *t *= h;
+                    }
+                },
+            );
             self.fft
                 .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
             self.resample(ws, ny, nx, vy, gnx, gny, fy);
             // Exact phase of the point-side leg; straight loops over f32 so they vectorise.
-            wide(#[inline(always)] || {
-                for ((a, f), (pb, ps)) in acc
-                    .iter_mut()
-                    .zip(&ws.field)
-                    .zip(ws.pbase.iter_mut().zip(&ws.pstep))
-                {
-                    *a += f * *pb;
-                    *pb *= ps;
-                }
-            });
+            wide(
+                #[inline(always)]
+                || {
+                    for ((a, f), (pb, ps)) in acc
+                        .iter_mut()
+                        .zip(&ws.field)
+                        .zip(ws.pbase.iter_mut().zip(&ws.pstep))
+                    {
+                        *a += f * *pb;
+                        *pb *= ps;
+                    }
+                },
+            );
         }
         if confocal {
             self.fft
@@ -420,7 +432,9 @@ impl Plan<'_> {
                 for ky in 0..hy {
                     let line = &mut g[ky * fx..(ky + 1) * fx];
                     mirror(&mut line[..gx], &ws.cols[ky * rows..(ky + 1) * rows], cx);
-                    line[gx..].iter_mut().for_each(|v| *v = Complex32::default());
+                    line[gx..]
+                        .iter_mut()
+                        .for_each(|v| *v = Complex32::default());
                 }
             },
         );
@@ -430,7 +444,10 @@ impl Plan<'_> {
             || {
                 for ky in 0..fy {
                     let src = if ky < hy { ky } else { fy - ky };
-                    unfold(&mut ws.t[ky * fx..(ky + 1) * fx], &g[src * fx..src * fx + hx]);
+                    unfold(
+                        &mut ws.t[ky * fx..(ky + 1) * fx],
+                        &g[src * fx..src * fx + hx],
+                    );
                 }
             },
         );
@@ -465,7 +482,10 @@ impl Plan<'_> {
         }
         // Along x first: whole lattice rows weighted and summed, contiguous, so it vectorises; then
         // along y at the voxels only (the gathering pass touches nx·ny·taps, not vx·ny·taps, values).
-        wide(#[inline(always)] || self.resample_off_lattice(ws, ny, nx, vy, lattice));
+        wide(
+            #[inline(always)]
+            || self.resample_off_lattice(ws, ny, nx, vy, lattice),
+        );
     }
 
     /// Windowed-sinc reads of [`Plan::resample`], kept in one function so it is compiled for AVX2.
