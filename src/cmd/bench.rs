@@ -1,5 +1,5 @@
 //! `murk bench`: reconstruction speed on the paper's Z-letter configuration, and side by side with
-//! y-tal's pf_dev on its own benchmark capture when a Python with y-tal is available.
+//! y-tal's pf_dev, fk and lct on its own benchmark captures when a Python with y-tal is available.
 
 use crate::cmd::progress::say;
 use anyhow::{bail, Context};
@@ -7,7 +7,8 @@ use clap::Args;
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
 use murk_recon::{Method, NoProgress, PfParams, Wavelength};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::time::Instant;
 
 #[derive(Args)]
@@ -31,11 +32,80 @@ pub struct BenchArgs {
     /// Where the renderer benchmark finds its scene files.
     #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
+    /// Only f-k and LCT next to y-tal's fk and lct on a 64 × 64 × 512 confocal capture: speed and
+    /// peak memory (y-tal's lct needs its git HEAD: put it in MURK_TAL_PYTHONPATH).
+    #[arg(long)]
+    pub confocal_vs_tal: bool,
+    /// y-tal's benchmark script (tal_bench.py), run with the y-tal Python for the confocal case.
+    #[arg(long, default_value = "../shared/reference/tal_bench.py")]
+    pub tal_bench: PathBuf,
 }
 
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
+}
+
+/// `python` ready to import y-tal, with `$MURK_TAL_PYTHONPATH` in front of `PYTHONPATH` (as in
+/// tests/interop_baselines.rs) so a checkout of y-tal's git HEAD, which has lct, can shadow the
+/// PyPI wheel.
+pub fn tal_command(python: &Path) -> anyhow::Result<Command> {
+    let mut cmd = Command::new(python);
+    if let Some(overlay) = std::env::var_os("MURK_TAL_PYTHONPATH") {
+        let old = std::env::var_os("PYTHONPATH").unwrap_or_default();
+        let paths = std::iter::once(PathBuf::from(overlay)).chain(std::env::split_paths(&old));
+        let joined = std::env::join_paths(paths).context("MURK_TAL_PYTHONPATH")?;
+        cmd.env("PYTHONPATH", joined);
+    }
+    Ok(cmd)
+}
+
+/// The text of `"key": value` in one line of flat JSON as Python's json.dumps writes it: a number,
+/// `true`/`false`, a `[…]` list of numbers, or a string's contents (escapes kept).
+pub fn json_value<'a>(line: &'a str, key: &str) -> Option<&'a str> {
+    let rest = line.split_once(&format!("\"{key}\": "))?.1;
+    if let Some(s) = rest.strip_prefix('"') {
+        let end = s
+            .char_indices()
+            .find(|&(i, c)| c == '"' && !s[..i].ends_with('\\'))?
+            .0;
+        return Some(&s[..end]);
+    }
+    let end = if rest.starts_with('[') {
+        rest.find(']')? + 1
+    } else {
+        rest.find([',', '}'])?
+    };
+    Some(&rest[..end])
+}
+
+/// The number, or the numbers of the list, at `key` (see [`json_value`]); empty when absent.
+pub fn json_numbers(line: &str, key: &str) -> Vec<f64> {
+    json_value(line, key)
+        .map(|v| {
+            v.trim_matches(['[', ']'])
+                .split(',')
+                .filter_map(|x| x.trim().parse().ok())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// A scratch folder under the system temp dir, removed when dropped (early returns included).
+pub struct Scratch(pub PathBuf);
+
+impl Scratch {
+    pub fn new(tag: &str) -> anyhow::Result<Scratch> {
+        let dir = std::env::temp_dir().join(format!("murk-bench-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        Ok(Scratch(dir))
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
 
 pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
@@ -56,15 +126,21 @@ pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
     if a.render {
         return crate::cmd::bench_render::run(&a.scenes, a.runs, quiet);
     }
-    if !a.skip_z {
-        z_letter(a.runs, quiet)?;
-    }
     let python = a
         .tal_python
         .clone()
         .or_else(|| Some(PathBuf::from(".venv/bin/python")).filter(|p| p.exists()));
+    if a.confocal_vs_tal {
+        return crate::cmd::bench_confocal::run(python.as_deref(), &a.tal_bench, a.runs, quiet);
+    }
+    if !a.skip_z {
+        z_letter(a.runs, quiet)?;
+    }
     match python {
-        Some(py) => versus_tal(&py, a.runs, quiet)?,
+        Some(py) => {
+            versus_tal(&py, a.runs, quiet)?;
+            crate::cmd::bench_confocal::run(Some(&py), &a.tal_bench, a.runs, quiet)?;
+        }
         None => say(
             quiet,
             "side by side with y-tal: skipped (no --tal-python and no .venv/bin/python)",
@@ -144,7 +220,7 @@ fn z_letter(runs: usize, quiet: bool) -> anyhow::Result<()> {
 /// y-tal's benchmark case (tal.md §11): 64 × 64 single-laser capture, 512 bins of 1 cm, point at
 /// (0.1, −0.2, 1.0); 32 planes of 64 × 64 at z = 0.85…1.16; λ = σ = 0.06 m. tal's pf_dev needs one call
 /// per plane for several planes (its multi-plane DIRECT_LIGHT path fails), as in its own benchmark.
-fn versus_tal(python: &std::path::Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+fn versus_tal(python: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
     let layout = CaptureLayout {
         kind: LayoutKind::SinglePointSensorGrid,
         wall_size_m: 1.0,
@@ -168,9 +244,8 @@ fn versus_tal(python: &std::path::Path, runs: usize, quiet: bool) -> anyhow::Res
         .scatterers()?,
         &SynthOptions::default(),
     )?;
-    let dir = std::env::temp_dir().join(format!("murk-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
-    let file = dir.join("point_single_N64_T512.h5");
+    let scratch = Scratch::new("single")?;
+    let file = scratch.0.join("point_single_N64_T512.h5");
     murk_io::write_capture(&file, &cap)?;
     let c = 0.5 - 0.5 / 64.0;
     let vol = Volume {
@@ -212,12 +287,11 @@ print(json.dumps({{"times": times, "version": tal.__version__}}))
         file = file.display().to_string(),
         reps = runs.clamp(1, 3)
     );
-    let out = std::process::Command::new(python)
+    let out = tal_command(python)?
         .arg("-c")
         .arg(&script)
         .output()
         .with_context(|| python.display().to_string())?;
-    let _ = std::fs::remove_dir_all(&dir);
     let murk_med = median(murk_times);
     if !out.status.success() {
         say(
@@ -239,12 +313,7 @@ print(json.dumps({{"times": times, "version": tal.__version__}}))
     }
     let text = String::from_utf8_lossy(&out.stdout);
     let line = text.lines().last().unwrap_or("");
-    let times: Vec<f64> = line
-        .split("\"times\": [")
-        .nth(1)
-        .and_then(|r| r.split(']').next())
-        .map(|l| l.split(',').filter_map(|x| x.trim().parse().ok()).collect())
-        .unwrap_or_default();
+    let times = json_numbers(line, "times");
     if times.is_empty() {
         bail!("could not parse tal's timing output: {line}");
     }

@@ -1,4 +1,5 @@
 pub mod bench;
+pub mod bench_confocal;
 pub mod bench_real;
 pub mod bench_render;
 pub mod demo;
