@@ -101,7 +101,12 @@ pub struct RenderDef {
     /// Standard deviation (m of path) of a Gaussian SPAD timing jitter added before binning; 0 = box.
     pub time_jitter: f64,
     /// Probability of sampling the first direction toward the hidden geometry (mixed with cosine sampling).
-    pub hidden_geometry_sampling: f64,
+    /// Default: 1 where no medium scatters (every first direction that contributes then meets the hidden
+    /// geometry), else 0.8.
+    pub hidden_geometry_sampling: Option<f64>,
+    /// Probability that a path goes on past its first hidden vertex (weighted by its inverse). Default: 0.25
+    /// where no medium scatters (the direct return needs only the first vertex; see the integrator), else 1.
+    pub first_vertex_survival: Option<f64>,
     /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight.
     pub equiangular: bool,
     /// Medium distances drawn so the connected path lands uniformly in the capture's time window (MIS-combined
@@ -120,7 +125,8 @@ impl Default for RenderDef {
             max_depth: 8,
             rr_depth: 5,
             time_jitter: 0.0,
-            hidden_geometry_sampling: 0.8,
+            hidden_geometry_sampling: None,
+            first_vertex_survival: None,
             equiangular: true,
             time_sampling: false,
             target_sampling: true,
@@ -414,10 +420,19 @@ impl Scene {
                 format!("must be ≥ 0, got {}", s.time_jitter),
             ));
         }
-        if !(0.0..=1.0).contains(&s.hidden_geometry_sampling) {
+        if let Some(p) = s
+            .hidden_geometry_sampling
+            .filter(|p| !(0.0..=1.0).contains(p))
+        {
             return Err(bad(
                 "render.hidden_geometry_sampling",
-                format!("must be in [0, 1], got {}", s.hidden_geometry_sampling),
+                format!("must be in [0, 1], got {p}"),
+            ));
+        }
+        if let Some(p) = s.first_vertex_survival.filter(|p| !(*p > 0.0 && *p <= 1.0)) {
+            return Err(bad(
+                "render.first_vertex_survival",
+                format!("must be in (0, 1], got {p}"),
             ));
         }
 
