@@ -359,14 +359,36 @@ impl Geometry {
             best = Some((p, k, t));
             Step::Shrink
         });
-        best.map(|(p, k, t)| {
-            let n = p.normal();
-            Hit {
-                t,
-                n: if n.dot(d) > 0.0 { -n } else { n },
-                albedo: self.objects[k as usize].albedo,
+        best.map(|(p, k, t)| self.hit(p, k, t, d))
+    }
+
+    /// Visits every hit of the ray `o + t·d`, t > EPS, as `(primitive, its object, t)`, and returns the
+    /// nearest (what `intersect` finds).
+    pub fn all_hits(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        mut f: impl FnMut(&Shape, &Object, f64),
+    ) -> Option<Hit> {
+        let mut best: Option<(&Shape, u32, f64)> = None;
+        self.bvh.walk(o, d, f64::INFINITY, |p, k, t| {
+            f(p, &self.objects[k as usize], t);
+            if best.is_none_or(|b| t < b.2) {
+                best = Some((p, k, t));
             }
-        })
+            Step::Continue
+        });
+        best.map(|(p, k, t)| self.hit(p, k, t, d))
+    }
+
+    /// The hit record of primitive `p` of object `k` at `t`, its normal facing the ray.
+    fn hit(&self, p: &Shape, k: u32, t: f64, d: DVec3) -> Hit {
+        let n = p.normal();
+        Hit {
+            t,
+            n: if n.dot(d) > 0.0 { -n } else { n },
+            albedo: self.objects[k as usize].albedo,
+        }
     }
 
     /// Whether anything blocks the open segment `o + t·d`, t ∈ (EPS, t_max − EPS).

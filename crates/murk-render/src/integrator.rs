@@ -28,7 +28,7 @@
 //!   (confocal); 0.1 cost 3 % more error there for little more saved. With fog, multiply scattered light is the
 //!   signal: the defaults stay 0.8 (`z-letter.toml` and `t-wall-medium.toml` set 0.2) and 1.
 
-use crate::geometry::{Bvh, Hit, Shape, Step, EPS};
+use crate::geometry::{Geometry, Hit, Shape, EPS};
 use crate::medium::Medium;
 use crate::scene::Scene;
 use murk_core::DVec3;
@@ -106,8 +106,6 @@ struct HiddenSampler {
     prims: Vec<Shape>,
     cdf: Vec<f64>,
     total: f64,
-    /// The same primitives, for the density's all-hits ray queries.
-    bvh: Bvh,
 }
 
 impl HiddenSampler {
@@ -128,7 +126,6 @@ impl HiddenSampler {
             })
             .collect();
         HiddenSampler {
-            bvh: Bvh::new(prims.iter().map(|p| (p.clone(), 0)).collect()),
             prims,
             cdf,
             total: acc,
@@ -148,15 +145,17 @@ impl HiddenSampler {
         self.prims[i].sample(u1, v)
     }
 
-    /// Solid-angle density of directions from `o` produced by `sample`: every point along the ray counts,
-    /// occluded or not, because sampling ignores visibility.
-    fn pdf(&self, o: DVec3, d: DVec3) -> f64 {
+    /// Solid-angle density of directions from `o` produced by `sample`, and the nearest hit along them,
+    /// from one walk: every point along the ray counts, occluded or not, because sampling ignores
+    /// visibility.
+    fn pdf(&self, g: &Geometry, o: DVec3, d: DVec3) -> (f64, Option<Hit>) {
         let mut sum = 0.0;
-        self.bvh.walk(o, d, f64::INFINITY, |p, _, t| {
-            sum += t * t / (self.total * p.normal().dot(d).abs().max(1e-12));
-            Step::Continue
+        let hit = g.all_hits(o, d, |p, obj, t| {
+            if obj.albedo > 0.0 {
+                sum += t * t / (self.total * p.normal().dot(d).abs().max(1e-12));
+            }
         });
-        sum
+        (sum, hit)
     }
 }
 
@@ -360,11 +359,12 @@ impl<'a> Tracer<'a> {
 
     /// Nearest surface along the ray: hidden geometry, or the relay seen from the hidden side.
     fn intersect(&self, o: DVec3, d: DVec3) -> Option<(Hit, bool)> {
-        let mut best = self
-            .scene
-            .geometry
-            .intersect(o, d, f64::INFINITY)
-            .map(|h| (h, false));
+        self.or_relay(o, d, self.scene.geometry.intersect(o, d, f64::INFINITY))
+    }
+
+    /// The relay's hit when it is nearer than `hit`, the nearest hidden-geometry hit along the ray.
+    fn or_relay(&self, o: DVec3, d: DVec3, hit: Option<Hit>) -> Option<(Hit, bool)> {
+        let mut best = hit.map(|h| (h, false));
         if d.z < 0.0 {
             let t = -o.z / d.z;
             let p = o + d * t;
@@ -450,12 +450,20 @@ impl<'a> Tracer<'a> {
                 if c <= 0.0 {
                     0.0
                 } else if from.origin {
-                    self.p_hidden * self.hidden.pdf(from.x, w) + (1.0 - self.p_hidden) * c / PI
+                    self.origin_pdf(from.x, n, w).0
                 } else {
                     c / PI
                 }
             }
         }
+    }
+
+    /// The density of the origin's first direction `w` (the hidden-geometry/cosine mixture), with the
+    /// nearest hidden-geometry hit along it.
+    fn origin_pdf(&self, o: DVec3, n: DVec3, w: DVec3) -> (f64, Option<Hit>) {
+        let (p, hit) = self.hidden.pdf(&self.scene.geometry, o, w);
+        let c = n.dot(w).max(0.0);
+        (self.p_hidden * p + (1.0 - self.p_hidden) * c / PI, hit)
     }
 
     /// The path side's distance samplers toward `tgt` on the medium part `[m0, m1]` of the segment
@@ -581,11 +589,13 @@ impl<'a> Tracer<'a> {
     }
 
     /// Connects vertex `y` (reached with throughput `beta` at optical path `opl`) to every target.
-    /// `mis(k)` weights the connection to target k.
+    /// `mis(k)` weights the connection to target k. `seen` is the start of the segment that reached y, which
+    /// sees y: a target there (confocal: the origin at the first vertex) needs no occlusion test.
     #[allow(clippy::too_many_arguments)]
     fn connect(
         &self,
         y: DVec3,
+        seen: DVec3,
         v: &Vertex,
         beta: f64,
         opl: f64,
@@ -604,7 +614,7 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             let f = self.eval(v, w);
-            if f <= 0.0 || self.scene.geometry.occluded(y, w, r) {
+            if f <= 0.0 || (tgt.p != seen && self.scene.geometry.occluded(y, w, r)) {
                 continue;
             }
             let (tr, extra) = match self.medium() {
@@ -646,7 +656,12 @@ impl<'a> Tracer<'a> {
             opl: origin.extra_m,
             origin: true,
         };
-        let pdf0 = self.dir_pdf(&from, d);
+        if d.dot(origin.n) <= 0.0 {
+            return;
+        }
+        // The density's walk also finds the first segment's hit.
+        let (pdf0, hit0) = self.origin_pdf(origin.p, origin.n, d);
+        let mut first_hit = Some(hit0);
         if pdf0 <= 0.0 {
             return;
         }
@@ -675,7 +690,10 @@ impl<'a> Tracer<'a> {
                     0.0
                 }
             };
-            let hit = self.intersect(pos, d);
+            let hit = match first_hit.take() {
+                Some(h) => self.or_relay(pos, d, h),
+                None => self.intersect(pos, d),
+            };
             let t_hit = hit.map_or(f64::INFINITY, |h| h.0.t);
             let mut medium_len = 0.0;
             let mut connected = false;
@@ -710,6 +728,7 @@ impl<'a> Tracer<'a> {
                                 let v = Vertex::Medium { dir: d };
                                 self.connect(
                                     y,
+                                    from.x,
                                     &v,
                                     b,
                                     o,
@@ -731,7 +750,17 @@ impl<'a> Tracer<'a> {
                                 albedo: h.albedo,
                             };
                             let o = opl + h.t + (m.ior - 1.0) * medium_len;
-                            self.connect(pos + d * h.t, &v, beta * tr, o, targets, |_| 1.0, s, out);
+                            self.connect(
+                                pos + d * h.t,
+                                from.x,
+                                &v,
+                                beta * tr,
+                                o,
+                                targets,
+                                |_| 1.0,
+                                s,
+                                out,
+                            );
                             connected = true;
                         }
                         // Free flight: scatter with density σt·exp(−σt·(t − m0)), else cross (weight T/P = 1).
@@ -747,6 +776,7 @@ impl<'a> Tracer<'a> {
                             beta *= m.albedo;
                             self.connect(
                                 pos,
+                                from.x,
                                 &Vertex::Medium { dir: d },
                                 beta,
                                 opl,
@@ -784,7 +814,7 @@ impl<'a> Tracer<'a> {
                 albedo: h.albedo,
             };
             if !on_relay && !connected {
-                self.connect(pos, &v, beta, opl, targets, |_| 1.0, s, out);
+                self.connect(pos, from.x, &v, beta, opl, targets, |_| 1.0, s, out);
             }
             beta *= h.albedo;
             if beta <= 0.0 || depth >= set.max_depth || !self.roulette(&mut beta, depth, s) {
