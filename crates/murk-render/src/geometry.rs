@@ -9,11 +9,17 @@ pub const EPS: f64 = 1e-7;
 /// A closed set of primitive kinds, dispatched statically (no trait objects in the inner loop).
 #[derive(Clone, Debug)]
 pub enum Shape {
-    /// `p0 + u·e1 + v·e2`, u, v ∈ [0, 1], with e1 ⟂ e2.
+    /// `p0 + u·e1 + v·e2`, u, v ∈ [0, 1], with e1 ⟂ e2; built by `Shape::rect`, which precomputes the
+    /// rest for the intersection test (the renderer's hottest function).
     Rect {
         p0: DVec3,
         e1: DVec3,
         e2: DVec3,
+        /// Unit normal e1 × e2 / |e1 × e2|.
+        n: DVec3,
+        /// e1/|e1|² and e2/|e2|²: a point's (u, v) by dot products.
+        e1s: DVec3,
+        e2s: DVec3,
     },
     Triangle {
         p0: DVec3,
@@ -23,6 +29,17 @@ pub enum Shape {
 }
 
 impl Shape {
+    pub fn rect(p0: DVec3, e1: DVec3, e2: DVec3) -> Self {
+        Shape::Rect {
+            p0,
+            e1,
+            e2,
+            n: e1.cross(e2).normalize(),
+            e1s: e1 / e1.length_squared(),
+            e2s: e2 / e2.length_squared(),
+        }
+    }
+
     pub fn area(&self) -> f64 {
         match self {
             Shape::Rect { e1, e2, .. } => e1.cross(*e2).length(),
@@ -33,17 +50,17 @@ impl Shape {
     /// Unit geometric normal (e1 × e2); surfaces are two-sided, so its sign only matters for meshes' users.
     pub fn normal(&self) -> DVec3 {
         match self {
-            Shape::Rect { e1, e2, .. } | Shape::Triangle { e1, e2, .. } => {
-                e1.cross(*e2).normalize()
-            }
+            Shape::Rect { n, .. } => *n,
+            Shape::Triangle { e1, e2, .. } => e1.cross(*e2).normalize(),
         }
     }
 
     /// Ray parameter of the hit in (`EPS`, `t_max`), if any.
     pub fn intersect(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<f64> {
         match self {
-            Shape::Rect { p0, e1, e2 } => {
-                let n = e1.cross(*e2);
+            Shape::Rect {
+                p0, n, e1s, e2s, ..
+            } => {
                 let denom = n.dot(d);
                 if denom.abs() < 1e-300 {
                     return None;
@@ -53,8 +70,8 @@ impl Shape {
                     return None;
                 }
                 let q = o + d * t - *p0;
-                let u = q.dot(*e1) / e1.length_squared();
-                let v = q.dot(*e2) / e2.length_squared();
+                let u = q.dot(*e1s);
+                let v = q.dot(*e2s);
                 ((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)).then_some(t)
             }
             Shape::Triangle { p0, e1, e2 } => {
@@ -84,7 +101,7 @@ impl Shape {
     /// A uniformly distributed point for `(u1, u2)` uniform in [0, 1)².
     pub fn sample(&self, u1: f64, u2: f64) -> DVec3 {
         match self {
-            Shape::Rect { p0, e1, e2 } => *p0 + *e1 * u1 + *e2 * u2,
+            Shape::Rect { p0, e1, e2, .. } => *p0 + *e1 * u1 + *e2 * u2,
             Shape::Triangle { p0, e1, e2 } => {
                 let su = u1.sqrt();
                 *p0 + *e1 * (1.0 - su) + *e2 * (u2 * su)
@@ -94,7 +111,7 @@ impl Shape {
 
     pub fn bounds(&self) -> Aabb {
         let (p0, e1, e2, far) = match self {
-            Shape::Rect { p0, e1, e2 } => (*p0, *e1, *e2, *p0 + *e1 + *e2),
+            Shape::Rect { p0, e1, e2, .. } => (*p0, *e1, *e2, *p0 + *e1 + *e2),
             Shape::Triangle { p0, e1, e2 } => (*p0, *e1, *e2, *p0),
         };
         Aabb::empty().grow(p0).grow(p0 + e1).grow(p0 + e2).grow(far)
@@ -496,7 +513,7 @@ mod tests {
                 } else {
                     // Rectangles need e1 ⟂ e2.
                     let e2 = e2 - e1 * (e2.dot(e1) / e1.length_squared());
-                    Shape::Rect { p0, e1, e2 }
+                    Shape::rect(p0, e1, e2)
                 }
             })
             .collect();
@@ -533,11 +550,7 @@ mod tests {
 
     #[test]
     fn rect_and_triangle_hits() {
-        let r = Shape::Rect {
-            p0: DVec3::new(-0.5, -0.5, 1.0),
-            e1: DVec3::X,
-            e2: DVec3::Y,
-        };
+        let r = Shape::rect(DVec3::new(-0.5, -0.5, 1.0), DVec3::X, DVec3::Y);
         assert_eq!(r.intersect(DVec3::ZERO, DVec3::Z, 10.0), Some(1.0));
         assert_eq!(r.intersect(DVec3::new(0.6, 0.0, 0.0), DVec3::Z, 10.0), None);
         let t = Shape::Triangle {

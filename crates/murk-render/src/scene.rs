@@ -517,11 +517,7 @@ impl Scene {
                     let (e1, e2) = (ex * size[0], ey * size[1]);
                     (
                         *albedo,
-                        vec![Shape::Rect {
-                            p0: v3(*center) - 0.5 * (e1 + e2),
-                            e1,
-                            e2,
-                        }],
+                        vec![Shape::rect(v3(*center) - 0.5 * (e1 + e2), e1, e2)],
                     )
                 }
                 ObjectDef::Box {
@@ -539,53 +535,20 @@ impl Scene {
                     }
                     let d = b - a;
                     let faces = [
-                        (
-                            "-x",
-                            Shape::Rect {
-                                p0: a,
-                                e1: DVec3::Y * d.y,
-                                e2: DVec3::Z * d.z,
-                            },
-                        ),
+                        ("-x", Shape::rect(a, DVec3::Y * d.y, DVec3::Z * d.z)),
                         (
                             "+x",
-                            Shape::Rect {
-                                p0: DVec3::new(b.x, a.y, a.z),
-                                e1: DVec3::Y * d.y,
-                                e2: DVec3::Z * d.z,
-                            },
+                            Shape::rect(DVec3::new(b.x, a.y, a.z), DVec3::Y * d.y, DVec3::Z * d.z),
                         ),
-                        (
-                            "-y",
-                            Shape::Rect {
-                                p0: a,
-                                e1: DVec3::X * d.x,
-                                e2: DVec3::Z * d.z,
-                            },
-                        ),
+                        ("-y", Shape::rect(a, DVec3::X * d.x, DVec3::Z * d.z)),
                         (
                             "+y",
-                            Shape::Rect {
-                                p0: DVec3::new(a.x, b.y, a.z),
-                                e1: DVec3::X * d.x,
-                                e2: DVec3::Z * d.z,
-                            },
+                            Shape::rect(DVec3::new(a.x, b.y, a.z), DVec3::X * d.x, DVec3::Z * d.z),
                         ),
-                        (
-                            "-z",
-                            Shape::Rect {
-                                p0: a,
-                                e1: DVec3::X * d.x,
-                                e2: DVec3::Y * d.y,
-                            },
-                        ),
+                        ("-z", Shape::rect(a, DVec3::X * d.x, DVec3::Y * d.y)),
                         (
                             "+z",
-                            Shape::Rect {
-                                p0: DVec3::new(a.x, a.y, b.z),
-                                e1: DVec3::X * d.x,
-                                e2: DVec3::Y * d.y,
-                            },
+                            Shape::rect(DVec3::new(a.x, a.y, b.z), DVec3::X * d.x, DVec3::Y * d.y),
                         ),
                     ];
                     if let Some(w) = omit.iter().find(|w| !faces.iter().any(|(n, _)| n == w)) {
