@@ -32,6 +32,10 @@ pub struct BenchArgs {
     /// Where the renderer benchmark finds its scene files.
     #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
+    /// With --render: only the cases whose scene file name contains this (e.g. t-wall-single;
+    /// z-letter for the paper format).
+    #[arg(long)]
+    pub only: Option<String>,
     /// Only f-k and LCT next to y-tal's fk and lct on a 64 × 64 × 512 confocal capture: speed and
     /// peak memory (y-tal's lct needs its git HEAD: put it in MURK_TAL_PYTHONPATH).
     #[arg(long)]
@@ -124,7 +128,7 @@ pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
         return crate::cmd::bench_real::run(dir, a.runs, quiet);
     }
     if a.render {
-        return crate::cmd::bench_render::run(&a.scenes, a.runs, quiet);
+        return crate::cmd::bench_render::run(&a.scenes, a.runs, a.only.as_deref(), quiet);
     }
     let python = a
         .tal_python

@@ -43,11 +43,16 @@ const CASES: [Case; 3] = [
     },
 ];
 
-pub fn run(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
-    for c in &CASES {
+/// `only`: run just the cases whose scene file name contains it.
+pub fn run(scenes: &Path, runs: usize, only: Option<&str>, quiet: bool) -> anyhow::Result<()> {
+    let wanted = |file: &str| only.is_none_or(|o| file.contains(o));
+    for c in CASES.iter().filter(|c| wanted(c.file)) {
         t_case(scenes, c, runs, quiet)?;
     }
-    paper_format(scenes, runs, quiet)
+    if wanted("z-letter.toml") {
+        paper_format(scenes, runs, quiet)?;
+    }
+    Ok(())
 }
 
 fn load(scenes: &Path, file: &str, ov: &Overrides) -> anyhow::Result<Scene> {
