@@ -382,3 +382,42 @@ fn closed_white_box_never_gains_energy() {
         }
     }
 }
+
+/// Thinning past the first hidden vertex (default `first_vertex_survival` 0.25 without a medium) and pure
+/// hidden-geometry sampling (default 1) are unbiased: in the closed white box, the power of orders 1–3 (half
+/// of it from past the first vertex) agrees with unthinned, cosine-mixed sampling within 3 % (seed-to-seed
+/// spread of the thinned render: 1.5 % at 200 spp, so about 0.75 % at 800).
+#[test]
+fn first_vertex_thinning_keeps_multibounce_power() {
+    let power = |settings: &str| {
+        let s = scene(&format!(
+            r#"
+            [relay]
+            kind = "wall"
+            size = [1.0, 1.0]
+            albedo = 1.0
+            [capture]
+            kind = "single"
+            grid = [16, 16]
+            bins = 50
+            bin_width = 0.2
+            [render]
+            max_depth = 3
+            {settings}
+            [[object]]
+            shape = "box"
+            min = [-0.5, -0.5, 0.0]
+            max = [0.5, 0.5, 0.15]
+            omit = ["-z"]
+            "#
+        ));
+        let h = render(&s, 800, 3).h;
+        PI * h.iter().map(|v| *v as f64).sum::<f64>() / (16.0 * 16.0)
+    };
+    let thinned = power("");
+    let full = power("first_vertex_survival = 1.0\nhidden_geometry_sampling = 0.5");
+    assert!(
+        (thinned / full - 1.0).abs() < 0.03,
+        "thinned {thinned:.4} vs full {full:.4}"
+    );
+}
