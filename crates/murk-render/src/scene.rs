@@ -104,7 +104,7 @@ pub struct RenderDef {
     /// Default: 1 where no medium scatters (every first direction that contributes then meets the hidden
     /// geometry), else 0.8.
     pub hidden_geometry_sampling: Option<f64>,
-    /// Probability that a path goes on past its first hidden vertex (weighted by its inverse). Default: 0.25
+    /// Probability that a path goes on past its first hidden vertex (weighted by its inverse). Default: 0.1
     /// where no medium scatters (the direct return needs only the first vertex; see the integrator), else 1.
     pub first_vertex_survival: Option<f64>,
     /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight.

@@ -383,10 +383,10 @@ fn closed_white_box_never_gains_energy() {
     }
 }
 
-/// Thinning past the first hidden vertex (default `first_vertex_survival` 0.25 without a medium) and pure
+/// Thinning past the first hidden vertex (default `first_vertex_survival` 0.1 without a medium) and pure
 /// hidden-geometry sampling (default 1) are unbiased: in the closed white box, the power of orders 1–3 (half
-/// of it from past the first vertex) agrees with unthinned, cosine-mixed sampling within 3 % (seed-to-seed
-/// spread of the thinned render: 1.5 % at 200 spp, so about 0.75 % at 800).
+/// of it from past the first vertex) agrees with unthinned, cosine-mixed sampling within 5 % (measured over
+/// seeds: −0.7 to +2.3 %, the thinned paths' rare large contributions; dropping the 1/q weight gives −45 %).
 #[test]
 fn first_vertex_thinning_keeps_multibounce_power() {
     let power = |settings: &str| {
@@ -411,13 +411,13 @@ fn first_vertex_thinning_keeps_multibounce_power() {
             omit = ["-z"]
             "#
         ));
-        let h = render(&s, 800, 3).h;
+        let h = render(&s, 3200, 3).h;
         PI * h.iter().map(|v| *v as f64).sum::<f64>() / (16.0 * 16.0)
     };
     let thinned = power("");
     let full = power("first_vertex_survival = 1.0\nhidden_geometry_sampling = 0.5");
     assert!(
-        (thinned / full - 1.0).abs() < 0.03,
+        (thinned / full - 1.0).abs() < 0.05,
         "thinned {thinned:.4} vs full {full:.4}"
     );
 }
