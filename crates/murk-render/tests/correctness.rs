@@ -386,7 +386,7 @@ fn closed_white_box_never_gains_energy() {
 /// Thinning past the first hidden vertex (default `first_vertex_survival` 0.1 without a medium) and pure
 /// hidden-geometry sampling (default 1) are unbiased: in the closed white box, the power of orders 1–3 (half
 /// of it from past the first vertex) agrees with unthinned, cosine-mixed sampling within 5 % (measured over
-/// seeds: −0.7 to +2.3 %, the thinned paths' rare large contributions; dropping the 1/q weight gives −45 %).
+/// seeds: −0.7 to +2.3 %, the thinned paths' rare large contributions; dropping the 1/q weight gives about −43 %).
 #[test]
 fn first_vertex_thinning_keeps_multibounce_power() {
     let power = |settings: &str| {
