@@ -4,6 +4,8 @@
 //! With pruning: the confocal methods zero-pad the data into one octant and keep one octant of the
 //! result, so the forward transform skips the all-zero lines and the inverse skips lines that are
 //! cropped away.
+//! With symmetry: a convolution with a kernel that is even in x and y (the LCT's light cone) needs
+//! only a quarter of the kernel's spectrum, and goes one temporal frequency plane at a time.
 
 use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
@@ -16,6 +18,12 @@ pub(crate) type C32 = Complex32;
 /// Along x or y, this many temporal frequencies are gathered and transformed as one block, so the
 /// block stays in cache.
 const T_BLOCK: usize = 32;
+
+/// [`Fft3::convolve_even`] stores its spectrum as groups of GROUP lines, sample f of the lines of
+/// a group side by side, and transforms laterally PLANE_BLOCK frequencies at a time: a block of a
+/// group is 512 contiguous bytes, and a group stays in cache along t.
+const GROUP: usize = 8;
+const PLANE_BLOCK: usize = 8;
 
 pub(crate) struct Fft3 {
     /// Real-domain shape.
@@ -77,6 +85,163 @@ impl Fft3 {
         self.along_y(&mut spec, &self.fwd[1], support[0]);
         self.along_x(&mut spec, &self.fwd[0]);
         spec
+    }
+
+    /// Quarter spectrum of real data that is even in x and in y about index 0 (line (x, y) =
+    /// line (nx − x, y) = line (x, ny − y), indices mod n), whose spectrum is even in kx and ky
+    /// alike, so the rest is its mirror image. Plane by plane, `[nt/2 + 1][ny/2 + 1][nx/2 + 1]`
+    /// (f, ky, kx), as [`Fft3::convolve_even`] reads it. `t_spectrum(f, plane)` writes the
+    /// temporal spectrum at frequency f of the lines x ≤ nx/2, y ≤ ny/2 into
+    /// `plane[x·(ny/2 + 1) + y]`.
+    pub fn forward_even(&self, t_spectrum: impl Fn(usize, &mut [C32]) + Sync) -> Vec<C32> {
+        let [nx, ny, _] = self.dims;
+        let (hx, hy) = (nx / 2 + 1, ny / 2 + 1);
+        let mut planes = vec![C32::default(); self.half() * hx * hy];
+        planes.par_chunks_mut(hx * hy).enumerate().for_each_init(
+            || self.plane(),
+            |p, (f, plane)| {
+                t_spectrum(f, plane);
+                // The y pass needs only the distinct x rows, and the x pass only ky ≤ ny/2.
+                for (row, quarter) in p.xy[..hx * ny].chunks_mut(ny).zip(plane.chunks(hy)) {
+                    row[..hy].copy_from_slice(quarter);
+                    unfold(row, hy);
+                }
+                self.fwd[1].process_with_scratch(&mut p.xy[..hx * ny], &mut p.scratch);
+                transpose(&p.xy, ny, &mut p.yx, nx, [hx, hy]);
+                for row in p.yx[..hy * nx].chunks_mut(nx) {
+                    unfold(row, hx);
+                }
+                self.fwd[0].process_with_scratch(&mut p.yx[..hy * nx], &mut p.scratch);
+                for (out, row) in plane.chunks_mut(hx).zip(p.yx.chunks(nx)) {
+                    out.copy_from_slice(&row[..hx]);
+                }
+            },
+        );
+        planes
+    }
+
+    /// Circular convolution of the real data that is zero outside x < `support[0]`, y <
+    /// `support[1]` (`fill` as in [`Fft3::forward`]) with a kernel that is even in x and y, given
+    /// by its quarter spectrum from [`Fft3::forward_even`]. For each line of the support, in
+    /// order, `emit(result line, out line)` gets the result (nt samples, scaled by 1/len) and
+    /// the next n samples of `out`. The padded spectrum is never stored: the lateral passes go
+    /// one temporal frequency plane at a time, in cache, on the support's spectrum.
+    pub fn convolve_even(
+        &self,
+        support: [usize; 2],
+        fill: impl Fn(usize, usize, &mut [f32]) + Sync,
+        kernel: &[C32],
+        out: &mut [f32],
+        emit: impl Fn(&[f32], &mut [f32]) + Sync,
+    ) {
+        let [nx, ny, nt] = self.dims;
+        let [sx, sy] = support;
+        let (hx, nh) = (nx / 2 + 1, self.half());
+        let k_len = hx * (ny / 2 + 1);
+        assert_eq!(kernel.len(), nh * k_len);
+        let n = out.len() / (sx * sy);
+        assert_eq!(n * sx * sy, out.len());
+        // [group][f][line in group], f padded to whole blocks.
+        let group_len = nh.next_multiple_of(PLANE_BLOCK) * GROUP;
+        let mut spec = vec![C32::default(); (sx * sy).div_ceil(GROUP) * group_len];
+        spec.par_chunks_mut(group_len).enumerate().for_each_init(
+            || {
+                (
+                    vec![0.0f32; nt],
+                    vec![C32::default(); nh],
+                    self.r2c.make_scratch_vec(),
+                )
+            },
+            |(line, freq, scratch), (g, group)| {
+                for l in 0..GROUP.min(sx * sy - g * GROUP) {
+                    let i = g * GROUP + l;
+                    line.fill(0.0);
+                    fill(i / sy, i % sy, line);
+                    self.r2c
+                        .process_with_scratch(line, freq, scratch)
+                        .expect("realfft lengths match their plan");
+                    for (f, v) in freq.iter().enumerate() {
+                        group[f * GROUP + l] = *v;
+                    }
+                }
+            },
+        );
+        // blocks[b] borrows block b of every group: disjoint, so they can be transformed in
+        // parallel without unsafe code.
+        let mut blocks: Vec<Vec<&mut [C32]>> = (0..group_len / (PLANE_BLOCK * GROUP))
+            .map(|_| Vec::with_capacity(spec.len() / group_len))
+            .collect();
+        for group in spec.chunks_mut(group_len) {
+            for (b, block) in group.chunks_mut(PLANE_BLOCK * GROUP).enumerate() {
+                blocks[b].push(block);
+            }
+        }
+        blocks.into_par_iter().enumerate().for_each_init(
+            || self.plane(),
+            |p, (b, mut groups)| {
+                for j in 0..PLANE_BLOCK.min(nh - b * PLANE_BLOCK) {
+                    // Sample (j, l) of the block of group g is line g·GROUP + l at f.
+                    let at = |x: usize, y: usize| {
+                        let i = x * sy + y;
+                        (i / GROUP, j * GROUP + i % GROUP)
+                    };
+                    for (x, row) in p.xy[..sx * ny].chunks_mut(ny).enumerate() {
+                        for (y, v) in row[..sy].iter_mut().enumerate() {
+                            let (g, k) = at(x, y);
+                            *v = groups[g][k];
+                        }
+                        row[sy..].fill(C32::default());
+                    }
+                    self.fwd[1].process_with_scratch(&mut p.xy[..sx * ny], &mut p.scratch);
+                    transpose(&p.xy, ny, &mut p.yx, nx, [sx, ny]);
+                    for row in p.yx.chunks_mut(nx) {
+                        row[sx..].fill(C32::default());
+                    }
+                    self.fwd[0].process_with_scratch(&mut p.yx, &mut p.scratch);
+                    let k = &kernel[(b * PLANE_BLOCK + j) * k_len..][..k_len];
+                    for (ky, row) in p.yx.chunks_mut(nx).enumerate() {
+                        // kx ≤ nx/2, then the mirrored rest: plain zips, which vectorise.
+                        let k = &k[mirror(ky, ny) * hx..][..hx];
+                        let (low, high) = row.split_at_mut(hx);
+                        low.iter_mut().zip(k).for_each(|(v, k)| *v *= k);
+                        high.iter_mut()
+                            .zip(k[1..=nx - hx].iter().rev())
+                            .for_each(|(v, k)| *v *= k);
+                    }
+                    self.inv[0].process_with_scratch(&mut p.yx, &mut p.scratch);
+                    transpose(&p.yx, nx, &mut p.xy, ny, [ny, sx]);
+                    self.inv[1].process_with_scratch(&mut p.xy[..sx * ny], &mut p.scratch);
+                    for (x, row) in p.xy[..sx * ny].chunks(ny).enumerate() {
+                        for (y, v) in row[..sy].iter().enumerate() {
+                            let (g, k) = at(x, y);
+                            groups[g][k] = *v;
+                        }
+                    }
+                }
+            },
+        );
+        let s = 1.0 / self.len() as f32;
+        spec.par_chunks_mut(group_len)
+            .zip(out.par_chunks_mut(GROUP * n))
+            .for_each_init(
+                || {
+                    (
+                        vec![C32::default(); nh],
+                        vec![0.0f32; nt],
+                        self.c2r.make_scratch_vec(),
+                    )
+                },
+                |(freq, line, scratch), (group, o)| {
+                    for (l, o) in o.chunks_mut(n).enumerate() {
+                        // Scaled here: half as many samples as after the transform.
+                        for (f, v) in freq.iter_mut().enumerate() {
+                            *v = group[f * GROUP + l] * s;
+                        }
+                        self.to_real(freq, line, scratch);
+                        emit(line, o);
+                    }
+                },
+            );
     }
 
     /// Inverse transform of a Hermitian spectrum (that of real data), scaled by 1/len, into `out`
@@ -149,6 +314,18 @@ impl Fft3 {
         self.dims.iter().product()
     }
 
+    /// Scratch for the lateral passes of one plane.
+    fn plane(&self) -> Plane {
+        let [nx, ny, _] = self.dims;
+        let lateral = self.fwd.iter().chain(&self.inv);
+        let scratch = lateral.map(|f| f.get_inplace_scratch_len()).max();
+        Plane {
+            xy: vec![C32::default(); nx * ny],
+            yx: vec![C32::default(); nx * ny],
+            scratch: vec![C32::default(); scratch.unwrap_or(0)],
+        }
+    }
+
     /// Unnormalised complex-to-real transform of one line of a Hermitian spectrum (used as scratch).
     fn to_real(&self, freq: &mut [C32], line: &mut [f32], scratch: &mut [C32]) {
         // The imaginary parts at DC (and Nyquist) of a Hermitian spectrum are zero; what is there
@@ -215,6 +392,45 @@ impl Fft3 {
     }
 }
 
+/// One lateral plane of a spectrum, laid out for the y pass (`xy` = `[x][y]`) and for the x pass
+/// (`yx` = `[y][x]`).
+struct Plane {
+    xy: Vec<C32>,
+    yx: Vec<C32>,
+    scratch: Vec<C32>,
+}
+
+/// `dst[c·dst_row + r]` = `src[r·src_row + c]` for r < `size[0]`, c < `size[1]`, in tiles that
+/// stay in L1.
+fn transpose(src: &[C32], src_row: usize, dst: &mut [C32], dst_row: usize, size: [usize; 2]) {
+    const TILE: usize = 8;
+    for r0 in (0..size[0]).step_by(TILE) {
+        for c0 in (0..size[1]).step_by(TILE) {
+            for r in r0..(r0 + TILE).min(size[0]) {
+                for c in c0..(c0 + TILE).min(size[1]) {
+                    dst[c * dst_row + r] = src[r * src_row + c];
+                }
+            }
+        }
+    }
+}
+
+/// Fills `row[h..]` with the mirror image of `row[..h]`, h = n/2 + 1: an even sequence from its
+/// first half.
+fn unfold(row: &mut [C32], h: usize) {
+    let n = row.len();
+    let (low, high) = row.split_at_mut(h);
+    high.iter_mut()
+        .zip(low[1..=n - h].iter().rev())
+        .for_each(|(v, m)| *v = *m);
+}
+
+/// i or its mirror image n − i, whichever is at most n/2: where data or spectra that are even
+/// along an axis of n samples keep sample i (mod n).
+fn mirror(i: usize, n: usize) -> usize {
+    i.min(n - i)
+}
+
 struct Scratch {
     block: Vec<C32>,
     fft: Vec<C32>,
@@ -254,10 +470,10 @@ impl Scratch {
 mod tests {
     use super::*;
 
-    /// Direct O(n²) DFT along each axis, as the reference for the pruned transforms.
-    fn dft3(x: &[C32], d: [usize; 3], sign: f64) -> Vec<C32> {
+    /// Direct O(n²) DFT along each of `axes`, as the reference for the pruned transforms.
+    fn dft(x: &[C32], d: [usize; 3], sign: f64, axes: std::ops::Range<usize>) -> Vec<C32> {
         let mut out = x.to_vec();
-        for axis in 0..3 {
+        for axis in axes {
             let stride = d[axis + 1..].iter().product::<usize>();
             let n = d[axis];
             let src = out.clone();
@@ -277,49 +493,75 @@ mod tests {
         out
     }
 
-    #[test]
-    fn pruned_transforms_match_the_direct_dft() {
-        let d = [6, 4, 40];
-        let (nt, n_out) = (d[2], 30);
-        let plan = Fft3::new(d);
-        let nh = plan.half();
-        let value =
-            |ix: usize, iy: usize, t: usize| ((ix * 7 + iy * 3 + t) % 11) as f32 - 0.1 * t as f32;
-        let mut x = vec![C32::default(); d.iter().product()];
-        for ix in 0..3 {
-            for iy in 0..2 {
+    /// The test grid, the data's support and the samples compared after inverse transforms.
+    const D: [usize; 3] = [6, 4, 40];
+    const SUPPORT: [usize; 2] = [3, 2];
+    const N_OUT: usize = 30;
+
+    fn value(ix: usize, iy: usize, t: usize) -> f32 {
+        ((ix * 7 + iy * 3 + t) % 11) as f32 - 0.1 * t as f32
+    }
+
+    /// `f` on the lines x < `support[0]`, y < `support[1]` of the grid, zero elsewhere.
+    fn dense(support: [usize; 2], f: impl Fn(usize, usize, usize) -> f32) -> Vec<C32> {
+        let [_, ny, nt] = D;
+        let mut x = vec![C32::default(); D.iter().product()];
+        for ix in 0..support[0] {
+            for iy in 0..support[1] {
                 for t in 0..nt {
-                    x[(ix * 4 + iy) * nt + t] = C32::new(value(ix, iy, t), 0.0);
+                    x[(ix * ny + iy) * nt + t] = C32::new(f(ix, iy, t), 0.0);
                 }
             }
         }
-        let want = dft3(&x, d, -1.0);
-        let spec = plan.forward([3, 2], |ix, iy, line| {
+        x
+    }
+
+    /// `f` as the `fill` of the transforms.
+    fn lines(
+        f: impl Fn(usize, usize, usize) -> f32 + Sync,
+    ) -> impl Fn(usize, usize, &mut [f32]) + Sync {
+        move |ix, iy, line| {
             line.iter_mut()
                 .enumerate()
-                .for_each(|(t, v)| *v = value(ix, iy, t))
-        });
-        // Relative to the largest value, f32 rounding: 1e-5 for spectra, 1e-5 after the round
-        // trip, 1e-4 for the squared magnitudes.
-        let scale = want.iter().map(|v| v.norm()).fold(0.0, f32::max);
+                .for_each(|(t, v)| *v = f(ix, iy, t))
+        }
+    }
+
+    /// `out` = [SUPPORT[0]][SUPPORT[1]][N_OUT] holds `f` within `tol`.
+    fn assert_kept(out: &[f32], f: impl Fn(usize, usize, usize) -> f32, tol: f32) {
+        for ix in 0..SUPPORT[0] {
+            for iy in 0..SUPPORT[1] {
+                for t in 0..N_OUT {
+                    let (a, b) = (out[(ix * SUPPORT[1] + iy) * N_OUT + t], f(ix, iy, t));
+                    assert!((a - b).abs() < tol, "({ix}, {iy}, {t}): {a} vs {b}");
+                }
+            }
+        }
+    }
+
+    fn peak_norm(x: &[C32]) -> f32 {
+        x.iter().map(|v| v.norm()).fold(0.0, f32::max)
+    }
+
+    // Tolerances below are relative to the largest value, for f32 rounding: 1e-5 for spectra and
+    // after round trips, 1e-4 for squared magnitudes.
+
+    #[test]
+    fn pruned_transforms_match_the_direct_dft() {
+        let [_, ny, nt] = D;
+        let plan = Fft3::new(D);
+        let nh = plan.half();
+        let x = dense(SUPPORT, value);
+        let want = dft(&x, D, -1.0, 0..3);
+        let spec = plan.forward(SUPPORT, lines(value));
+        let scale = peak_norm(&want);
         for (i, a) in spec.iter().enumerate() {
             let b = want[i / nh * nt + i % nh];
             assert!((a - b).norm() < 1e-5 * scale, "{a} vs {b}");
         }
-        let kept = |out: &[f32], f: &dyn Fn(usize, usize, usize) -> f32, tol: f32| {
-            for ix in 0..3 {
-                for iy in 0..2 {
-                    for t in 0..n_out {
-                        let (a, b) = (out[(ix * 2 + iy) * n_out + t], f(ix, iy, t));
-                        assert!((a - b).abs() < tol, "({ix}, {iy}, {t}): {a} vs {b}");
-                    }
-                }
-            }
-        };
-        let mut out = vec![0.0f32; 3 * 2 * n_out];
-        plan.inverse(&mut spec.clone(), [3, 2], &mut out);
-        let peak = x.iter().map(|v| v.re.abs()).fold(0.0, f32::max);
-        kept(&out, &|ix, iy, t| value(ix, iy, t), 1e-5 * peak);
+        let mut out = vec![0.0f32; SUPPORT[0] * SUPPORT[1] * N_OUT];
+        plan.inverse(&mut spec.clone(), SUPPORT, &mut out);
+        assert_kept(&out, value, 1e-5 * peak_norm(&x));
         // The analytic signal: the direct inverse of the spectrum without negative frequencies.
         let mut one_sided = want.clone();
         one_sided
@@ -328,22 +570,66 @@ mod tests {
             .filter(|(i, _)| i % nt >= nh)
             .for_each(|(_, v)| *v = C32::default());
         let len = x.len() as f32;
-        let z: Vec<f32> = dft3(&one_sided, d, 1.0)
+        let z: Vec<f32> = dft(&one_sided, D, 1.0, 0..3)
             .iter()
             .map(|v| (v / len).norm_sqr())
             .collect();
-        plan.inverse_power_one_sided(&mut spec.clone(), [3, 2], &mut out);
+        plan.inverse_power_one_sided(&mut spec.clone(), SUPPORT, &mut out);
         let peak = z.iter().copied().fold(0.0, f32::max);
-        kept(&out, &|ix, iy, t| z[(ix * 4 + iy) * nt + t], 1e-4 * peak);
+        assert_kept(&out, |ix, iy, t| z[(ix * ny + iy) * nt + t], 1e-4 * peak);
         // A pointwise map between the inverse and forward transforms: the spectrum of x².
         let mut squared = spec;
         plan.map_real(&mut squared, |v| v * v);
         let x2: Vec<C32> = x.iter().map(|v| v * v).collect();
-        let want = dft3(&x2, d, -1.0);
-        let scale = want.iter().map(|v| v.norm()).fold(0.0, f32::max);
+        let want = dft(&x2, D, -1.0, 0..3);
+        let scale = peak_norm(&want);
         for (i, a) in squared.iter().enumerate() {
             let b = want[i / nh * nt + i % nh];
             assert!((a - b).norm() < 1e-5 * scale, "{a} vs {b}");
         }
+    }
+
+    #[test]
+    fn even_transforms_match_the_direct_dft() {
+        let [nx, ny, nt] = D;
+        let plan = Fft3::new(D);
+        let (hx, hy, nh) = (nx / 2 + 1, ny / 2 + 1, plan.half());
+        // Even in x and y: a function of the mirrored indices.
+        let kernel =
+            |ix: usize, iy: usize, t: usize| value(mirror(ix, nx), 3 * mirror(iy, ny), t * t);
+        let k = dense([nx, ny], kernel);
+        let k_t = dft(&k, D, -1.0, 2..3);
+        let quarter = plan.forward_even(|f, plane| {
+            for (x, row) in plane.chunks_mut(hy).enumerate() {
+                for (y, v) in row.iter_mut().enumerate() {
+                    *v = k_t[(x * ny + y) * nt + f];
+                }
+            }
+        });
+        let k_spec = dft(&k_t, D, -1.0, 0..2);
+        let scale = peak_norm(&k_spec);
+        for (i, b) in k_spec.iter().enumerate().filter(|(i, _)| i % nt < nh) {
+            let (kx, ky) = (mirror(i / (ny * nt), nx), mirror(i / nt % ny, ny));
+            let a = quarter[((i % nt) * hy + ky) * hx + kx];
+            assert!((a - b).norm() < 1e-5 * scale, "{a} vs {b}");
+        }
+        // The direct circular convolution: the inverse of the product of the spectra.
+        let x = dense(SUPPORT, value);
+        let product: Vec<C32> = dft(&x, D, -1.0, 0..3)
+            .iter()
+            .zip(&k_spec)
+            .map(|(a, b)| a * b)
+            .collect();
+        let len = x.len() as f32;
+        let want: Vec<f32> = dft(&product, D, 1.0, 0..3)
+            .iter()
+            .map(|v| v.re / len)
+            .collect();
+        let mut out = vec![0.0f32; SUPPORT[0] * SUPPORT[1] * N_OUT];
+        plan.convolve_even(SUPPORT, lines(value), &quarter, &mut out, |line, o| {
+            o.copy_from_slice(&line[..N_OUT])
+        });
+        let peak = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        assert_kept(&out, |ix, iy, t| want[(ix * ny + iy) * nt + t], 1e-5 * peak);
     }
 }

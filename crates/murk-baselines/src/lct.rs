@@ -12,6 +12,8 @@ use crate::fft3::{Fft3, C32};
 use crate::Reconstruction;
 use murk_core::{Capture, Error, Result};
 use rayon::prelude::*;
+use rustfft::num_complex::Complex64;
+use std::f64::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reflectance {
@@ -47,6 +49,8 @@ pub struct LctPlan {
     /// Power-of-two number of depth samples (≥ the capture's), required by the resampler.
     m: usize,
     fft: Fft3,
+    /// The Wiener filter, even in kx and ky: its quarter kx ≤ nx, ky ≤ ny, as
+    /// [`Fft3::forward_even`] returns it.
     filter: Vec<C32>,
     resampler: Resampler,
 }
@@ -64,16 +68,21 @@ impl LctPlan {
         let (nx, ny) = (geom.nx, geom.ny);
         let fft = Fft3::new([2 * nx, 2 * ny, 2 * m]);
         let (delay, norm) = light_cone(&geom, m);
-        let mut filter = fft.forward([2 * nx, 2 * ny], |jx, jy, line| {
-            if let Some(k) = delay[jx * 2 * ny + jy] {
-                line[k] = norm;
+        // A cone line is one sample, norm at k: its temporal spectrum is norm·e^(−2πi·kf/2m).
+        let phase: Vec<C32> = (0..2 * m)
+            .map(|q| {
+                let z = Complex64::from_polar(norm as f64, -PI * q as f64 / m as f64);
+                C32::new(z.re as f32, z.im as f32)
+            })
+            .collect();
+        // The cone is even in x and y about its apex, so its spectrum and the filter are too.
+        let spectrum = fft.forward_even(|f, plane| {
+            for (v, d) in plane.iter_mut().zip(&delay) {
+                // kf mod 2m, m a power of two.
+                *v = d.map_or(C32::default(), |k| phase[(k * f) & (2 * m - 1)]);
             }
         });
-        // conj(F)/(|F|² + c) of a real PSF's spectrum stays Hermitian, so the real transform applies.
-        let inv_snr = (1.0 / params.snr) as f32;
-        filter
-            .par_iter_mut()
-            .for_each(|f| *f = f.conj() / (f.norm_sqr() + inv_snr));
+        let filter = wiener(spectrum, params.snr);
         Ok(LctPlan {
             geom,
             params,
@@ -96,38 +105,20 @@ impl LctPlan {
         let scale: Vec<f32> = (0..g.nt)
             .map(|k| (k as f32 / m as f32).powi(power))
             .collect();
-        // Scaled and zero-padded to m samples, the resampler's input.
-        let mut scaled = vec![0.0f32; g.nx * g.ny * m];
-        scaled
-            .par_chunks_mut(m)
-            .zip(tau.par_chunks(g.nt))
-            .for_each(|(d, src)| {
-                d.iter_mut()
-                    .zip(src.iter().zip(&scale))
-                    .for_each(|(d, (s, w))| *d = s * w)
-            });
-        let mut spec = self.fft.forward([g.nx, g.ny], |ix, iy, line| {
-            let col = &scaled[(ix * g.ny + iy) * m..][..m];
-            self.resampler.t_to_v(col, &mut line[..m]);
-        });
-        spec.par_iter_mut()
-            .zip(&self.filter)
-            .for_each(|(b, f)| *b *= f);
-        // The v-domain result, reusing the buffer of the same shape.
-        let mut v = scaled;
-        self.fft.inverse(&mut spec, [g.nx, g.ny], &mut v);
         let mut data = vec![0.0f32; g.nx * g.ny * g.nt];
-        data.par_chunks_mut(g.nt)
-            .zip(v.par_chunks(m))
-            .for_each_init(
-                || vec![0.0f32; m],
-                |col, (out, v)| {
-                    self.resampler.v_to_t(v, col);
-                    out.iter_mut()
-                        .zip(col.iter())
-                        .for_each(|(o, v)| *o = v.max(0.0));
-                },
-            );
+        self.fft.convolve_even(
+            [g.nx, g.ny],
+            |ix, iy, line| {
+                let col = &tau[(ix * g.ny + iy) * g.nt..][..g.nt];
+                self.resampler.t_to_v(col, &scale, &mut line[..m]);
+            },
+            &self.filter,
+            &mut data,
+            |v, out| {
+                self.resampler.v_to_t(&v[..m], out);
+                out.iter_mut().for_each(|o| *o = o.max(0.0));
+            },
+        );
         Ok(g.reconstruction(g.nt, data))
     }
 }
@@ -138,27 +129,37 @@ pub fn lct(capture: &Capture, params: LctParams) -> Result<Reconstruction> {
 }
 
 /// The binary light cone on the padded [2nx][2ny][2m] grid, apex at index 0 (negative lateral
-/// offsets wrap): the depth sample of its one non-zero value per line [wx][wy] (none where the cone
-/// leaves the grid), and the value that normalises it to unit L2 norm.
+/// offsets wrap), even in x and y: on the lines [wx][wy], wx ≤ nx, wy ≤ ny, the depth sample of its
+/// one non-zero value (none where the cone leaves the grid); and the value that normalises it to
+/// unit L2 norm.
 fn light_cone(g: &ConfocalGeometry, m: usize) -> (Vec<Option<usize>>, f32) {
-    let (nx2, ny2, m2) = (2 * g.nx, 2 * g.ny, 2 * m);
     let [dx, dy] = g.spacing();
     // A scatterer at lateral distance r appears 4r²/R² later in v̂ = (path/R)², i.e. 4r²·M/R² samples.
     let r_total = m as f64 * g.ds;
-    let mut delay = vec![None; nx2 * ny2];
-    for jx in 0..nx2 {
-        for jy in 0..ny2 {
-            let ox = (jx as f64 - g.nx as f64) * dx;
-            let oy = (jy as f64 - g.ny as f64) * dy;
+    let mut delay = Vec::with_capacity((g.nx + 1) * (g.ny + 1));
+    let mut count = 0;
+    for wx in 0..=g.nx {
+        for wy in 0..=g.ny {
+            let (ox, oy) = (wx as f64 * dx, wy as f64 * dy);
             let k = (4.0 * (ox * ox + oy * oy) * m as f64 / (r_total * r_total)).round() as usize;
-            if k < m2 {
-                let (wx, wy) = ((jx + g.nx) % nx2, (jy + g.ny) % ny2);
-                delay[wx * ny2 + wy] = Some(k);
+            let d = (k < 2 * m).then_some(k);
+            if d.is_some() {
+                // Lines strictly inside the quarter stand for their mirror images too.
+                count += (1 + usize::from(wx % g.nx != 0)) * (1 + usize::from(wy % g.ny != 0));
             }
+            delay.push(d);
         }
     }
-    let count = delay.iter().flatten().count();
     (delay, 1.0 / (count as f32).sqrt())
+}
+
+/// The Wiener filter conj(F)/(|F|² + 1/snr) of the PSF spectrum F. (Of a real PSF's spectrum it
+/// stays Hermitian, so the real inverse transform applies.)
+fn wiener(mut f: Vec<C32>, snr: f64) -> Vec<C32> {
+    let inv_snr = (1.0 / snr) as f32;
+    f.par_iter_mut()
+        .for_each(|f| *f = f.conj() * (f.norm_sqr() + inv_snr).recip());
+    f
 }
 
 /// O'Toole's t → v = t² resampling matrix as a sparse M×M operator (M a power of two): fine row
@@ -171,6 +172,7 @@ struct Resampler {
 impl Resampler {
     fn new(m: usize) -> Self {
         let rows = (0..m)
+            .into_par_iter()
             .map(|i| {
                 let mut row: Vec<(usize, f64)> = Vec::new();
                 for j in i * m + 1..=(i + 1) * m {
@@ -187,17 +189,24 @@ impl Resampler {
         Resampler { rows }
     }
 
-    fn t_to_v(&self, t: &[f32], v: &mut [f32]) {
+    /// Resamples t·`scale` (elementwise), zero-padded to M samples.
+    fn t_to_v(&self, t: &[f32], scale: &[f32], v: &mut [f32]) {
         for (row, out) in self.rows.iter().zip(v.iter_mut()) {
-            *out = row.iter().map(|&(c, w)| w * t[c]).sum();
+            *out = row
+                .iter()
+                .take_while(|&&(c, _)| c < t.len())
+                .map(|&(c, w)| w * (t[c] * scale[c]))
+                .sum();
         }
     }
 
-    /// The transpose applied to `v`.
+    /// The transpose applied to `v`, the first `t.len()` samples of it.
     fn v_to_t(&self, v: &[f32], t: &mut [f32]) {
         t.fill(0.0);
+        let n = t.len();
         for (row, x) in self.rows.iter().zip(v) {
-            for &(c, w) in row {
+            // A row's columns ascend.
+            for &(c, w) in row.iter().take_while(|&&(c, _)| c < n) {
                 t[c] += w * x;
             }
         }
@@ -230,6 +239,39 @@ mod tests {
         let r = lct(&c, LctParams::default()).unwrap();
         assert_eq!(r.volume.shape(), [16, 16, 100]);
         assert_plane_depth(&r, 60, 4);
+    }
+
+    #[test]
+    fn quarter_filter_is_the_full_transform_of_the_cone() {
+        // A non-square grid (8 × 6 columns) so that the x and y mirrors differ; 100 bins, M = 128.
+        let mut c = confocal(8, 0.64, axis(0.0, 0.01, 100));
+        let grid = murk_core::PointSet::wall_grid(DVec3::ZERO, 0.64, 0.48, 8, 6);
+        (c.illum, c.sensor, c.h) = (grid.clone(), grid, vec![0.0; 8 * 6 * 100]);
+        let plan = LctPlan::new(&c, LctParams::default()).unwrap();
+        let [nx, ny, _] = plan.fft.dims;
+        let (hx, hy, nh) = (nx / 2 + 1, ny / 2 + 1, plan.fft.half());
+        let (delay, norm) = light_cone(&plan.geom, plan.m);
+        let psf_at = |wx: usize, wy: usize| delay[wx.min(nx - wx) * hy + wy.min(ny - wy)];
+        let psf = |wx: usize, wy: usize, line: &mut [f32]| {
+            if let Some(k) = psf_at(wx, wy) {
+                line[k] = norm;
+            }
+        };
+        // Unit L2 norm over the whole grid.
+        let count = (0..nx * ny)
+            .filter(|i| psf_at(i / ny, i % ny).is_some())
+            .count();
+        assert!((norm * (count as f32).sqrt() - 1.0).abs() < 1e-6);
+        let full = wiener(plan.fft.forward([nx, ny], psf), plan.params.snr);
+        let peak = full.iter().map(|v| v.norm()).fold(0.0, f32::max);
+        for (i, want) in full.iter().enumerate() {
+            let (kx, ky, f) = (i / (ny * nh), i / nh % ny, i % nh);
+            let (kx, ky) = (kx.min(nx - kx), ky.min(ny - ky));
+            let got = plan.filter[(f * hy + ky) * hx + kx];
+            // f32 rounding of two differently ordered transforms (about 3e-7 here), relative to the
+            // largest value.
+            assert!((got - want).norm() < 1e-5 * peak, "{got} vs {want}");
+        }
     }
 
     #[test]
