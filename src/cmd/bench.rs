@@ -40,6 +40,14 @@ pub struct BenchArgs {
     /// peak memory (y-tal's lct needs its git HEAD: put it in MURK_TAL_PYTHONPATH).
     #[arg(long)]
     pub confocal_vs_tal: bool,
+    /// With --render: a Python with mitransient 1.3.1 and mitsuba (see mitransient.md §7.1), to render
+    /// the T-letter cases with mitransient in the same run instead of quoting its recorded figures
+    /// (about 5 minutes more: 10 000 spp and a 100 000-spp reference per case).
+    #[arg(long)]
+    pub mitransient_python: Option<PathBuf>,
+    /// mitransient's benchmark script, run with --mitransient-python.
+    #[arg(long, default_value = "../shared/reference/mitransient_bench.py")]
+    pub mitransient_bench: PathBuf,
     /// y-tal's benchmark script (tal_bench.py), run with the y-tal Python for the confocal case.
     #[arg(long, default_value = "../shared/reference/tal_bench.py")]
     pub tal_bench: PathBuf,
@@ -128,7 +136,20 @@ pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
         return crate::cmd::bench_real::run(dir, a.runs, quiet);
     }
     if a.render {
-        return crate::cmd::bench_render::run(&a.scenes, a.runs, a.only.as_deref(), quiet);
+        let mit =
+            a.mitransient_python
+                .as_deref()
+                .map(|python| crate::cmd::bench_render::Mitransient {
+                    python,
+                    script: &a.mitransient_bench,
+                });
+        return crate::cmd::bench_render::run(
+            &a.scenes,
+            a.runs,
+            a.only.as_deref(),
+            mit.as_ref(),
+            quiet,
+        );
     }
     let python = a
         .tal_python

@@ -1,21 +1,36 @@
 //! `murk bench --render`: the renderer's efficiency on mitransient.md §7.2's T-letter scenes, next to
 //! mitransient 1.3.1's figures measured on this machine (§7.4), and the paper-format Z-letter capture.
 
+use crate::cmd::bench::{json_numbers, json_value, Scratch};
 use crate::cmd::progress::say;
-use anyhow::Context;
+use anyhow::{bail, Context};
+use murk_core::TimeAxis;
 use murk_render::bench::{median, peak_rss_mib, rel_l2, split_rel_l2, timed_render, window_mask};
 use murk_render::{Overrides, Plan, Scene};
 use std::path::Path;
+use std::process::Command;
 
-/// One T-letter case: scene file, spp, reference spp, object window (m; `None`: all bins), and
-/// mitransient's relL2 and CPU seconds for it (mitransient.md §7.4: 10 000 spp against a 100 000-spp
-/// reference, 2 vCPU EPYC; `transient_nlos_path` without a medium, `transient_prbvolpath` with one).
+/// One T-letter case: scene file, spp, reference spp, object window (m; `None`: all bins),
+/// mitransient's relL2 and CPU seconds for it as recorded in mitransient.md §7.4 (10 000 spp against a
+/// 100 000-spp reference, 2 vCPU EPYC; `transient_nlos_path` without a medium, `transient_prbvolpath`
+/// with one), and the arguments of mitransient_bench.py that render the same case live.
 struct Case {
     file: &'static str,
     spp: u64,
     ref_spp: u64,
     window: Option<(f64, f64)>,
     mitransient: (f64, f64),
+    mit_args: &'static [&'static str],
+}
+
+/// mitransient's spp and reference spp in the live comparison (those of mitransient.md §7.4).
+const MIT_SPP: u64 = 10_000;
+const MIT_REF_SPP: u64 = 100_000;
+
+/// A Python with mitransient and mitsuba, and mitransient_bench.py, for the live comparison.
+pub struct Mitransient<'a> {
+    pub python: &'a Path,
+    pub script: &'a Path,
 }
 
 const CASES: [Case; 3] = [
@@ -25,6 +40,7 @@ const CASES: [Case; 3] = [
         ref_spp: 16_000,
         window: Some((1.98, 2.70)),
         mitransient: (0.058, 2.64),
+        mit_args: &["--mode", "nlos", "--capture", "single"],
     },
     // §7.4 gives the confocal error over all bins only; compared over all bins.
     Case {
@@ -33,6 +49,7 @@ const CASES: [Case; 3] = [
         ref_spp: 16_000,
         window: None,
         mitransient: (0.065, 2.42),
+        mit_args: &["--mode", "nlos", "--capture", "confocal"],
     },
     Case {
         file: "t-wall-medium.toml",
@@ -40,14 +57,22 @@ const CASES: [Case; 3] = [
         ref_spp: 4096,
         window: Some((1.98, 2.70)),
         mitransient: (0.624, 16.48),
+        mit_args: &["--mode", "vol", "--capture", "single", "--medium"],
     },
 ];
 
-/// `only`: run just the cases whose scene file name contains it.
-pub fn run(scenes: &Path, runs: usize, only: Option<&str>, quiet: bool) -> anyhow::Result<()> {
+/// `only`: run just the cases whose scene file name contains it. `mit`: render each T case with
+/// mitransient in this run too, instead of quoting its recorded figures.
+pub fn run(
+    scenes: &Path,
+    runs: usize,
+    only: Option<&str>,
+    mit: Option<&Mitransient>,
+    quiet: bool,
+) -> anyhow::Result<()> {
     let wanted = |file: &str| only.is_none_or(|o| file.contains(o));
     for c in CASES.iter().filter(|c| wanted(c.file)) {
-        t_case(scenes, c, runs, quiet)?;
+        t_case(scenes, c, runs, mit, quiet)?;
     }
     if wanted("z-letter.toml") {
         paper_format(scenes, runs, quiet)?;
@@ -60,7 +85,13 @@ fn load(scenes: &Path, file: &str, ov: &Overrides) -> anyhow::Result<Scene> {
     Scene::load(&path, ov).with_context(|| format!("{} (use --scenes DIR)", path.display()))
 }
 
-fn t_case(scenes: &Path, c: &Case, runs: usize, quiet: bool) -> anyhow::Result<()> {
+fn t_case(
+    scenes: &Path,
+    c: &Case,
+    runs: usize,
+    mit: Option<&Mitransient>,
+    quiet: bool,
+) -> anyhow::Result<()> {
     let scene = load(scenes, c.file, &Overrides::default())?;
     let plan = Plan::new(&scene);
     let reference = timed_render(&plan, c.ref_spp, 1_000_000, None)?;
@@ -81,11 +112,17 @@ fn t_case(scenes: &Path, c: &Case, runs: usize, quiet: bool) -> anyhow::Result<(
         median(rows.iter().map(|r| r.1).collect()),
         median(rows.iter().map(|r| r.2).collect()),
     );
-    let (em, cm) = c.mitransient;
+    let ((em, cm), source) = match mit {
+        Some(m) => (
+            mitransient_live(m, c, &scene.capture.time, quiet)?,
+            "measured now",
+        ),
+        None => (c.mitransient, "recorded in mitransient.md §7.4"),
+    };
     // CPU time to mitransient's error, by error ∝ CPU^−½.
     let ours = cpu * (e / em).powi(2);
     say(quiet, format!(
-        "{}: {} points × {} spp, median of {runs}: relL2 {e:.4} ({}), CPU {cpu:.2} s, {:.2} M paths/CPU-s; to mitransient's {em} we need {ours:.2} CPU-s vs its {cm} s: {:.1}× less CPU",
+        "{}: {} points × {} spp, median of {runs}: relL2 {e:.4} ({}), CPU {cpu:.2} s, {:.2} M paths/CPU-s; to mitransient's {em:.4} ({source}) we need {ours:.2} CPU-s vs its {cm:.2} s: {:.1}× less CPU",
         c.file,
         plan.n_units(),
         c.spp,
@@ -94,6 +131,75 @@ fn t_case(scenes: &Path, c: &Case, runs: usize, quiet: bool) -> anyhow::Result<(
         cm / ours
     ));
     Ok(())
+}
+
+/// mitransient's relL2 (over the case's window, against its own 100 000-spp reference, the
+/// reference's noise taken out as for murk) and CPU seconds of its warm 10 000-spp render, measured by
+/// running mitransient_bench.py now.
+fn mitransient_live(
+    m: &Mitransient,
+    c: &Case,
+    time: &TimeAxis,
+    quiet: bool,
+) -> anyhow::Result<(f64, f64)> {
+    let dir = Scratch::new("mitransient")?;
+    let render = |spp: u64, repeats: u32, tag: &str| -> anyhow::Result<(Vec<f32>, f64)> {
+        say(
+            quiet,
+            format!("  mitransient {} at {spp} spp …", c.mit_args.join(" ")),
+        );
+        let out = Command::new(m.python)
+            .arg(m.script)
+            .args(c.mit_args)
+            .args([
+                "--spp",
+                &spp.to_string(),
+                "--repeats",
+                &repeats.to_string(),
+                "--tag",
+                tag,
+            ])
+            .arg("--outdir")
+            .arg(&dir.0)
+            .arg("--results")
+            .arg(dir.0.join("results.jsonl"))
+            .output()
+            .with_context(|| format!("running {}", m.python.display()))?;
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let line = stdout.lines().rev().find(|l| l.starts_with('{'));
+        let Some(line) = line.filter(|_| out.status.success()) else {
+            let err = String::from_utf8_lossy(&out.stderr);
+            bail!(
+                "{} {} failed: {}",
+                m.python.display(),
+                m.script.display(),
+                err.lines().last().unwrap_or("no output")
+            );
+        };
+        let cpu = *json_numbers(line, "cpu_s")
+            .last()
+            .context("no cpu_s in its output")?;
+        let npy = json_value(line, "npy").context("no npy in its output")?;
+        let (shape, h) = murk_io::read_npy_f32(Path::new(npy))?;
+        // [x, y, bins, channels]: channel 0 is the transient.
+        let (bins, ch) = match shape[..] {
+            [_, _, b, ch] => (b, ch),
+            _ => bail!("{npy}: unexpected transient shape {shape:?}"),
+        };
+        if bins != time.bins {
+            bail!("{npy}: {bins} bins, the scene has {}", time.bins);
+        }
+        Ok((h.iter().step_by(ch).copied().collect(), cpu))
+    };
+    let (reference, _) = render(MIT_REF_SPP, 1, "_murkref")?;
+    let (h, cpu) = render(MIT_SPP, 2, "_murkrun")?;
+    let mask = window_mask(
+        time,
+        h.len(),
+        c.window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY)),
+    );
+    let e = rel_l2(&h, &reference, &mask) / (1.0 + MIT_SPP as f64 / MIT_REF_SPP as f64).sqrt();
+    Ok((e, cpu))
 }
 
 /// The paper's format (`scenes/z-letter.toml`: 128² laser grid, one SPAD point, 4096 bins, fog μt = 1/m,
