@@ -90,17 +90,18 @@ impl<'a> Plan<'a> {
         if vol.z.start.min(vol.z.end) <= wall_z {
             return Err("the volume is not entirely in front of the wall plane".into());
         }
-        let lattice = |axis: &murk_core::Axis, o: f64, d: f64| {
+        let lattice = |axis: &murk_core::Axis, o: f64, d: f64, n: usize| {
             Resampler::new(
                 &axis
                     .values()
                     .iter()
                     .map(|x| (x - o) / d)
                     .collect::<Vec<_>>(),
+                (n as f64 - 1.0) / 2.0,
             )
         };
-        let rx = lattice(&vol.x, grid.origin.x, grid.step_x.x);
-        let ry = lattice(&vol.y, grid.origin.y, grid.step_y.y);
+        let rx = lattice(&vol.x, grid.origin.x, grid.step_x.x, grid.nx);
+        let ry = lattice(&vol.y, grid.origin.y, grid.step_y.y, grid.ny);
         let fft = Fft2::new(
             next_fast_len(grid.nx + rx.len - 1),
             next_fast_len(grid.ny + ry.len - 1),

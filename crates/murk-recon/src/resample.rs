@@ -21,8 +21,11 @@ pub struct Resampler {
 }
 
 impl Resampler {
-    /// `positions` in lattice units (lattice sample j sits at position j).
-    pub fn new(positions: &[f64]) -> Resampler {
+    /// `positions` in lattice units (lattice sample j sits at position j). On-lattice positions above
+    /// `centre` take their taps one sample lower (the extra tap has weight 0 either way), so positions
+    /// symmetric about `centre` read a lattice span symmetric about it: the fast Phasor Fields' kernel
+    /// support is then symmetric and its spectrum needs about half the FFT work.
+    pub fn new(positions: &[f64], centre: f64) -> Resampler {
         let aligned = positions.iter().all(|t| (t - t.round()).abs() < 1e-6);
         let taps = if aligned { 1 } else { (2 * HALF_TAPS) as usize };
         let firsts: Vec<i64> = positions
@@ -30,6 +33,8 @@ impl Resampler {
             .map(|&t| {
                 if aligned {
                     t.round() as i64
+                } else if t > centre && (t - t.round()).abs() < 1e-9 {
+                    t.round() as i64 - HALF_TAPS
                 } else {
                     t.floor() as i64 - HALF_TAPS + 1
                 }
@@ -91,9 +96,33 @@ mod tests {
 
     #[test]
     fn aligned_positions_read_one_sample() {
-        let r = Resampler::new(&[3.0, 5.0, 7.0]);
+        let r = Resampler::new(&[3.0, 5.0, 7.0], 5.0);
         assert_eq!((r.lo, r.len, r.taps), (3, 5, 1));
         assert_eq!(r.starts, vec![0, 2, 4]);
+    }
+
+    /// Off-lattice positions symmetric about the centre, on-lattice ends included, span a symmetric
+    /// range; the shifted end still reads exactly its sample.
+    #[test]
+    fn symmetric_positions_span_a_symmetric_range() {
+        let pos: Vec<f64> = (0..73).map(|i| i as f64 * 127.0 / 72.0).collect();
+        let r = Resampler::new(&pos, 63.5);
+        assert_eq!(
+            2 * r.lo + r.len as i64 - 1,
+            127,
+            "lo {} len {}",
+            r.lo,
+            r.len
+        );
+        let plain = Resampler::new(&pos, f64::INFINITY);
+        assert_eq!(plain.len, r.len + 1);
+        let last = r.weights_of(72);
+        assert_eq!(r.lo + (r.starts[72] + HALF_TAPS as usize) as i64, 127);
+        assert!((last[HALF_TAPS as usize] - 1.0).abs() < 1e-6);
+        assert!(last
+            .iter()
+            .enumerate()
+            .all(|(k, w)| k == HALF_TAPS as usize || w.abs() < 1e-6));
     }
 
     #[test]
@@ -101,7 +130,7 @@ mod tests {
         // A complex exponential of ν cycles/sample sampled on the lattice, read at fractional positions.
         for nu in [0.05, 0.2, 0.3, 0.35] {
             let pos: Vec<f64> = (0..40).map(|i| 10.3 + i as f64 * 0.731).collect();
-            let r = Resampler::new(&pos);
+            let r = Resampler::new(&pos, f64::INFINITY);
             let mut worst: f64 = 0.0;
             for (o, &t) in pos.iter().enumerate() {
                 let w = r.weights_of(o);
