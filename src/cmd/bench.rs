@@ -136,6 +136,13 @@ pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
         return crate::cmd::bench_real::run(dir, a.runs, quiet);
     }
     if a.render {
+        if let Some(python) = &a.mitransient_python {
+            for p in [python, &a.mitransient_bench] {
+                if !p.exists() {
+                    bail!("{}: no such file", p.display());
+                }
+            }
+        }
         let mit =
             a.mitransient_python
                 .as_deref()
