@@ -102,7 +102,10 @@ fn methods() -> Vec<(&'static str, Vec<&'static str>, f64, f64, bool)> {
 }
 
 /// Reconstructs `cap` (or its through-slab version) with each method; (name, shape, data, z axis).
-fn each_method(dir: &Path, cap: &Path) -> Vec<(&'static str, [usize; 3], Vec<f32>, Vec<f64>)> {
+/// A method's name, volume shape, intensities and depth axis.
+type MethodOut = (&'static str, [usize; 3], Vec<f32>, Vec<f64>);
+
+fn each_method(dir: &Path, cap: &Path) -> Vec<MethodOut> {
     let slab = cap.with_extension("slab.h5");
     let free = murk_io::read_capture(cap).unwrap();
     let blurred = murk_baselines::through_slab(&free, &Default::default()).unwrap();
@@ -272,7 +275,7 @@ fn lct_import_follows_the_reference_front_view() {
     let (n, t) = (4usize, 700usize);
     // One count at row i = 0, column j = 1, bin 650 (after the 600 gated bins), column-major.
     let mut v = vec![0f64; n * n * t];
-    v[650 * n * n + n + 0] = 7.0;
+    v[650 * n * n + n] = 7.0;
     v[10 * n * n] = 9.0; // direct light, gated away
     let mat = dir.join("scan.mat");
     write_mat_v5(

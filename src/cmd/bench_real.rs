@@ -92,7 +92,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
         })?;
         time("pf", &mut || pf_on(&vol))?;
         time("pf-cdt-voxels", &mut || pf_on(&pf_grid))?;
-        say(quiet, line.trim_end_matches(',').to_string());
+        say(quiet, line.trim_end_matches(','));
         if scene == ORDER[0] {
             say(
                 quiet,

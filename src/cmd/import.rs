@@ -178,7 +178,7 @@ pub fn import(path: &Path, o: &ImportOptions) -> anyhow::Result<Capture> {
     if let Some(v) = data.iter().find(|v| !v.is_finite()) {
         bail!("{}: '{var}' holds a non-finite value ({v})", path.display());
     }
-    if !(side.is_finite() && side > 0.0) || !(bin_ps.is_finite() && bin_ps > 0.0) {
+    if !(side.is_finite() && side > 0.0 && bin_ps.is_finite() && bin_ps > 0.0) {
         bail!("scan side ({side} m) and bin width ({bin_ps} ps) must be positive");
     }
     // Grid point (ix, iy) is scan column b = nb − 1 − ix, row a = na − 1 − iy.

@@ -243,7 +243,7 @@ mod tests {
         assert_eq!(views.front.values[0], 5.0);
         assert_eq!(views.depth.values[0], 2.0);
         assert!(views.depth.values[1].is_nan());
-        assert_eq!(views.top.values[1 * 3], 5.0); // row = depth index 1, column 0 = +x
+        assert_eq!(views.top.values[3], 5.0); // row = depth index 1, column 0 = +x
         assert_eq!(views.side.values[1], 5.0); // row 0 = +y, column = depth index 1
         assert_eq!(colour(0.0), [0, 0, 4]);
         assert_eq!(colour(1.0), [252, 255, 164]);

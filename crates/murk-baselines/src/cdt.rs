@@ -126,7 +126,7 @@ pub struct CdtPlan {
 impl CdtPlan {
     pub fn new(capture: &Capture, params: CdtParams) -> Result<Self> {
         params.slab.validate()?;
-        if !(params.snr > 0.0) {
+        if params.snr.is_nan() || params.snr <= 0.0 {
             return Err(Error::param(format!(
                 "CDT snr must be positive, got {}",
                 params.snr

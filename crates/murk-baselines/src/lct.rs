@@ -57,7 +57,7 @@ pub struct LctPlan {
 
 impl LctPlan {
     pub fn new(capture: &Capture, params: LctParams) -> Result<Self> {
-        if !(params.snr > 0.0) {
+        if params.snr.is_nan() || params.snr <= 0.0 {
             return Err(Error::param(format!(
                 "LCT snr must be positive, got {}",
                 params.snr

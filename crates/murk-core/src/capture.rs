@@ -232,8 +232,10 @@ mod tests {
         let c = product(3, 2, 4);
         let s = c.swapped_roles();
         assert_eq!(s.illum.len(), 2);
-        // histogram (l=2, s=1) of the original is (l=1, s=2) of the swapped one.
-        assert_eq!(c.histogram(2 * 2 + 1), s.histogram(1 * 3 + 2));
+        // Histogram (l=2, s=1) of the original, index l·2 + s, is (l=1, s=2) of the swapped one,
+        // index l·3 + s.
+        let (orig, swapped) = (2 * 2 + 1, 3 + 2);
+        assert_eq!(c.histogram(orig), s.histogram(swapped));
         assert_eq!(s.swapped_roles().h, c.h);
     }
 

@@ -51,7 +51,7 @@ impl Target {
                 if outline.len() < 3 {
                     return Err(Error::param("a polygon needs at least 3 vertices"));
                 }
-                if *depth_m <= 0.0 || !(*spacing_m > 0.0) {
+                if *depth_m <= 0.0 || spacing_m.is_nan() || *spacing_m <= 0.0 {
                     return Err(Error::param(format!(
                         "polygon depth ({depth_m} m) and spacing ({spacing_m} m) must be > 0"
                     )));
