@@ -1,5 +1,6 @@
 //! `murk bench --render`: the renderer's efficiency on mitransient.md §7.2's T-letter scenes, next to
-//! mitransient 1.3.1's figures measured on this machine (§7.4), and the paper-format Z-letter capture.
+//! mitransient 1.3.1 (its figures recorded on this machine in §7.4, or rendered in the same run), and
+//! the paper-format Z-letter capture.
 
 use crate::cmd::bench::{json_numbers, json_value, Scratch};
 use crate::cmd::progress::say;
@@ -31,6 +32,23 @@ const MIT_REF_SPP: u64 = 100_000;
 pub struct Mitransient<'a> {
     pub python: &'a Path,
     pub script: &'a Path,
+}
+
+impl Case {
+    /// Which entries of a [hist][bin] (or [x][y][bin]) array of `n` values the error is taken over.
+    fn mask(&self, time: &TimeAxis, n: usize) -> Vec<bool> {
+        window_mask(
+            time,
+            n,
+            self.window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY)),
+        )
+    }
+}
+
+/// A run's relL2 against a reference of `ref_spp` with the reference's own noise (spp/ref_spp of the
+/// run's variance) taken out.
+fn without_reference_noise(e: f64, spp: u64, ref_spp: u64) -> f64 {
+    e / (1.0 + spp as f64 / ref_spp as f64).sqrt()
 }
 
 const CASES: [Case; 3] = [
@@ -95,16 +113,11 @@ fn t_case(
     let scene = load(scenes, c.file, &Overrides::default())?;
     let plan = Plan::new(&scene);
     let reference = timed_render(&plan, c.ref_spp, 1_000_000, None)?;
-    let mask = window_mask(
-        &scene.capture.time,
-        reference.h.len(),
-        c.window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY)),
-    );
+    let mask = c.mask(&scene.capture.time, reference.h.len());
     let mut rows = Vec::new();
     for seed in 0..runs as u64 {
         let r = timed_render(&plan, c.spp, seed, None)?;
-        // The reference's own noise adds spp/ref_spp of the run's variance; take it out.
-        let e = rel_l2(&r.h, &reference.h, &mask) / (1.0 + c.spp as f64 / c.ref_spp as f64).sqrt();
+        let e = without_reference_noise(rel_l2(&r.h, &reference.h, &mask), c.spp, c.ref_spp);
         rows.push((e, r.cpu_s, r.paths / r.cpu_s));
     }
     let (e, cpu, rate) = (
@@ -113,10 +126,7 @@ fn t_case(
         median(rows.iter().map(|r| r.2).collect()),
     );
     let ((em, cm), source) = match mit {
-        Some(m) => (
-            mitransient_live(m, c, &scene.capture.time, quiet)?,
-            "measured now",
-        ),
+        Some(m) => (mitransient_live(m, c, &mask, quiet)?, "measured now"),
         None => (c.mitransient, "recorded in mitransient.md §7.4"),
     };
     // CPU time to mitransient's error, by error ∝ CPU^−½.
@@ -133,13 +143,14 @@ fn t_case(
     Ok(())
 }
 
-/// mitransient's relL2 (over the case's window, against its own 100 000-spp reference, the
-/// reference's noise taken out as for murk) and CPU seconds of its warm 10 000-spp render, measured by
-/// running mitransient_bench.py now.
+/// mitransient's relL2 (over `mask`, murk's mask of the case: mitransient's [x][y][bin] transient has the
+/// layout of murk's histograms; against its own 100 000-spp reference, the reference's noise taken out
+/// as for murk) and CPU seconds of its warm 10 000-spp render, measured by running mitransient_bench.py
+/// now.
 fn mitransient_live(
     m: &Mitransient,
     c: &Case,
-    time: &TimeAxis,
+    mask: &[bool],
     quiet: bool,
 ) -> anyhow::Result<(f64, f64)> {
     let dir = Scratch::new("mitransient")?;
@@ -182,23 +193,21 @@ fn mitransient_live(
         let npy = json_value(line, "npy").context("no npy in its output")?;
         let (shape, h) = murk_io::read_npy_f32(Path::new(npy))?;
         // [x, y, bins, channels]: channel 0 is the transient.
-        let (bins, ch) = match shape[..] {
-            [_, _, b, ch] => (b, ch),
-            _ => bail!("{npy}: unexpected transient shape {shape:?}"),
+        let [_, _, _, ch] = shape[..] else {
+            bail!("{npy}: unexpected transient shape {shape:?}");
         };
-        if bins != time.bins {
-            bail!("{npy}: {bins} bins, the scene has {}", time.bins);
+        let h: Vec<f32> = h.iter().step_by(ch).copied().collect();
+        if h.len() != mask.len() {
+            bail!(
+                "{npy}: shape {shape:?} does not match the scene's {} histogram values",
+                mask.len()
+            );
         }
-        Ok((h.iter().step_by(ch).copied().collect(), cpu))
+        Ok((h, cpu))
     };
     let (reference, _) = render(MIT_REF_SPP, 1, "_murkref")?;
     let (h, cpu) = render(MIT_SPP, 2, "_murkrun")?;
-    let mask = window_mask(
-        time,
-        h.len(),
-        c.window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY)),
-    );
-    let e = rel_l2(&h, &reference, &mask) / (1.0 + MIT_SPP as f64 / MIT_REF_SPP as f64).sqrt();
+    let e = without_reference_noise(rel_l2(&h, &reference, mask), MIT_SPP, MIT_REF_SPP);
     Ok((e, cpu))
 }
 

@@ -193,7 +193,7 @@ fn atan2_upper(y: f64, x: f64) -> f64 {
         a = FRAC_PI_2 - a;
     }
     if x < 0.0 {
-        a = std::f64::consts::PI - a;
+        a = PI - a;
     }
     a
 }
