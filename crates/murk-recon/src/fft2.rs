@@ -47,7 +47,19 @@ impl Fft2 {
 
     /// `a` is [x][y] (fx rows of fy); the spectrum is written to `t` as [ky][kx]. `a` is clobbered.
     pub fn forward(&self, a: &mut [Complex32], t: &mut [Complex32], scratch: &mut [Complex32]) {
-        self.fwd_y.process_with_scratch(a, scratch);
+        self.forward_rows(a, self.fx, t, scratch);
+    }
+
+    /// [`Fft2::forward`] for an `a` whose rows x ≥ `rows` are zero (they are left untouched).
+    pub fn forward_rows(
+        &self,
+        a: &mut [Complex32],
+        rows: usize,
+        t: &mut [Complex32],
+        scratch: &mut [Complex32],
+    ) {
+        self.fwd_y
+            .process_with_scratch(&mut a[..rows * self.fy], scratch);
         transpose(a, t, self.fx, self.fy);
         self.fwd_x.process_with_scratch(t, scratch);
     }

@@ -14,6 +14,7 @@ mod resample;
 pub mod spectrum;
 
 pub use compensation::Compensation;
+pub use pf_fast::Slab;
 
 use murk_core::{Capture, CaptureKind, DVec3, Error, Result, Volume};
 use rustfft::num_complex::Complex32;
@@ -89,6 +90,8 @@ pub struct ReconInfo {
     pub wall_spacing_m: Option<f64>,
     pub frequencies: usize,
     pub dft_len: usize,
+    /// The fast form's depth slabs, each with its own time window: (planes, frequencies, DFT length).
+    pub slabs: Vec<Slab>,
     /// "fast" or "exact" (the fast path falls back to exact when the capture is not a planar grid).
     pub evaluated_with: &'static str,
     pub warnings: Vec<String>,
@@ -187,9 +190,15 @@ pub fn reconstruct(
             cap.time.bin_width_m
         )));
     }
-    let spectra = spectrum::prepare(cap, volume, params, wavelength_m)?;
+    let sigma_m = params.sigma_m(wavelength_m);
+    let window = spectrum::Window::new(
+        cap,
+        spectrum::path_range(cap, volume),
+        sigma_m,
+        wavelength_m,
+    )?;
     if let Some(d) = spacing {
-        let lmin = spectra.band.min_wavelength_m();
+        let lmin = window.band.min_wavelength_m();
         if lmin < nyquist_factor * d {
             warnings.push(format!(
                 "the pulse band reaches λ = {lmin:.4} m, below the {:.4} m Nyquist limit of the wall sampling: steep angles may alias",
@@ -197,28 +206,30 @@ pub fn reconstruct(
             ));
         }
     }
-    if spectra.empty {
+    if window.empty {
         warnings
             .push("the capture's time window does not reach the volume: the result is zero".into());
-    } else if spectra.truncated {
+    } else if window.truncated {
         warnings.push("the capture's time window covers only part of the paths through the volume (zeros assumed beyond it)".into());
     }
-    let (field, evaluated_with) = match (method, pf_fast::Plan::new(cap, volume, params.falloff)) {
-        (Method::Fast, Ok(plan)) => (plan.run(&spectra, progress), "fast"),
-        (Method::Fast, Err(why)) => {
-            warnings.push(format!(
-                "fast form not applicable ({why}); used the exact form"
-            ));
-            (
-                pf_exact::run(cap, volume, &spectra, params.falloff, progress),
-                "exact",
-            )
-        }
-        (Method::Exact, _) => (
-            pf_exact::run(cap, volume, &spectra, params.falloff, progress),
-            "exact",
-        ),
+    let exact = |progress: &dyn Progress| {
+        let spectra = spectrum::spectra(cap, std::slice::from_ref(&window));
+        pf_exact::run(cap, volume, &spectra.part(0), params.falloff, progress)
     };
+    let (field, evaluated_with, slabs) =
+        match (method, pf_fast::Plan::new(cap, volume, params.falloff)) {
+            (Method::Fast, Ok(plan)) => {
+                let (field, slabs) = plan.run(sigma_m, wavelength_m, progress)?;
+                (field, "fast", slabs)
+            }
+            (Method::Fast, Err(why)) => {
+                warnings.push(format!(
+                    "fast form not applicable ({why}); used the exact form"
+                ));
+                (exact(progress), "exact", Vec::new())
+            }
+            (Method::Exact, _) => (exact(progress), "exact", Vec::new()),
+        };
     let (point, aperture) = compensation_points(cap);
     let intensity = field
         .iter()
@@ -237,8 +248,9 @@ pub fn reconstruct(
             wavelength_m,
             sigma_m: params.sigma_m(wavelength_m),
             wall_spacing_m: spacing,
-            frequencies: spectra.band.len(),
-            dft_len: spectra.band.nf,
+            frequencies: window.band.len(),
+            dft_len: window.band.nf,
+            slabs,
             evaluated_with,
             warnings,
         },

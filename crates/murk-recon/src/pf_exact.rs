@@ -2,7 +2,7 @@
 //! into its complex band-limited signal once, then every voxel sums the signals read (linear
 //! interpolation) at its exact round-trip path. Cost O(voxels × histograms).
 
-use crate::spectrum::Spectra;
+use crate::spectrum::Part;
 use crate::{Falloff, Progress};
 use murk_core::{Capture, Volume};
 use rayon::prelude::*;
@@ -12,7 +12,7 @@ use rustfft::FftPlanner;
 pub fn run(
     cap: &Capture,
     vol: &Volume,
-    spectra: &Spectra,
+    spectra: &Part,
     falloff: Falloff,
     progress: &dyn Progress,
 ) -> Vec<Complex32> {

@@ -6,12 +6,13 @@
 
 use crate::fft2::Fft2;
 use crate::resample::Resampler;
-use crate::spectrum::{next_fast_len, Spectra};
+use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Progress};
 use murk_core::simd::wide;
-use murk_core::{Capture, CaptureKind, DVec3, RegularGrid, Volume};
+use murk_core::{Axis, Capture, CaptureKind, DVec3, RegularGrid, Result, Volume};
 use rayon::prelude::*;
 use rustfft::num_complex::{Complex32, Complex64};
+use std::ops::Range;
 
 /// Which histogram feeds grid cell `c` for a given point-side index.
 #[derive(Clone, Copy)]
@@ -19,6 +20,14 @@ enum GridSide {
     Illum,
     Sensor,
     Confocal,
+}
+
+/// Depth planes evaluated together over one time window.
+#[derive(Clone, Debug)]
+pub struct Slab {
+    pub planes: Range<usize>,
+    pub frequencies: usize,
+    pub dft_len: usize,
 }
 
 pub struct Plan<'a> {
@@ -159,78 +168,191 @@ impl<'a> Plan<'a> {
         }
     }
 
-    pub fn run(&self, spectra: &Spectra, progress: &dyn Progress) -> Vec<Complex32> {
+    /// The field at every voxel, and the depth slabs it was computed in.
+    pub fn run(
+        &self,
+        sigma_m: f64,
+        wavelength_m: f64,
+        progress: &dyn Progress,
+    ) -> Result<(Vec<Complex32>, Vec<Slab>)> {
         let (nx, ny, nz) = (self.vol.x.n, self.vol.y.n, self.vol.z.n);
         let sources = self.sources();
+        let (slabs, windows) = self.slabs(sigma_m, wavelength_m)?;
         progress.start((sources.len() * nz) as u64);
         let mut field = vec![Complex64::default(); nx * ny * nz];
-        for src in sources {
-            let hspec = self.grid_spectra(spectra, src);
-            let planes: Vec<Vec<Complex32>> = (0..nz)
-                .into_par_iter()
-                .map_init(
-                    || Workspace::new(self),
-                    |ws, iz| {
-                        let plane = self.plane(ws, spectra, &hspec, src, iz);
-                        progress.advance(1);
-                        plane
-                    },
-                )
-                .collect();
-            for (iz, plane) in planes.iter().enumerate() {
-                for (ixy, v) in plane.iter().enumerate() {
-                    field[ixy * nz + iz] += Complex64::new(v.re as f64, v.im as f64);
+        let all = crate::spectrum::spectra(self.cap, &windows);
+        let mut hspec = Vec::new();
+        for (k, planes) in slabs.iter().enumerate() {
+            let spectra = all.part(k);
+            for &src in &sources {
+                self.grid_spectra(&spectra, src, &mut hspec);
+                let out: Vec<Vec<Complex32>> = planes
+                    .clone()
+                    .into_par_iter()
+                    .map_init(
+                        || Workspace::new(self),
+                        |ws, iz| {
+                            let plane = self.plane(ws, &spectra, &hspec, src, iz);
+                            progress.advance(1);
+                            plane
+                        },
+                    )
+                    .collect();
+                for (iz, plane) in planes.clone().zip(&out) {
+                    for (ixy, v) in plane.iter().enumerate() {
+                        field[ixy * nz + iz] += Complex64::new(v.re as f64, v.im as f64);
+                    }
                 }
             }
         }
-        field
+        let field = field
             .iter()
             .map(|u| Complex32::new(u.re as f32, u.im as f32))
-            .collect()
+            .collect();
+        let slabs = slabs
+            .into_iter()
+            .zip(windows)
+            .map(|(planes, w)| Slab {
+                planes,
+                frequencies: w.band.len(),
+                dft_len: w.band.nf,
+            })
+            .collect();
+        Ok((field, slabs))
     }
 
-    /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout.
-    fn grid_spectra(&self, spectra: &Spectra, src: Option<usize>) -> Vec<Complex32> {
-        let (fx, fy) = (self.fft.fx, self.fft.fy);
-        let (gnx, gny) = (self.grid.nx, self.grid.ny);
-        let nb = spectra.band.len();
-        // Frequency-major copy of the grid's spectra, so each frequency reads contiguous memory.
-        let mut by_freq = vec![Complex32::default(); nb * gnx * gny];
-        for cell in 0..gnx * gny {
-            for (j, v) in spectra.hist(self.hist_index(cell, src)).iter().enumerate() {
-                by_freq[j * gnx * gny + cell] = *v;
+    /// Splits the depth planes into contiguous slabs, each with its own time window. A slab's paths
+    /// span less than the whole volume's, so its DFT is shorter and holds fewer band frequencies (the
+    /// plane work is proportional to them), but each slab transforms the data and the grid spectra
+    /// once more. The split minimises a cost model in FFT point-operations, with planes shared among
+    /// the worker threads, by dynamic programming over slab ends.
+    fn slabs(&self, sigma_m: f64, wavelength_m: f64) -> Result<(Vec<Range<usize>>, Vec<Window>)> {
+        const MAX_PLANES: usize = 256;
+        let nz = self.vol.z.n;
+        let paths: Vec<(f64, f64)> = (0..nz)
+            .into_par_iter()
+            .map(|iz| {
+                let z = self.vol.z.at(iz);
+                let plane = Volume {
+                    z: Axis::new(z, z, 1),
+                    ..self.vol
+                };
+                path_range(self.cap, &plane)
+            })
+            .collect();
+        let threads = rayon::current_num_threads().max(1);
+        let n = (self.fft.fx * self.fft.fy) as f64;
+        let fft2 = n * n.log2();
+        // Costs per frequency, relative to one FFT2, as measured on the Z-letter bench: a plane (kernel
+        // spectrum, inverse FFT, resampling; confocal planes skip the per-frequency inverse), and the
+        // grid's spectra (gather, forward FFT2) per source. A histogram's transform costs about its
+        // n·log2 n.
+        let per_plane = if matches!(self.side, GridSide::Confocal) {
+            1.5
+        } else {
+            2.5
+        } * fft2;
+        let per_freq = 4.0 * fft2 / threads as f64;
+        let sources = self.sources().len() as f64;
+        let cost = |planes: usize, w: &Window| {
+            let nf = w.band.nf as f64;
+            let data = self.cap.n_hist() as f64 * nf * nf.log2() / threads as f64;
+            let waves = planes.div_ceil(threads) as f64;
+            w.band.len() as f64 * sources * (waves * per_plane + per_freq) + data
+        };
+        let window = |lo: f64, hi: f64| Window::new(self.cap, (lo, hi), sigma_m, wavelength_m);
+        // best[i]: cost of planes 0..i and where its last slab starts.
+        let mut best = vec![(f64::INFINITY, 0usize); nz + 1];
+        best[0].0 = 0.0;
+        for j in 0..nz {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for i in j + 1..=(j + MAX_PLANES).min(nz) {
+                lo = lo.min(paths[i - 1].0);
+                hi = hi.max(paths[i - 1].1);
+                let c = best[j].0 + cost(i - j, &window(lo, hi)?);
+                if c < best[i].0 {
+                    best[i] = (c, j);
+                }
             }
         }
-        let mut out = vec![Complex32::default(); nb * fx * fy];
-        out.par_chunks_mut(fx * fy)
-            .zip(by_freq.par_chunks(gnx * gny))
+        let (mut ranges, mut windows) = (Vec::new(), Vec::new());
+        let mut i = nz;
+        while i > 0 {
+            let j = best[i].1;
+            let (lo, hi) = paths[j..i]
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.0), b.max(p.1))
+                });
+            ranges.push(j..i);
+            windows.push(window(lo, hi)?);
+            i = j;
+        }
+        ranges.reverse();
+        windows.reverse();
+        Ok((ranges, windows))
+    }
+
+    /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout,
+    /// into `out` (reused across slabs).
+    fn grid_spectra(&self, spectra: &Part, src: Option<usize>, out: &mut Vec<Complex32>) {
+        let (fx, fy) = (self.fft.fx, self.fft.fy);
+        let (gnx, gny) = (self.grid.nx, self.grid.ny);
+        let cells = gnx * gny;
+        let nb = spectra.band.len();
+        // Frequency-major copy of the grid's spectra, so each frequency reads contiguous memory;
+        // split by frequency ranges so each task reads one contiguous run per histogram.
+        let mut by_freq = vec![Complex32::default(); nb * cells];
+        let per_task = nb.div_ceil(4 * rayon::current_num_threads()).max(1);
+        by_freq
+            .par_chunks_mut(per_task * cells)
+            .enumerate()
+            .for_each(|(task, block)| {
+                let j0 = task * per_task;
+                for cell in 0..cells {
+                    let h = &spectra.hist(self.hist_index(cell, src))[j0..];
+                    for (dj, v) in h.iter().take(block.len() / cells).enumerate() {
+                        block[dj * cells + cell] = *v;
+                    }
+                }
+            });
+        out.resize(nb * fx * fy, Complex32::default());
+        out[..nb * fx * fy]
+            .par_chunks_mut(fx * fy)
+            .zip(by_freq.par_chunks(cells))
             .for_each_init(
                 || (vec![Complex32::default(); fx * fy], self.fft.scratch()),
                 |(a, scratch), (t, cells)| {
-                    a.iter_mut().for_each(|v| *v = Complex32::default());
+                    // Rows x ≥ gnx stay zero: only the grid's rows are written and transformed.
                     for ix in 0..gnx {
-                        a[ix * fy..ix * fy + gny].copy_from_slice(&cells[ix * gny..(ix + 1) * gny]);
+                        let row = &mut a[ix * fy..(ix + 1) * fy];
+                        row[..gny].copy_from_slice(&cells[ix * gny..(ix + 1) * gny]);
+                        row[gny..]
+                            .iter_mut()
+                            .for_each(|v| *v = Complex32::default());
                     }
-                    self.fft.forward(a, t, scratch);
+                    self.fft.forward_rows(a, gnx, t, scratch);
                     // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
                     let norm = 1.0 / (fx * fy) as f32;
-                    t.iter_mut().for_each(|v| *v *= norm);
-                    if let Some(f) = &self.fold {
-                        for (row, py) in t.chunks_mut(fx).zip(&f.py) {
-                            for (v, px) in row.iter_mut().zip(&f.px) {
-                                *v *= px * py;
+                    match &self.fold {
+                        Some(f) => {
+                            for (row, py) in t.chunks_mut(fx).zip(&f.py) {
+                                let py = py * norm;
+                                for (v, px) in row.iter_mut().zip(&f.px) {
+                                    *v *= px * py;
+                                }
                             }
                         }
+                        None => t.iter_mut().for_each(|v| *v *= norm),
                     }
                 },
             );
-        out
     }
 
     fn plane(
         &self,
         ws: &mut Workspace,
-        spectra: &Spectra,
+        spectra: &Part,
         hspec: &[Complex32],
         src: Option<usize>,
         iz: usize,

@@ -2,7 +2,6 @@
 //! frequencies of the virtual pulse, and each histogram's band-limited spectrum with its fixed path
 //! offsets already applied as exact phases.
 
-use crate::PfParams;
 use murk_core::{Capture, DVec3, Error, Result, Volume};
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
@@ -65,22 +64,41 @@ impl Band {
     }
 }
 
-/// Band-limited spectra of every histogram, cropped to the paths the volume can see.
+/// Band-limited spectra of every histogram for several [`Window`]s, computed in one pass over the
+/// data (reading the histograms dominates, not the transforms).
 pub struct Spectra {
-    pub band: Band,
-    /// `[hist][j]`: W_j·Ĥ_j·exp(ik_j(e_l + e_s − s_pad0)) / nf, so that a voxel's value is
+    bands: Vec<Band>,
+    /// `[hist][window][j]`: W_j·Ĥ_j·exp(ik_j(e_l + e_s − s_pad0)) / nf, so that a voxel's value is
     /// Σ_j spec[j]·exp(ik_j(d_l + d_s)) summed over histograms.
-    pub spec: Vec<Complex32>,
-    /// True when the data's time window misses part of the paths the volume needs (zeros are used there).
-    pub truncated: bool,
-    /// True when no data bin falls within the volume's paths at all.
-    pub empty: bool,
+    spec: Vec<Complex32>,
+    /// Offset of each window's band within a histogram's row, and the row length.
+    offsets: Vec<usize>,
+    stride: usize,
 }
 
 impl Spectra {
+    /// The spectra of window `w`.
+    pub fn part(&self, w: usize) -> Part<'_> {
+        Part {
+            band: &self.bands[w],
+            spec: &self.spec,
+            offset: self.offsets[w],
+            stride: self.stride,
+        }
+    }
+}
+
+/// One window's spectra within [`Spectra`].
+pub struct Part<'a> {
+    pub band: &'a Band,
+    spec: &'a [Complex32],
+    offset: usize,
+    stride: usize,
+}
+
+impl Part<'_> {
     pub fn hist(&self, i: usize) -> &[Complex32] {
-        let n = self.band.len();
-        &self.spec[i * n..(i + 1) * n]
+        &self.spec[i * self.stride + self.offset..][..self.band.len()]
     }
 }
 
@@ -118,7 +136,7 @@ pub fn box_distance_range(p: DVec3, vol: &Volume) -> (f64, f64) {
 }
 
 /// Range of total path (device to device) over all measured pairs and all voxels of `vol`.
-fn path_range(cap: &Capture, vol: &Volume) -> (f64, f64) {
+pub fn path_range(cap: &Capture, vol: &Volume) -> (f64, f64) {
     let side = |pts: &[DVec3], off: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
         pts.iter()
             .enumerate()
@@ -163,80 +181,142 @@ pub fn next_fast_len(n: usize) -> usize {
     }
 }
 
-/// Crops every histogram to the paths `vol` needs (± the pulse envelope), pads it with zeros (never
-/// wraps), transforms it and keeps the band.
-pub fn prepare(
-    cap: &Capture,
-    vol: &Volume,
-    params: &PfParams,
-    wavelength_m: f64,
-) -> Result<Spectra> {
-    let sigma = params.sigma_m(wavelength_m);
-    let t = cap.time;
-    let dt = t.bin_width_m;
-    let (pmin, pmax) = path_range(cap, vol);
-    let margin = ENVELOPE_SIGMAS * sigma;
-    // Bin n represents path start + (n + ½)Δs.
-    let want_lo = ((pmin - margin - t.start_m) / dt - 0.5).floor() as i64;
-    let want_hi = ((pmax + margin - t.start_m) / dt - 0.5).ceil() as i64 + 1;
-    let i_lo = want_lo.clamp(0, t.bins as i64) as usize;
-    let i_hi = want_hi.clamp(0, t.bins as i64) as usize;
-    let truncated = want_lo < 0 || want_hi > t.bins as i64;
-    let pad = (margin / dt).ceil() as usize + 1;
-    // The window the volume needs, not the data we have, sets the period: reads never alias.
-    let span_bins = (want_hi - want_lo).max(1) as usize;
-    let nf = next_fast_len(span_bins + 2 * pad);
-    if nf > 1 << 24 {
-        return Err(Error::Limits(format!(
-            "the volume needs {nf} time samples of {dt} m; use a smaller volume or coarser bins"
-        )));
+/// The bins of every histogram that paths in a range need (± the pulse envelope), zero-padded (never
+/// wrapped) to a fast DFT length, and the pulse's band on that DFT's grid.
+pub struct Window {
+    pub band: Band,
+    /// Bins `i_lo..i_hi` of the data are used.
+    i_lo: usize,
+    i_hi: usize,
+    /// Data bin at padded index 0 (may be negative).
+    first_bin: i64,
+    /// True when the data's time window misses part of the paths (zeros are used there).
+    pub truncated: bool,
+    /// True when no data bin falls within the paths at all.
+    pub empty: bool,
+}
+
+impl Window {
+    /// The window for total paths (device to device) in `paths_m`.
+    pub fn new(
+        cap: &Capture,
+        paths_m: (f64, f64),
+        sigma_m: f64,
+        wavelength_m: f64,
+    ) -> Result<Window> {
+        let t = cap.time;
+        let dt = t.bin_width_m;
+        let (pmin, pmax) = paths_m;
+        let margin = ENVELOPE_SIGMAS * sigma_m;
+        // Bin n represents path start + (n + ½)Δs.
+        let want_lo = ((pmin - margin - t.start_m) / dt - 0.5).floor() as i64;
+        let want_hi = ((pmax + margin - t.start_m) / dt - 0.5).ceil() as i64 + 1;
+        let i_lo = want_lo.clamp(0, t.bins as i64) as usize;
+        let i_hi = want_hi.clamp(0, t.bins as i64) as usize;
+        // The window the paths need, not the data we have, sets the period. A read lies at least one
+        // margin inside the window, so the nearest wrapped image of any data bin is at least a margin
+        // away: it weighs no more than the data the crop already drops. Even lengths keep realfft on
+        // its fast path.
+        let pad = 1;
+        let span_bins = (want_hi - want_lo).max(1) as usize;
+        let nf = 2 * next_fast_len((span_bins + 2 * pad).div_ceil(2));
+        if nf > 1 << 24 {
+            return Err(Error::Limits(format!(
+                "the volume needs {nf} time samples of {dt} m; use a smaller volume or coarser bins"
+            )));
+        }
+        let band = Band::new(nf, dt, wavelength_m, sigma_m);
+        if band.is_empty() {
+            return Err(Error::param(format!(
+                "no frequency of the virtual pulse (λ = {wavelength_m} m) fits the {dt} m bins"
+            )));
+        }
+        Ok(Window {
+            band,
+            i_lo,
+            i_hi,
+            first_bin: want_lo - pad as i64,
+            truncated: want_lo < 0 || want_hi > t.bins as i64,
+            empty: i_lo >= i_hi,
+        })
     }
-    let band = Band::new(nf, dt, wavelength_m, sigma);
-    if band.is_empty() {
-        return Err(Error::param(format!(
-            "no frequency of the virtual pulse (λ = {wavelength_m} m) fits the {dt} m bins"
-        )));
+}
+
+/// Transforms every histogram over each window and keeps the windows' bands, path offsets applied as
+/// exact phases.
+pub fn spectra(cap: &Capture, windows: &[Window]) -> Spectra {
+    let mut offsets = Vec::with_capacity(windows.len());
+    let mut stride = 0;
+    for w in windows {
+        offsets.push(stride);
+        stride += w.band.len();
     }
-    // Padded index 0: the window starts `pad` bins before want_lo.
-    let first_bin = want_lo - pad as i64;
-    let s_pad0 = t.start_m + (first_bin as f64 + 0.5) * dt;
-    let nb = band.len();
-    let mut spec = vec![Complex32::new(0.0, 0.0); cap.n_hist() * nb];
-    let empty = i_lo >= i_hi;
-    if !empty {
-        let fft = RealFftPlanner::<f32>::new().plan_fft_forward(nf);
-        let scale = 1.0 / nf as f64;
-        spec.par_chunks_mut(nb).enumerate().for_each_init(
+    let mut spec = vec![Complex32::new(0.0, 0.0); cap.n_hist() * stride];
+    let ffts: Vec<_> = {
+        let mut planner = RealFftPlanner::<f32>::new();
+        windows
+            .iter()
+            .map(|w| planner.plan_fft_forward(w.band.nf))
+            .collect()
+    };
+    let dt = cap.time.bin_width_m;
+    spec.par_chunks_mut(stride.max(1))
+        .enumerate()
+        .for_each_init(
             || {
-                (
-                    fft.make_input_vec(),
-                    fft.make_output_vec(),
-                    fft.make_scratch_vec(),
-                )
+                ffts.iter()
+                    .map(|f| {
+                        (
+                            f.make_input_vec(),
+                            f.make_output_vec(),
+                            f.make_scratch_vec(),
+                        )
+                    })
+                    .collect::<Vec<_>>()
             },
-            |(input, output, scratch), (i, out)| {
-                input.iter_mut().for_each(|v| *v = 0.0);
+            |bufs, (i, row)| {
                 let h = cap.histogram(i);
-                let off = (i_lo as i64 - first_bin) as usize;
-                input[off..off + (i_hi - i_lo)].copy_from_slice(&h[i_lo..i_hi]);
-                fft.process_with_scratch(input, output, scratch)
-                    .expect("realfft lengths match their plan");
                 let (l, s) = cap.hist_pair(i);
-                let shift = cap.first_bounce_m(l) + cap.last_bounce_m(s) - s_pad0;
-                for (j, o) in out.iter_mut().enumerate() {
-                    let x = output[band.m_lo + j];
-                    let ph = Complex64::from_polar(band.weights[j] * scale, band.k(j) * shift);
-                    *o = Complex32::new(x.re, x.im) * Complex32::new(ph.re as f32, ph.im as f32);
+                let offsets_m = cap.first_bounce_m(l) + cap.last_bounce_m(s);
+                for (((w, fft), (input, output, scratch)), &o) in
+                    windows.iter().zip(&ffts).zip(bufs.iter_mut()).zip(&offsets)
+                {
+                    if w.empty {
+                        continue;
+                    }
+                    let band = &w.band;
+                    let (i_lo, i_hi) = (w.i_lo, w.i_hi);
+                    let off = (i_lo as i64 - w.first_bin) as usize;
+                    let n = i_hi - i_lo;
+                    input[..off].iter_mut().for_each(|v| *v = 0.0);
+                    input[off + n..].iter_mut().for_each(|v| *v = 0.0);
+                    input[off..off + n].copy_from_slice(&h[i_lo..i_hi]);
+                    fft.process_with_scratch(input, output, scratch)
+                        .expect("realfft lengths match their plan");
+                    let s_pad0 = cap.time.start_m + (w.first_bin as f64 + 0.5) * dt;
+                    let shift = offsets_m - s_pad0;
+                    // exp(ik_j·shift) by recurrence from k_0 (f64: no drift over a band), times the
+                    // pulse weight and the 1/nf scale.
+                    let mut ph = Complex64::from_polar(1.0 / band.nf as f64, band.k(0) * shift);
+                    let step = Complex64::from_polar(1.0, band.dk() * shift);
+                    for ((r, x), wj) in row[o..o + band.len()]
+                        .iter_mut()
+                        .zip(&output[band.m_lo..])
+                        .zip(&band.weights)
+                    {
+                        let p = ph * *wj;
+                        *r = Complex32::new(x.re, x.im) * Complex32::new(p.re as f32, p.im as f32);
+                        ph *= step;
+                    }
                 }
             },
         );
-    }
-    Ok(Spectra {
-        band,
+    Spectra {
+        bands: windows.iter().map(|w| w.band.clone()).collect(),
         spec,
-        truncated,
-        empty,
-    })
+        offsets,
+        stride,
+    }
 }
 
 #[cfg(test)]
