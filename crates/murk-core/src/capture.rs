@@ -186,7 +186,21 @@ impl Capture {
                 t.bins
             )));
         }
-        if let Some(i) = self.h.iter().position(|v| !v.is_finite()) {
+        // Branch-free per chunk (all-ones exponent means Inf or NaN) so the scan vectorises; the
+        // position is looked up only in a chunk that has one.
+        const CHUNK: usize = 1 << 14;
+        let non_finite = |c: &[f32]| {
+            c.iter().fold(false, |bad, v| {
+                bad | (v.to_bits() & 0x7f80_0000 == 0x7f80_0000)
+            })
+        };
+        if let Some(i) = self.h.chunks(CHUNK).position(non_finite).and_then(|c| {
+            let start = c * CHUNK;
+            self.h[start..]
+                .iter()
+                .position(|v| !v.is_finite())
+                .map(|o| start + o)
+        }) {
             let (hist, bin) = (i / t.bins, i % t.bins);
             let (l, s) = self.hist_pair(hist);
             return Err(Error::param(format!(

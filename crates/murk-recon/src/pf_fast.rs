@@ -300,8 +300,9 @@ impl<'a> Plan<'a> {
         let (gnx, gny) = (self.grid.nx, self.grid.ny);
         let cells = gnx * gny;
         let nb = spectra.band.len();
-        // Frequency-major copy of the grid's spectra, so each frequency reads contiguous memory;
-        // split by frequency ranges so each task reads one contiguous run per histogram.
+        // Frequency-major copy of the grid's spectra, so each frequency reads contiguous memory. Split
+        // by frequency ranges, and transposed in tiles of cells so reads and writes stay in cache.
+        const TILE: usize = 64;
         let mut by_freq = vec![Complex32::default(); nb * cells];
         let per_task = nb.div_ceil(4 * rayon::current_num_threads()).max(1);
         by_freq
@@ -309,10 +310,18 @@ impl<'a> Plan<'a> {
             .enumerate()
             .for_each(|(task, block)| {
                 let j0 = task * per_task;
-                for cell in 0..cells {
-                    let h = &spectra.hist(self.hist_index(cell, src))[j0..];
-                    for (dj, v) in h.iter().take(block.len() / cells).enumerate() {
-                        block[dj * cells + cell] = *v;
+                let nj = block.len() / cells;
+                for c0 in (0..cells).step_by(TILE) {
+                    let tile = c0..(c0 + TILE).min(cells);
+                    let rows: Vec<&[Complex32]> = tile
+                        .clone()
+                        .map(|cell| &spectra.hist(self.hist_index(cell, src))[j0..j0 + nj])
+                        .collect();
+                    for dj in 0..nj {
+                        for (d, row) in block[dj * cells + c0..][..rows.len()].iter_mut().zip(&rows)
+                        {
+                            *d = row[dj];
+                        }
                     }
                 }
             });
@@ -368,7 +377,9 @@ impl<'a> Plan<'a> {
         let (dxs, dys) = (self.grid.step_x.x, self.grid.step_y.y);
         // Round trip for confocal data: both legs share the wall point.
         let legs = if src.is_none() { 2.0 } else { 1.0 };
-        let (k0, dk) = (band.k(0), band.dk());
+        // k_0 = m_lo·Δk, so a phase at k_0 is the per-frequency step to the power m_lo: one sincos
+        // per entry instead of two.
+        let (m0, dk) = (band.m_lo as u32, band.dk());
         // The kernel depends on |dx| and |dy| only: its sines, cosines and per-frequency recurrence
         // live in a table over the distinct (|dx|, |dy|) (a quarter of the support when the volume is
         // centred on the wall) that is mirrored into the FFT input.
@@ -382,9 +393,9 @@ impl<'a> Plan<'a> {
                 let dy = ay as f64 * dys;
                 let r = (dx * dx + dy * dy + dz * dz).sqrt();
                 let amp = amplitude(self.falloff, r).powf(legs);
-                ws.tcur.push(c32(Complex64::from_polar(amp, k0 * legs * r)));
-                ws.tstep
-                    .push(c32(Complex64::from_polar(1.0, dk * legs * r)));
+                let step = Complex64::from_polar(1.0, dk * legs * r);
+                ws.tcur.push(c32(step.powu(m0) * amp));
+                ws.tstep.push(c32(step));
             }
         }
         // Exact phase of the point-side leg, per voxel.
@@ -395,9 +406,9 @@ impl<'a> Plan<'a> {
                     Some(s) => {
                         let v = DVec3::new(self.vol.x.at(ix), self.vol.y.at(iy), z);
                         let d = (v - self.source_point(s)).length();
-                        ws.pbase[i] =
-                            c32(Complex64::from_polar(amplitude(self.falloff, d), k0 * d));
-                        ws.pstep[i] = c32(Complex64::from_polar(1.0, dk * d));
+                        let step = Complex64::from_polar(1.0, dk * d);
+                        ws.pbase[i] = c32(step.powu(m0) * amplitude(self.falloff, d));
+                        ws.pstep[i] = c32(step);
                     }
                     None => {
                         ws.pbase[i] = Complex32::new(1.0, 0.0);
