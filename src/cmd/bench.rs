@@ -239,7 +239,7 @@ fn z_letter(runs: usize, quiet: bool) -> anyhow::Result<()> {
     say(quiet, format!(
         "Z letter, 128² laser grid × 4096 bins → 73×59×73 voxels (fast PF; {} depth slabs of {:.1} frequencies per plane on average, against {} over the whole volume's window): median {:.3} s (runs {:?}); synthesis {:.2} s; peak depth {:.3} m (Z at 2.000 m); peak RSS {:.0} MiB",
         rec.info.slabs.len(),
-        rec.info.slabs.iter().map(|s| (s.planes.len() * s.frequencies) as f64).sum::<f64>() / vol.z.n as f64,
+        rec.info.frequencies_per_plane(),
         rec.info.frequencies,
         median(times.clone()),
         times.iter().map(|t| (t * 1000.0).round() / 1000.0).collect::<Vec<_>>(),

@@ -503,11 +503,9 @@ fn pf_rows(i: &murk_recon::ReconInfo) -> Vec<(String, String)> {
         (
             "frequencies".into(),
             if i.slabs.len() > 1 {
-                let planes: usize = i.slabs.iter().map(|s| s.planes.len()).sum();
-                let per_plane: usize = i.slabs.iter().map(|s| s.planes.len() * s.frequencies).sum();
                 format!(
                     "{:.1} per plane over {} depth slabs with their own time windows (the whole volume's window: {} of a {}-point DFT)",
-                    per_plane as f64 / planes as f64,
+                    i.frequencies_per_plane(),
                     i.slabs.len(),
                     i.frequencies,
                     i.dft_len

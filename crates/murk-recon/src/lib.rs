@@ -97,6 +97,22 @@ pub struct ReconInfo {
     pub warnings: Vec<String>,
 }
 
+impl ReconInfo {
+    /// Band frequencies per depth plane: the mean over the fast form's slabs, else the whole window's.
+    pub fn frequencies_per_plane(&self) -> f64 {
+        let planes: usize = self.slabs.iter().map(|s| s.planes.len()).sum();
+        if planes == 0 {
+            return self.frequencies as f64;
+        }
+        let work: usize = self
+            .slabs
+            .iter()
+            .map(|s| s.planes.len() * s.frequencies)
+            .sum();
+        work as f64 / planes as f64
+    }
+}
+
 #[derive(Debug)]
 pub struct Reconstruction {
     pub volume: Volume,
@@ -246,7 +262,7 @@ pub fn reconstruct(
         intensity,
         info: ReconInfo {
             wavelength_m,
-            sigma_m: params.sigma_m(wavelength_m),
+            sigma_m,
             wall_spacing_m: spacing,
             frequencies: window.band.len(),
             dft_len: window.band.nf,

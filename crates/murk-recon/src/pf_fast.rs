@@ -13,6 +13,7 @@ use murk_core::{Axis, Capture, CaptureKind, DVec3, RegularGrid, Result, Volume};
 use rayon::prelude::*;
 use rustfft::num_complex::{Complex32, Complex64};
 use std::ops::Range;
+use std::sync::Mutex;
 
 /// Which histogram feeds grid cell `c` for a given point-side index.
 #[derive(Clone, Copy)]
@@ -181,22 +182,24 @@ impl<'a> Plan<'a> {
         progress.start((sources.len() * nz) as u64);
         let mut field = vec![Complex64::default(); nx * ny * nz];
         let all = crate::spectrum::spectra(self.cap, &windows);
-        let mut hspec = Vec::new();
+        let mut grid = GridBuffers::default();
+        // One workspace per worker thread for the whole run (planes of every slab reuse them).
+        let pool: Vec<Mutex<Workspace>> = (0..rayon::current_num_threads().max(1))
+            .map(|_| Mutex::new(Workspace::new(self)))
+            .collect();
         for (k, planes) in slabs.iter().enumerate() {
             let spectra = all.part(k);
             for &src in &sources {
-                self.grid_spectra(&spectra, src, &mut hspec);
+                let hspec = self.grid_spectra(&spectra, src, &mut grid, &pool);
                 let out: Vec<Vec<Complex32>> = planes
                     .clone()
                     .into_par_iter()
-                    .map_init(
-                        || Workspace::new(self),
-                        |ws, iz| {
-                            let plane = self.plane(ws, &spectra, &hspec, src, iz);
-                            progress.advance(1);
-                            plane
-                        },
-                    )
+                    .map(|iz| {
+                        let mut ws = lock(&pool);
+                        let plane = self.plane(&mut ws, &spectra, hspec, src, iz);
+                        progress.advance(1);
+                        plane
+                    })
                     .collect();
                 for (iz, plane) in planes.clone().zip(&out) {
                     for (ixy, v) in plane.iter().enumerate() {
@@ -261,31 +264,28 @@ impl<'a> Plan<'a> {
             w.band.len() as f64 * sources * (waves * per_plane + per_freq) + data
         };
         let window = |lo: f64, hi: f64| Window::new(self.cap, (lo, hi), sigma_m, wavelength_m);
-        // best[i]: cost of planes 0..i and where its last slab starts.
-        let mut best = vec![(f64::INFINITY, 0usize); nz + 1];
+        // best[i]: cost of planes 0..i, where its last slab starts, and that slab's window.
+        let mut best: Vec<(f64, usize, Option<Window>)> =
+            (0..=nz).map(|_| (f64::INFINITY, 0, None)).collect();
         best[0].0 = 0.0;
         for j in 0..nz {
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
             for i in j + 1..=(j + MAX_PLANES).min(nz) {
                 lo = lo.min(paths[i - 1].0);
                 hi = hi.max(paths[i - 1].1);
-                let c = best[j].0 + cost(i - j, &window(lo, hi)?);
+                let w = window(lo, hi)?;
+                let c = best[j].0 + cost(i - j, &w);
                 if c < best[i].0 {
-                    best[i] = (c, j);
+                    best[i] = (c, j, Some(w));
                 }
             }
         }
         let (mut ranges, mut windows) = (Vec::new(), Vec::new());
         let mut i = nz;
         while i > 0 {
-            let j = best[i].1;
-            let (lo, hi) = paths[j..i]
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                    (a.min(p.0), b.max(p.1))
-                });
+            let (_, j, w) = std::mem::replace(&mut best[i], (0.0, 0, None));
             ranges.push(j..i);
-            windows.push(window(lo, hi)?);
+            windows.push(w.expect("every reachable end has a window"));
             i = j;
         }
         ranges.reverse();
@@ -293,69 +293,72 @@ impl<'a> Plan<'a> {
         Ok((ranges, windows))
     }
 
-    /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout,
-    /// into `out` (reused across slabs).
-    fn grid_spectra(&self, spectra: &Part, src: Option<usize>, out: &mut Vec<Complex32>) {
+    /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout;
+    /// the buffers are reused across slabs.
+    fn grid_spectra<'b>(
+        &self,
+        spectra: &Part,
+        src: Option<usize>,
+        buf: &'b mut GridBuffers,
+        pool: &[Mutex<Workspace>],
+    ) -> &'b [Complex32] {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
         let (gnx, gny) = (self.grid.nx, self.grid.ny);
         let cells = gnx * gny;
         let nb = spectra.band.len();
-        // Frequency-major copy of the grid's spectra, so each frequency reads contiguous memory. Split
-        // by frequency ranges, and transposed in tiles of cells so reads and writes stay in cache.
-        const TILE: usize = 64;
-        let mut by_freq = vec![Complex32::default(); nb * cells];
+        // Frequency-major copy of the grid's spectra, so each frequency reads contiguous memory;
+        // split by frequency ranges so each task reads one contiguous run per histogram.
+        let by_freq = &mut buf.by_freq;
+        by_freq.resize(nb * cells, Complex32::default());
         let per_task = nb.div_ceil(4 * rayon::current_num_threads()).max(1);
-        by_freq
+        by_freq[..nb * cells]
             .par_chunks_mut(per_task * cells)
             .enumerate()
             .for_each(|(task, block)| {
-                let j0 = task * per_task;
-                let nj = block.len() / cells;
-                for c0 in (0..cells).step_by(TILE) {
-                    let tile = c0..(c0 + TILE).min(cells);
-                    let rows: Vec<&[Complex32]> = tile
-                        .clone()
-                        .map(|cell| &spectra.hist(self.hist_index(cell, src))[j0..j0 + nj])
-                        .collect();
-                    for dj in 0..nj {
-                        for (d, row) in block[dj * cells + c0..][..rows.len()].iter_mut().zip(&rows)
-                        {
-                            *d = row[dj];
-                        }
+                let (j0, nj) = (task * per_task, block.len() / cells);
+                for cell in 0..cells {
+                    let h = &spectra.hist(self.hist_index(cell, src))[j0..j0 + nj];
+                    for (dj, v) in h.iter().enumerate() {
+                        block[dj * cells + cell] = *v;
                     }
                 }
             });
+        let out = &mut buf.spec;
         out.resize(nb * fx * fy, Complex32::default());
         out[..nb * fx * fy]
             .par_chunks_mut(fx * fy)
-            .zip(by_freq.par_chunks(cells))
-            .for_each_init(
-                || (vec![Complex32::default(); fx * fy], self.fft.scratch()),
-                |(a, scratch), (t, cells)| {
-                    // Rows x ≥ gnx stay zero: only the grid's rows are written and transformed.
-                    for ix in 0..gnx {
-                        let row = &mut a[ix * fy..(ix + 1) * fy];
-                        row[..gny].copy_from_slice(&cells[ix * gny..(ix + 1) * gny]);
-                        row[gny..]
-                            .iter_mut()
-                            .for_each(|v| *v = Complex32::default());
-                    }
-                    self.fft.forward_rows(a, gnx, t, scratch);
-                    // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
-                    let norm = 1.0 / (fx * fy) as f32;
-                    match &self.fold {
-                        Some(f) => {
-                            for (row, py) in t.chunks_mut(fx).zip(&f.py) {
-                                let py = py * norm;
-                                for (v, px) in row.iter_mut().zip(&f.px) {
-                                    *v *= px * py;
-                                }
+            .zip(by_freq[..nb * cells].par_chunks(cells))
+            .for_each(|(t, cells)| {
+                let mut ws = lock(pool);
+                let Workspace {
+                    grid_in: a,
+                    scratch,
+                    ..
+                } = &mut *ws;
+                // Rows x ≥ gnx stay zero: only the grid's rows are written and transformed.
+                for ix in 0..gnx {
+                    let row = &mut a[ix * fy..(ix + 1) * fy];
+                    row[..gny].copy_from_slice(&cells[ix * gny..(ix + 1) * gny]);
+                    row[gny..]
+                        .iter_mut()
+                        .for_each(|v| *v = Complex32::default());
+                }
+                self.fft.forward_rows(a, gnx, t, scratch);
+                // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
+                let norm = 1.0 / (fx * fy) as f32;
+                match &self.fold {
+                    Some(f) => {
+                        for (row, py) in t.chunks_mut(fx).zip(&f.py) {
+                            let py = py * norm;
+                            for (v, px) in row.iter_mut().zip(&f.px) {
+                                *v *= px * py;
                             }
                         }
-                        None => t.iter_mut().for_each(|v| *v *= norm),
                     }
-                },
-            );
+                    None => t.iter_mut().for_each(|v| *v *= norm),
+                }
+            });
+        &out[..nb * fx * fy]
     }
 
     fn plane(
@@ -665,8 +668,24 @@ fn c32(v: Complex64) -> Complex32 {
     Complex32::new(v.re as f32, v.im as f32)
 }
 
+/// The calling worker thread's workspace (uncontended: one slot per thread, and no rayon call is
+/// made while it is held).
+fn lock(pool: &[Mutex<Workspace>]) -> std::sync::MutexGuard<'_, Workspace> {
+    let slot = rayon::current_thread_index().unwrap_or(0) % pool.len();
+    pool[slot].lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The grid's spectra: the frequency-major copy and its FFT2s, kept across slabs.
+#[derive(Default)]
+struct GridBuffers {
+    by_freq: Vec<Complex32>,
+    spec: Vec<Complex32>,
+}
+
 /// Per-thread buffers, reused across planes and frequencies.
 struct Workspace {
+    /// The grid's spectrum at one frequency, zero-padded: rows x ≥ the grid's stay zero.
+    grid_in: Vec<Complex32>,
     g: Vec<Complex32>,
     t: Vec<Complex32>,
     scratch: Vec<Complex32>,
@@ -692,6 +711,7 @@ impl Workspace {
         let (fx, fy) = (plan.fft.fx, plan.fft.fy);
         let nv = plan.vol.x.n * plan.vol.y.n;
         Workspace {
+            grid_in: vec![Complex32::default(); fx * fy],
             g: vec![Complex32::default(); fx * fy],
             t: vec![Complex32::default(); fx * fy],
             scratch: plan.fft.scratch(),

@@ -66,8 +66,8 @@ impl Band {
 
 /// Band-limited spectra of every histogram for several [`Window`]s, computed in one pass over the
 /// data (reading the histograms dominates, not the transforms).
-pub struct Spectra {
-    bands: Vec<Band>,
+pub struct Spectra<'w> {
+    windows: &'w [Window],
     /// `[hist][window][j]`: W_j·Ĥ_j·exp(ik_j(e_l + e_s − s_pad0)) / nf, so that a voxel's value is
     /// Σ_j spec[j]·exp(ik_j(d_l + d_s)) summed over histograms.
     spec: Vec<Complex32>,
@@ -76,11 +76,11 @@ pub struct Spectra {
     stride: usize,
 }
 
-impl Spectra {
+impl Spectra<'_> {
     /// The spectra of window `w`.
     pub fn part(&self, w: usize) -> Part<'_> {
         Part {
-            band: &self.bands[w],
+            band: &self.windows[w].band,
             spec: &self.spec,
             offset: self.offsets[w],
             stride: self.stride,
@@ -185,11 +185,12 @@ pub fn next_fast_len(n: usize) -> usize {
 /// wrapped) to a fast DFT length, and the pulse's band on that DFT's grid.
 pub struct Window {
     pub band: Band,
-    /// Bins `i_lo..i_hi` of the data are used.
+    /// Bins `i_lo..i_hi` of the data are used; they start at `lead` in the padded window.
     i_lo: usize,
     i_hi: usize,
-    /// Data bin at padded index 0 (may be negative).
-    first_bin: i64,
+    lead: usize,
+    /// Path at the centre of the padded window's first sample.
+    s_pad0_m: f64,
     /// True when the data's time window misses part of the paths (zeros are used there).
     pub truncated: bool,
     /// True when no data bin falls within the paths at all.
@@ -231,11 +232,13 @@ impl Window {
                 "no frequency of the virtual pulse (λ = {wavelength_m} m) fits the {dt} m bins"
             )));
         }
+        let first_bin = want_lo - pad as i64;
         Ok(Window {
             band,
             i_lo,
             i_hi,
-            first_bin: want_lo - pad as i64,
+            lead: (i_lo as i64 - first_bin) as usize,
+            s_pad0_m: t.start_m + (first_bin as f64 + 0.5) * dt,
             truncated: want_lo < 0 || want_hi > t.bins as i64,
             empty: i_lo >= i_hi,
         })
@@ -244,7 +247,7 @@ impl Window {
 
 /// Transforms every histogram over each window and keeps the windows' bands, path offsets applied as
 /// exact phases.
-pub fn spectra(cap: &Capture, windows: &[Window]) -> Spectra {
+pub fn spectra<'w>(cap: &Capture, windows: &'w [Window]) -> Spectra<'w> {
     let mut offsets = Vec::with_capacity(windows.len());
     let mut stride = 0;
     for w in windows {
@@ -259,7 +262,6 @@ pub fn spectra(cap: &Capture, windows: &[Window]) -> Spectra {
             .map(|w| planner.plan_fft_forward(w.band.nf))
             .collect()
     };
-    let dt = cap.time.bin_width_m;
     spec.par_chunks_mut(stride.max(1))
         .enumerate()
         .for_each_init(
@@ -277,7 +279,7 @@ pub fn spectra(cap: &Capture, windows: &[Window]) -> Spectra {
             |bufs, (i, row)| {
                 let h = cap.histogram(i);
                 let (l, s) = cap.hist_pair(i);
-                let offsets_m = cap.first_bounce_m(l) + cap.last_bounce_m(s);
+                let bounces_m = cap.first_bounce_m(l) + cap.last_bounce_m(s);
                 for (((w, fft), (input, output, scratch)), &o) in
                     windows.iter().zip(&ffts).zip(bufs.iter_mut()).zip(&offsets)
                 {
@@ -285,16 +287,13 @@ pub fn spectra(cap: &Capture, windows: &[Window]) -> Spectra {
                         continue;
                     }
                     let band = &w.band;
-                    let (i_lo, i_hi) = (w.i_lo, w.i_hi);
-                    let off = (i_lo as i64 - w.first_bin) as usize;
-                    let n = i_hi - i_lo;
-                    input[..off].iter_mut().for_each(|v| *v = 0.0);
-                    input[off + n..].iter_mut().for_each(|v| *v = 0.0);
-                    input[off..off + n].copy_from_slice(&h[i_lo..i_hi]);
+                    let (lead, n) = (w.lead, w.i_hi - w.i_lo);
+                    input[..lead].iter_mut().for_each(|v| *v = 0.0);
+                    input[lead + n..].iter_mut().for_each(|v| *v = 0.0);
+                    input[lead..lead + n].copy_from_slice(&h[w.i_lo..w.i_hi]);
                     fft.process_with_scratch(input, output, scratch)
                         .expect("realfft lengths match their plan");
-                    let s_pad0 = cap.time.start_m + (w.first_bin as f64 + 0.5) * dt;
-                    let shift = offsets_m - s_pad0;
+                    let shift = bounces_m - w.s_pad0_m;
                     // exp(ik_j·shift) by recurrence from k_0 (f64: no drift over a band), times the
                     // pulse weight and the 1/nf scale.
                     let mut ph = Complex64::from_polar(1.0 / band.nf as f64, band.k(0) * shift);
@@ -312,7 +311,7 @@ pub fn spectra(cap: &Capture, windows: &[Window]) -> Spectra {
             },
         );
     Spectra {
-        bands: windows.iter().map(|w| w.band.clone()).collect(),
+        windows,
         spec,
         offsets,
         stride,
