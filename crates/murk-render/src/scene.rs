@@ -96,8 +96,9 @@ pub struct RenderDef {
     pub spp: u64,
     /// Most hidden vertices (surface or medium) on a path; 1 = third-bounce NLOS only.
     pub max_depth: u32,
-    /// Russian roulette from this many hidden vertices on.
-    pub rr_depth: u32,
+    /// Russian roulette from this many hidden vertices on. Default: 5 where no medium scatters, else none
+    /// (see the integrator).
+    pub rr_depth: Option<u32>,
     /// Standard deviation (m of path) of a Gaussian SPAD timing jitter added before binning; 0 = box.
     pub time_jitter: f64,
     /// Probability of sampling the first direction toward the hidden geometry (mixed with cosine sampling).
@@ -109,9 +110,10 @@ pub struct RenderDef {
     pub first_vertex_survival: Option<f64>,
     /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight.
     pub equiangular: bool,
-    /// Medium distances drawn so the connected path lands uniformly in the capture's time window (MIS-combined
-    /// with equiangular and free flight); used where the medium's ior is 1.
-    pub time_sampling: bool,
+    /// Medium distances per segment and target drawn so the connected path lands uniformly in the capture's
+    /// time window, stratified (MIS-combined with equiangular and free flight); used where the medium's ior
+    /// is 1. 0: off.
+    pub time_samples: u32,
     /// Medium vertices also drawn from the wall points' side (cosine lobe, equiangular toward the path
     /// vertex), MIS-combined with the path side: removes the fireflies of fog paths passing near a wall point.
     pub target_sampling: bool,
@@ -123,12 +125,12 @@ impl Default for RenderDef {
         RenderDef {
             spp: 256,
             max_depth: 8,
-            rr_depth: 5,
+            rr_depth: None,
             time_jitter: 0.0,
             hidden_geometry_sampling: None,
             first_vertex_survival: None,
             equiangular: true,
-            time_sampling: false,
+            time_samples: 0,
             target_sampling: true,
             trace_from: TraceFrom::Auto,
         }

@@ -94,9 +94,16 @@ fn first_bounce_of_a_small_patch() {
 
 /// One laser point and one SPAD point 0.4 m apart under an unbounded (40 m) medium, single scattering only:
 /// the histogram summed over 0.2 m windows against a Gauss–Legendre quadrature of
-/// H = ∫ (cos_s/π) σs e^{−σt t} p(ω·w) e^{−σt r_l} cos_l/(π r_l²) dt dω, within 3 %.
+/// H = ∫ (cos_s/π) σs e^{−σt t} p(ω·w) e^{−σt r_l} cos_l/(π r_l²) dt dω, within 3 %; with and without
+/// stratified time-window distances.
 #[test]
 fn single_scattering_matches_quadrature() {
+    for time_samples in [0, 3] {
+        single_scattering_case(time_samples);
+    }
+}
+
+fn single_scattering_case(time_samples: u32) {
     let (mu_t, alb, g) = (1.0, 0.5, 0.3);
     let s = scene(&format!(
         r#"
@@ -115,6 +122,7 @@ fn single_scattering_matches_quadrature() {
         start = 0.4
         [render]
         max_depth = 1
+        time_samples = {time_samples}
         [medium]
         mu_t = {mu_t}
         albedo = {alb}
@@ -161,7 +169,7 @@ fn single_scattering_matches_quadrature() {
         let q = window(a, b);
         assert!(
             (mc / q - 1.0).abs() < 0.03,
-            "window [{a:.1}, {b:.1}]: MC {mc:e} vs quadrature {q:e}"
+            "time_samples {time_samples}, window [{a:.1}, {b:.1}]: MC {mc:e} vs quadrature {q:e}"
         );
     }
 }
