@@ -4,9 +4,10 @@
 //! Sampling (see `integrator`): deterministic connections from every hidden vertex to the wall points of
 //! the other side (the laser spot is a point emitter, the SPAD point a point sensor), hidden-geometry
 //! sampling of the first direction mixed with cosine sampling (one-sample MIS with the exact mixture pdf),
-//! free-flight and Henyey–Greenstein sampling, equiangular sampling toward the wall points on every
-//! medium segment and target-side sampling of medium vertices from the wall points, all combined with free
-//! flight by the balance heuristic, Russian roulette and a depth cap.
+//! free-flight and Henyey–Greenstein sampling, target-side sampling of medium vertices from the wall
+//! points, and (opt-in) equiangular and stratified time-window distances toward the wall points on every
+//! medium segment, all combined with free flight by the balance heuristic; Russian roulette (surfaces only)
+//! and a depth cap.
 //! For many laser points and one SPAD point paths start at the laser points (reciprocity), so every
 //! vertex makes one connection instead of one per laser point.
 

@@ -108,7 +108,9 @@ pub struct RenderDef {
     /// Probability that a path goes on past its first hidden vertex (weighted by its inverse). Default: 0.1
     /// where no medium scatters (the direct return needs only the first vertex; see the integrator), else 1.
     pub first_vertex_survival: Option<f64>,
-    /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight.
+    /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight. Off by
+    /// default: with target-side sampling and without Russian roulette it cost more than it removed
+    /// (see the integrator).
     pub equiangular: bool,
     /// Medium distances per segment and target drawn so the connected path lands uniformly in the capture's
     /// time window, stratified (MIS-combined with equiangular and free flight); used where the medium's ior
@@ -129,7 +131,7 @@ impl Default for RenderDef {
             time_jitter: 0.0,
             hidden_geometry_sampling: None,
             first_vertex_survival: None,
-            equiangular: true,
+            equiangular: false,
             time_samples: 0,
             target_sampling: true,
             trace_from: TraceFrom::Auto,

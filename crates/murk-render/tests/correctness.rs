@@ -94,16 +94,16 @@ fn first_bounce_of_a_small_patch() {
 
 /// One laser point and one SPAD point 0.4 m apart under an unbounded (40 m) medium, single scattering only:
 /// the histogram summed over 0.2 m windows against a Gauss–Legendre quadrature of
-/// H = ∫ (cos_s/π) σs e^{−σt t} p(ω·w) e^{−σt r_l} cos_l/(π r_l²) dt dω, within 3 %; with and without
-/// stratified time-window distances.
+/// H = ∫ (cos_s/π) σs e^{−σt t} p(ω·w) e^{−σt r_l} cos_l/(π r_l²) dt dω, within 3 %; with the default
+/// techniques and with equiangular and stratified time-window distances added.
 #[test]
 fn single_scattering_matches_quadrature() {
-    for time_samples in [0, 3] {
-        single_scattering_case(time_samples);
+    for (time_samples, equiangular) in [(0, false), (3, true)] {
+        single_scattering_case(time_samples, equiangular);
     }
 }
 
-fn single_scattering_case(time_samples: u32) {
+fn single_scattering_case(time_samples: u32, equiangular: bool) {
     let (mu_t, alb, g) = (1.0, 0.5, 0.3);
     let s = scene(&format!(
         r#"
@@ -123,6 +123,7 @@ fn single_scattering_case(time_samples: u32) {
         [render]
         max_depth = 1
         time_samples = {time_samples}
+        equiangular = {equiangular}
         [medium]
         mu_t = {mu_t}
         albedo = {alb}
