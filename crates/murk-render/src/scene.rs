@@ -119,6 +119,10 @@ pub struct RenderDef {
     /// Medium vertices also drawn from the wall points' side (cosine lobe, equiangular toward the path
     /// vertex), MIS-combined with the path side: removes the fireflies of fog paths passing near a wall point.
     pub target_sampling: bool,
+    /// Segments starting within `target_split_radius` (m) of a target get up to this many target-side
+    /// draws toward it (∝ radius/distance; counted as n·pdf in the balance weights). 1: off.
+    pub target_split: u32,
+    pub target_split_radius: f64,
     pub trace_from: TraceFrom,
 }
 
@@ -134,6 +138,8 @@ impl Default for RenderDef {
             equiangular: false,
             time_samples: 0,
             target_sampling: true,
+            target_split: 64,
+            target_split_radius: 0.5,
             trace_from: TraceFrom::Auto,
         }
     }
