@@ -234,63 +234,84 @@ fn pure_absorber_scales_by_transmittance() {
 #[test]
 fn reciprocity_laser_and_sensor_tracing_agree() {
     let mk = |from: &str| {
-        scene(&format!(
-            r#"
-            [relay]
-            kind = "wall"
-            size = [1.0, 1.0]
-            albedo = 0.5
-            [capture]
-            kind = "laser-grid"
-            grid = [3, 3]
-            extent = [0.8, 0.8]
-            spad_point = [0.1, 0.05]
-            bins = 30
-            bin_width = 0.15
-            start = 0.0
-            [render]
-            trace_from = "{from}"
-            [medium]
-            mu_t = 0.5
-            albedo = 0.8
-            g = 0.3
-            min = [-1.5, -1.5, 0.001]
-            max = [1.5, 1.5, 2.5]
-            {T_LETTER}
-            "#
-        ))
+        fog_t_scene(
+            0.5,
+            "grid = [3, 3]\nextent = [0.8, 0.8]\nspad_point = [0.1, 0.05]\nbin_width = 0.15",
+            &format!("trace_from = \"{from}\""),
+            "mu_t = 0.5\nalbedo = 0.8\ng = 0.3",
+        )
     };
     let (la, se) = (mk("laser"), mk("sensor"));
     let a = render(&la, 80_000, 4).h;
     let a2 = render(&la, 20_000, 5).h;
     let b = render(&se, 720_000, 6).h;
-    for hist in 0..9 {
+    assert_same_expectation(
+        &a,
+        &a2,
+        &b,
+        30,
+        0.06,
+        9.0,
+        ("laser-traced", "sensor-traced"),
+    );
+}
+
+/// The T letter 1 m behind a 1 m × 1 m relay wall of `relay_albedo`, in fog filling the box of
+/// mitransient.md §7.2; a laser grid with one SPAD point, 30 bins from 0. The other keys are TOML lines.
+fn fog_t_scene(relay_albedo: f64, capture: &str, render: &str, medium: &str) -> Scene {
+    scene(&format!(
+        r#"
+        [relay]
+        kind = "wall"
+        size = [1.0, 1.0]
+        albedo = {relay_albedo}
+        [capture]
+        kind = "laser-grid"
+        bins = 30
+        start = 0.0
+        {capture}
+        [render]
+        {render}
+        [medium]
+        min = [-1.5, -1.5, 0.001]
+        max = [1.5, 1.5, 2.5]
+        {medium}
+        {T_LETTER}
+        "#
+    ))
+}
+
+/// Two estimators of one H: every histogram's sum agrees within `tol`, and the squared difference
+/// between `a` and `b` is below `k`× that between two seeds `a`, `a2` of the first.
+fn assert_same_expectation(
+    a: &[f32],
+    a2: &[f32],
+    b: &[f32],
+    bins: usize,
+    tol: f64,
+    k: f64,
+    (name_a, name_b): (&str, &str),
+) {
+    for hist in 0..a.len() / bins {
         let sum = |h: &[f32]| {
-            h[hist * 30..(hist + 1) * 30]
+            h[hist * bins..(hist + 1) * bins]
                 .iter()
                 .map(|v| *v as f64)
                 .sum::<f64>()
         };
-        let (x, y) = (sum(&a), sum(&b));
+        let (x, y) = (sum(a), sum(b));
         assert!(
-            (x / y - 1.0).abs() < 0.06,
-            "histogram {hist}: laser-traced {x:e}, sensor-traced {y:e}"
+            (x / y - 1.0).abs() < tol,
+            "histogram {hist}: {name_a} {x:e}, {name_b} {y:e}"
         );
     }
-    // Difference between the two directions vs the spread between two seeds of one direction.
-    let d2: f64 = a
-        .iter()
-        .zip(&b)
-        .map(|(x, y)| ((x - y) as f64).powi(2))
-        .sum();
-    let n2: f64 = a
-        .iter()
-        .zip(&a2)
-        .map(|(x, y)| ((x - y) as f64).powi(2))
-        .sum();
+    let dist2 = |u: &[f32], v: &[f32]| -> f64 {
+        u.iter().zip(v).map(|(x, y)| ((x - y) as f64).powi(2)).sum()
+    };
+    let (d2, n2) = (dist2(a, b), dist2(a, a2));
     assert!(
-        d2 < 9.0 * n2,
-        "direction difference² {d2:e} vs seed noise² {n2:e}"
+        d2 < k * n2,
+        "{name_a} vs {name_b} difference² {d2:e} vs seed noise² {n2:e}"
     );
 }
 
@@ -300,64 +321,18 @@ fn reciprocity_laser_and_sensor_tracing_agree() {
 #[test]
 fn target_split_keeps_the_expectation() {
     let mk = |split: u32| {
-        scene(&format!(
-            r#"
-            [relay]
-            kind = "wall"
-            size = [1.0, 1.0]
-            albedo = 1.0
-            [capture]
-            kind = "laser-grid"
-            grid = [2, 2]
-            extent = [0.4, 0.4]
-            spad_point = [0.0, 0.0]
-            bins = 30
-            bin_width = 0.1
-            start = 0.0
-            [render]
-            max_depth = 4
-            target_split = {split}
-            target_split_radius = 0.5
-            [medium]
-            mu_t = 1.0
-            albedo = 0.8
-            min = [-1.5, -1.5, 0.001]
-            max = [1.5, 1.5, 2.5]
-            {T_LETTER}
-            "#
-        ))
+        fog_t_scene(
+            1.0,
+            "grid = [2, 2]\nextent = [0.4, 0.4]\nspad_point = [0.0, 0.0]\nbin_width = 0.1",
+            &format!("max_depth = 4\ntarget_split = {split}\ntarget_split_radius = 0.5"),
+            "mu_t = 1.0\nalbedo = 0.8",
+        )
     };
     let (off, on) = (mk(1), mk(64));
     let a = render(&off, 200_000, 11).h;
     let a2 = render(&off, 200_000, 12).h;
     let b = render(&on, 200_000, 13).h;
-    for hist in 0..4 {
-        let sum = |h: &[f32]| {
-            h[hist * 30..(hist + 1) * 30]
-                .iter()
-                .map(|v| *v as f64)
-                .sum::<f64>()
-        };
-        let (x, y) = (sum(&a), sum(&b));
-        assert!(
-            (x / y - 1.0).abs() < 0.03,
-            "histogram {hist}: unsplit {x:e}, split {y:e}"
-        );
-    }
-    let d2: f64 = a
-        .iter()
-        .zip(&b)
-        .map(|(x, y)| ((x - y) as f64).powi(2))
-        .sum();
-    let n2: f64 = a
-        .iter()
-        .zip(&a2)
-        .map(|(x, y)| ((x - y) as f64).powi(2))
-        .sum();
-    assert!(
-        d2 < 2.0 * n2,
-        "split vs unsplit difference² {d2:e} vs seed noise² {n2:e}"
-    );
+    assert_same_expectation(&a, &a2, &b, 30, 0.03, 2.0, ("unsplit", "split"));
 }
 
 /// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 64 000-spp reference
