@@ -120,7 +120,7 @@ pub struct RenderDef {
     /// vertex), MIS-combined with the path side: removes the fireflies of fog paths passing near a wall point.
     pub target_sampling: bool,
     /// Segments starting within `target_split_radius` (m) of a target get up to this many target-side
-    /// draws toward it (∝ radius/distance; counted as n·pdf in the balance weights). 1: off.
+    /// draws toward it (∝ radius/distance; counted as n·pdf in the balance weights). 0 or 1: off.
     pub target_split: u32,
     pub target_split_radius: f64,
     pub trace_from: TraceFrom,
@@ -437,6 +437,21 @@ impl Scene {
             return Err(bad(
                 "render.hidden_geometry_sampling",
                 format!("must be in [0, 1], got {p}"),
+            ));
+        }
+        // Per-segment draw counts: capped so a typo cannot stall a render.
+        for (field, n) in [
+            ("render.time_samples", s.time_samples),
+            ("render.target_split", s.target_split),
+        ] {
+            if n > 4096 {
+                return Err(bad(field, format!("must be at most 4096, got {n}")));
+            }
+        }
+        if !(s.target_split_radius.is_finite() && s.target_split_radius >= 0.0) {
+            return Err(bad(
+                "render.target_split_radius",
+                format!("must be ≥ 0 m, got {}", s.target_split_radius),
             ));
         }
         if let Some(p) = s.first_vertex_survival.filter(|p| !(*p > 0.0 && *p <= 1.0)) {

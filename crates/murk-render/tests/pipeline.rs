@@ -123,6 +123,21 @@ fn bad_scenes_name_file_and_field() {
             "bins = 64\nstart = 50.0",
             "capture.bins/bin_width/start",
         ),
+        (
+            "[medium]",
+            "[render]\ntime_samples = 100000\n[medium]",
+            "render.time_samples",
+        ),
+        (
+            "[medium]",
+            "[render]\ntarget_split = 5000\n[medium]",
+            "render.target_split",
+        ),
+        (
+            "[medium]",
+            "[render]\ntarget_split_radius = -0.1\n[medium]",
+            "render.target_split_radius",
+        ),
         ("kind = \"wall\"", "kind = \"wal\"", "line 3"),
         ("[capture]", "[capture\n", "line"),
         (
