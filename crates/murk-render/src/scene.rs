@@ -108,6 +108,9 @@ pub struct RenderDef {
     /// Probability that a path goes on past its first hidden vertex (weighted by its inverse). Default: 0.1
     /// where no medium scatters (the direct return needs only the first vertex; see the integrator), else 1.
     pub first_vertex_survival: Option<f64>,
+    /// Medium vertices also connect to the other side through a uniform point of the hidden geometry
+    /// (next-event estimation of the object return after scattering), MIS-combined with the phase direction.
+    pub object_connections: bool,
     /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight. Off by
     /// default: with target-side sampling and without Russian roulette it cost more than it removed
     /// (see the integrator).
@@ -135,6 +138,7 @@ impl Default for RenderDef {
             time_jitter: 0.0,
             hidden_geometry_sampling: None,
             first_vertex_survival: None,
+            object_connections: true,
             equiangular: false,
             time_samples: 0,
             target_sampling: true,
