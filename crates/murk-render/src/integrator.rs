@@ -45,7 +45,8 @@
 //! - Medium vertices also connect through a uniform point of the hidden geometry (`object_connections`,
 //!   MIS with the phase direction): on z-letter the object return after one scattering event came from
 //!   rare phase directions meeting the Z (18 % of the second moment from 0.1 % of the samples); relL2 at
-//!   128 spp 2.79 → 2.38 for 15 % more CPU per path (8.5 → 7.3 CPU-h); t-wall-medium unchanged.
+//!   128 spp 2.79 → 2.38 for 15 % more CPU per path (8.5 → 7.3 CPU-h). On t-wall-medium (relL2 1.10 → 1.01
+//!   for ~40 % more CPU per path) it pays nothing, so that scene turns it off.
 //! - Equiangular distances toward the targets are off by default (`equiangular`): once target-side
 //!   sampling handles the points near a target and roulette is gone, they took a third of the CPU time
 //!   for no lower error. t-wall-medium (median of 7 seeds, 256 spp): relL2 1.35 at 0.90 CPU-s with them,
