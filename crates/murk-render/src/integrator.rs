@@ -748,14 +748,39 @@ impl<'a> Tracer<'a> {
         if p_h <= 0.0 || ph <= 0.0 {
             return;
         }
-        let l = m.overlap(x, w, h.t);
-        let b = beta * ph / (ph + p_h) * (-m.sigma_t * l).exp();
+        let b = beta * ph / (ph + p_h);
+        self.connect_hit(x, w, &h, b, opl, targets, s, out);
+    }
+
+    /// Transmittance along `o + t·d`, t ∈ [0, t_max], and the optical path the medium adds to it.
+    fn transmit(&self, o: DVec3, d: DVec3, t_max: f64) -> (f64, f64) {
+        self.medium().map_or((1.0, 0.0), |m| {
+            let l = m.overlap(o, d, t_max);
+            ((-m.sigma_t * l).exp(), (m.ior - 1.0) * l)
+        })
+    }
+
+    /// Connects the surface hit `h` of the ray `x + t·w` to every target, through the transmittance of
+    /// the segment from `x` (reached with throughput `beta` at optical path `opl`).
+    #[allow(clippy::too_many_arguments)]
+    fn connect_hit(
+        &self,
+        x: DVec3,
+        w: DVec3,
+        h: &Hit,
+        beta: f64,
+        opl: f64,
+        targets: &[Endpoint],
+        s: &mut Sampler,
+        out: &mut [f64],
+    ) {
+        let (tr, extra) = self.transmit(x, w, h.t);
         let v = Vertex::Surface {
             n: h.n,
             albedo: h.albedo,
         };
-        let o = opl + h.t + (m.ior - 1.0) * l;
-        self.connect(x + w * h.t, x, &v, b, o, targets, |_| 1.0, s, out);
+        let o = opl + h.t + extra;
+        self.connect(x + w * h.t, x, &v, beta * tr, o, targets, |_| 1.0, s, out);
     }
 
     /// Connects vertex `y` (reached with throughput `beta` at optical path `opl`) to every target.
@@ -787,13 +812,7 @@ impl<'a> Tracer<'a> {
             if f <= 0.0 || (tgt.p != seen && self.scene.geometry.occluded(y, w, r)) {
                 continue;
             }
-            let (tr, extra) = match self.medium() {
-                Some(m) => {
-                    let l = m.overlap(y, w, r);
-                    ((-m.sigma_t * l).exp(), (m.ior - 1.0) * l)
-                }
-                None => (1.0, 0.0),
-            };
+            let (tr, extra) = self.transmit(y, w, r);
             let value = beta * f * tr * cos_t / (PI * r2) * mis(k);
             self.splat(out, k, opl + r + extra + tgt.extra_m, value, s);
         }
@@ -891,13 +910,12 @@ impl<'a> Tracer<'a> {
                             let n_time = seg[k].time.as_ref().map_or(0, |e| e.n);
                             // Draw 0 is equiangular, draws 1..=n_time the time window's strata.
                             for j in 0..=n_time {
-                                let draw = match (j, &seg[k].equi, &seg[k].time) {
-                                    (0, Some(e), _) => e.sample(s.next()),
-                                    (0, None, _) => continue,
-                                    (_, _, Some(e)) => e.sample(j - 1, s.next()),
-                                    _ => continue,
+                                let draw = if j == 0 {
+                                    seg[k].equi.as_ref().map(|e| e.sample(s.next()))
+                                } else {
+                                    seg[k].time.as_ref().map(|e| e.sample(j - 1, s.next()))
                                 };
-                                let (t, pdf) = draw;
+                                let Some((t, pdf)) = draw else { continue };
                                 if !(t >= m0 && t <= m1 && pdf > 0.0) {
                                     continue;
                                 }
@@ -924,23 +942,8 @@ impl<'a> Tracer<'a> {
                         // path toward the hidden object contributes its return; a pass below does not connect
                         // again.
                         if let Some((h, false)) = hit {
-                            let tr = (-m.sigma_t * medium_len).exp();
-                            let v = Vertex::Surface {
-                                n: h.n,
-                                albedo: h.albedo,
-                            };
-                            let o = opl + h.t + (m.ior - 1.0) * medium_len;
-                            self.connect(
-                                pos + d * h.t,
-                                from.x,
-                                &v,
-                                beta * tr * self.object_weight(&from, d),
-                                o,
-                                targets,
-                                |_| 1.0,
-                                s,
-                                out,
-                            );
+                            let b = beta * self.object_weight(&from, d);
+                            self.connect_hit(pos, d, &h, b, opl, targets, s, out);
                             connected = true;
                         }
                         // Free flight: scatter with density σt·exp(−σt·(t − m0)), else cross (weight T/P = 1).

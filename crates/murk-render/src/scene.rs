@@ -125,6 +125,7 @@ pub struct RenderDef {
     /// Segments starting within `target_split_radius` (m) of a target get up to this many target-side
     /// draws toward it (∝ radius/distance; counted as n·pdf in the balance weights). 0 or 1: off.
     pub target_split: u32,
+    /// Distance (m) from a target within which `target_split` applies; 0: off.
     pub target_split_radius: f64,
     pub trace_from: TraceFrom,
 }
