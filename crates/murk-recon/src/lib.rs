@@ -6,6 +6,7 @@
 //! P0(s) = exp(i2πs/λ)·exp(−s²/2σ²) normalised so its spectrum is 1 at 1/λ, and σ = cycles·λ/6.
 //! Phases are computed in f64, fields stored in f32.
 
+mod cmul;
 mod compensation;
 mod fft2;
 mod pf_exact;

@@ -4,6 +4,7 @@
 //! phase afterwards; confocal captures use the round-trip kernel e^{2ikr}. Volumes whose lateral samples
 //! are not on the wall lattice read the convolution through a windowed-sinc resampler.
 
+use crate::cmul;
 use crate::fft2::Fft2;
 use crate::resample::Resampler;
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
@@ -404,7 +405,7 @@ impl<'a> Plan<'a> {
         // Exact phase of the point-side leg, per voxel.
         for ix in 0..nx {
             for iy in 0..ny {
-                let i = ix * ny + iy;
+                let i = iy * nx + ix;
                 match src {
                     Some(s) => {
                         let v = DVec3::new(self.vol.x.at(ix), self.vol.y.at(iy), z);
@@ -428,6 +429,7 @@ impl<'a> Plan<'a> {
                 .iter_mut()
                 .for_each(|v| *v = Complex32::default());
         }
+        // Summed field, y-major like `ws.field`.
         let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
             if self.fold.is_some() {
@@ -450,59 +452,37 @@ impl<'a> Plan<'a> {
                 );
                 self.fft.forward(&mut ws.g, &mut ws.t, &mut ws.scratch);
             }
-            wide(
-                #[inline(always)]
-                || {
-                    for (c, s) in ws.tcur.iter_mut().zip(&ws.tstep) {
-                        *c *= s;
-                    }
-                },
-            );
+            cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
+            if self.fold.is_some() {
+                self.folded_product(ws, h);
+            } else {
+                cmul::mul_assign(&mut ws.t, h);
+            }
             if confocal {
                 wide(
                     #[inline(always)]
-                    || {
-                        for ((a, t), h) in ws.spec_acc.iter_mut().zip(&ws.t).zip(h) {
-                            *a += t * h;
-                        }
-                    },
+                    || ws.spec_acc.iter_mut().zip(&ws.t).for_each(|(a, t)| *a += t),
                 );
                 continue;
             }
-            wide(
-                #[inline(always)]
-                || {
-                    for (t, h) in ws.t.iter_mut().zip(h) {
-                        *t *= h;
-                    }
-                },
-            );
             self.fft
                 .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
-            self.resample(ws, ny, nx, vy, gnx, gny, fy);
-            // Exact phase of the point-side leg; straight loops over f32 so they vectorise.
-            wide(
-                #[inline(always)]
-                || {
-                    for ((a, f), (pb, ps)) in acc
-                        .iter_mut()
-                        .zip(&ws.field)
-                        .zip(ws.pbase.iter_mut().zip(&ws.pstep))
-                    {
-                        *a += f * *pb;
-                        *pb *= ps;
-                    }
-                },
-            );
+            self.resample(ws, nx, vy, gnx, gny, fy);
+            // Exact phase of the point-side leg.
+            cmul::mul_add(&mut acc, &ws.field, &ws.pbase);
+            cmul::mul_assign(&mut ws.pbase, &ws.pstep);
         }
         if confocal {
             self.fft
                 .inverse_rows(&mut ws.spec_acc, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
-            self.resample(ws, ny, nx, vy, gnx, gny, fy);
+            self.resample(ws, nx, vy, gnx, gny, fy);
             acc.copy_from_slice(&ws.field);
         }
-        acc
+        // The voxels' order in the volume: x-major.
+        let mut out = vec![Complex32::default(); nx * ny];
+        transpose::transpose(&acc, &mut out, nx, ny);
+        out
     }
 }
 
@@ -537,12 +517,13 @@ fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
 }
 
 impl Plan<'_> {
-    /// The kernel's spectrum at the current frequency into `ws.t` ([ky][kx]) for a symmetric support
-    /// (see [`Fold`]): transforms along y only the distinct rows |dx| ≤ cx, keeps ky ≤ fy/2, transforms
-    /// those columns along x, keeps kx ≤ fx/2, and unfolds by mirroring (the phases live in the data).
+    /// The kernel's spectrum at the current frequency for a symmetric support (see [`Fold`]): transforms
+    /// along y only the distinct rows |dx| ≤ cx, keeps ky ≤ fy/2 and transforms those columns along x,
+    /// leaving lines ky ≤ fy/2 (kx ≤ fx/2 valid) in `ws.g` for [`Plan::folded_product`] to unfold by
+    /// mirroring (the phases live in the data).
     fn folded_kernel_spectrum(&self, ws: &mut Workspace, gx: usize, gy: usize, my: usize) {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
-        let (hx, hy) = (fx / 2 + 1, fy / 2 + 1);
+        let hy = fy / 2 + 1;
         let rows = self.cx as usize + 1;
         let (cx, cy) = (self.cx, self.cy);
         let g = &mut ws.g;
@@ -557,12 +538,10 @@ impl Plan<'_> {
             },
         );
         self.fft.rows_y(&mut g[..rows * fy], &mut ws.scratch);
-        ws.cols.resize(hy * rows, Complex32::default());
-        for ax in 0..rows {
-            for ky in 0..hy {
-                ws.cols[ky * rows + ax] = g[ax * fy + ky];
-            }
-        }
+        // All fy columns, by the blocked transpose: a strided copy of only the hy that are read
+        // measured 1.8× slower.
+        ws.cols.resize(fy * rows, Complex32::default());
+        transpose::transpose(&g[..rows * fy], &mut ws.cols, fy, rows);
         wide(
             #[inline(always)]
             || {
@@ -576,28 +555,31 @@ impl Plan<'_> {
             },
         );
         self.fft.rows_x(&mut g[..hy * fx], &mut ws.scratch);
-        wide(
-            #[inline(always)]
-            || {
-                for ky in 0..fy {
-                    let src = if ky < hy { ky } else { fy - ky };
-                    unfold(
-                        &mut ws.t[ky * fx..(ky + 1) * fx],
-                        &g[src * fx..src * fx + hx],
-                    );
-                }
-            },
-        );
+    }
+
+    /// `ws.t` = the kernel's spectrum × `h` ([ky][kx]), unfolding the quarter that
+    /// [`Plan::folded_kernel_spectrum`] left in `ws.g` line by line as it is multiplied (one pass over
+    /// `ws.t` instead of a copy and a product).
+    fn folded_product(&self, ws: &mut Workspace, h: &[Complex32]) {
+        let (fx, fy) = (self.fft.fx, self.fft.fy);
+        let hx = fx / 2 + 1;
+        for (ky, (t, h)) in
+            ws.t.chunks_exact_mut(fx)
+                .zip(h.chunks_exact(fx))
+                .enumerate()
+        {
+            let src = if ky <= fy / 2 { ky } else { fy - ky };
+            unfold(t, &ws.g[src * fx..src * fx + hx]);
+            cmul::mul_assign(t, h);
+        }
     }
 
     /// Reads the convolution (lattice rows x ∈ [gnx−1, gnx−1+vx), columns [gny−1, gny−1+vy) of `ws.g`)
-    /// at the voxels into `ws.field`: a plain gather on the wall lattice, else windowed sinc along y
-    /// for every lattice row, then along x.
-    #[allow(clippy::too_many_arguments)]
+    /// at the voxels into `ws.field` (y-major): a plain gather on the wall lattice, else windowed sinc
+    /// along x, then along y.
     fn resample(
         &self,
         ws: &mut Workspace,
-        ny: usize,
         nx: usize,
         vy: usize,
         gnx: usize,
@@ -608,20 +590,17 @@ impl Plan<'_> {
         if self.rx.taps == 1 && self.ry.taps == 1 {
             for ix in 0..nx {
                 let row = &ws.g[lattice(self.rx.starts[ix])..][..vy];
-                for (f, &sy) in ws.field[ix * ny..(ix + 1) * ny]
-                    .iter_mut()
-                    .zip(&self.ry.starts)
-                {
-                    *f = row[sy];
+                for (iy, &sy) in self.ry.starts.iter().enumerate() {
+                    ws.field[iy * nx + ix] = row[sy];
                 }
             }
             return;
         }
         // Along x first: whole lattice rows weighted and summed, contiguous, so it vectorises; then
-        // along y at the voxels only (the gathering pass touches nx·ny·taps, not vx·ny·taps, values).
+        // along y at the voxels only (touching nx·ny·taps, not vx·ny·taps, values).
         wide(
             #[inline(always)]
-            || self.resample_off_lattice(ws, ny, nx, vy, lattice),
+            || self.resample_off_lattice(ws, nx, vy, lattice),
         );
     }
 
@@ -630,31 +609,48 @@ impl Plan<'_> {
     fn resample_off_lattice(
         &self,
         ws: &mut Workspace,
-        ny: usize,
         nx: usize,
         vy: usize,
         lattice: impl Fn(usize) -> usize,
     ) {
+        // Over the interleaved (re, im) floats: plain f32 loops vectorise without the shuffles that
+        // LLVM puts around a product of complex values by a real one.
         for ix in 0..nx {
             let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
-            let out = &mut ws.tmp[ix * vy..(ix + 1) * vy];
-            out.iter_mut().for_each(|v| *v = Complex32::default());
+            let out = floats_mut(&mut ws.tmp[ix * vy..(ix + 1) * vy]);
+            out.iter_mut().for_each(|v| *v = 0.0);
             for (k, wk) in w.iter().enumerate() {
-                for (x, g) in out.iter_mut().zip(&ws.g[lattice(st + k)..][..vy]) {
+                for (x, g) in out.iter_mut().zip(floats(&ws.g[lattice(st + k)..][..vy])) {
                     *x += g * wk;
                 }
             }
-            let row = &ws.tmp[ix * vy..(ix + 1) * vy];
-            for (iy, f) in ws.field[ix * ny..(ix + 1) * ny].iter_mut().enumerate() {
-                let sy = self.ry.starts[iy];
-                *f = row[sy..sy + self.ry.taps]
-                    .iter()
-                    .zip(self.ry.weights_of(iy))
-                    .map(|(v, w)| v * w)
-                    .sum();
+        }
+        // Then along y on the transposed rows, so each tap is one more contiguous row of nx values
+        // (short per-voxel dot products measured half the resampling time).
+        transpose::transpose(&ws.tmp[..nx * vy], &mut ws.tmp_t[..nx * vy], vy, nx);
+        for (iy, f) in ws.field.chunks_exact_mut(nx).enumerate() {
+            let f = floats_mut(f);
+            f.iter_mut().for_each(|v| *v = 0.0);
+            let sy = self.ry.starts[iy];
+            for (k, wk) in self.ry.weights_of(iy).iter().enumerate() {
+                let row = floats(&ws.tmp_t[(sy + k) * nx..(sy + k + 1) * nx]);
+                for (x, g) in f.iter_mut().zip(row) {
+                    *x += g * wk;
+                }
             }
         }
     }
+}
+
+/// The interleaved (re, im) floats of complex values.
+fn floats(v: &[Complex32]) -> &[f32] {
+    // SAFETY: num-complex's Complex<f32> is #[repr(C)] {re, im}: n of them are 2n f32, same alignment.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast(), 2 * v.len()) }
+}
+
+fn floats_mut(v: &mut [Complex32]) -> &mut [f32] {
+    // SAFETY: as in `floats`; the borrow is exclusive for the returned slice's lifetime.
+    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast(), 2 * v.len()) }
 }
 
 fn amplitude(f: Falloff, d: f64) -> f64 {
@@ -701,9 +697,11 @@ struct Workspace {
     /// Point-side phase per voxel and its per-frequency step (f32 recurrence, as for the kernel).
     pbase: Vec<Complex32>,
     pstep: Vec<Complex32>,
-    /// The camera-side field at the voxels for the current frequency.
+    /// The camera-side field at the voxels for the current frequency, y-major ([y][x]).
     field: Vec<Complex32>,
+    /// The field resampled along x ([x][lattice y]) and its transpose.
     tmp: Vec<Complex32>,
+    tmp_t: Vec<Complex32>,
 }
 
 impl Workspace {
@@ -723,6 +721,7 @@ impl Workspace {
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
             tmp: vec![Complex32::default(); plan.vol.x.n * plan.ry.len],
+            tmp_t: vec![Complex32::default(); plan.vol.x.n * plan.ry.len],
         }
     }
 }
