@@ -145,6 +145,12 @@ impl<'a> Plan<'a> {
         })
     }
 
+    /// Whether the kernel's spectrum is folded (see [`Fold`]).
+    #[cfg(test)]
+    pub fn folds(&self) -> bool {
+        self.fold.is_some()
+    }
+
     /// Point-side indices: one pass per point of the non-gridded side (none for confocal).
     fn sources(&self) -> Vec<Option<usize>> {
         match self.side {
