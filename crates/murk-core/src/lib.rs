@@ -9,6 +9,7 @@
 //! [`PointSet`]s, and [`Pairing`] says whether H is measured for every (illumination, sensor) pair
 //! or for the i-th illumination point with the i-th sensor point (confocal scans).
 
+pub mod buffer;
 mod capture;
 mod error;
 mod points;

@@ -187,7 +187,7 @@ impl<'a> Plan<'a> {
         let sources = self.sources();
         let (slabs, windows) = self.slabs(sigma_m, wavelength_m)?;
         progress.start((sources.len() * nz) as u64);
-        let mut field = vec![Complex64::default(); nx * ny * nz];
+        let mut field = murk_core::buffer::filled(nx * ny * nz, Complex64::default());
         let all = crate::spectrum::spectra(self.cap, &windows);
         let mut grid = GridBuffers::default();
         // One workspace per worker thread for the whole run (planes of every slab reuse them).
@@ -316,7 +316,7 @@ impl<'a> Plan<'a> {
         // Frequency-major copy of the grid's spectra, so each frequency reads contiguous memory;
         // split by frequency ranges so each task reads one contiguous run per histogram.
         let by_freq = &mut buf.by_freq;
-        by_freq.resize(nb * cells, Complex32::default());
+        murk_core::buffer::grow(by_freq, nb * cells, Complex32::default());
         let per_task = nb.div_ceil(4 * rayon::current_num_threads()).max(1);
         by_freq[..nb * cells]
             .par_chunks_mut(per_task * cells)
@@ -331,7 +331,7 @@ impl<'a> Plan<'a> {
                 }
             });
         let out = &mut buf.spec;
-        out.resize(nb * fx * fy, Complex32::default());
+        murk_core::buffer::grow(out, nb * fx * fy, Complex32::default());
         out[..nb * fx * fy]
             .par_chunks_mut(fx * fy)
             .zip(by_freq[..nb * cells].par_chunks(cells))

@@ -254,7 +254,7 @@ pub fn spectra<'w>(cap: &Capture, windows: &'w [Window]) -> Spectra<'w> {
         offsets.push(stride);
         stride += w.band.len();
     }
-    let mut spec = vec![Complex32::new(0.0, 0.0); cap.n_hist() * stride];
+    let mut spec = murk_core::buffer::filled(cap.n_hist() * stride, Complex32::new(0.0, 0.0));
     let ffts: Vec<_> = {
         let mut planner = RealFftPlanner::<f32>::new();
         windows
