@@ -355,11 +355,11 @@ impl<'a> Plan<'a> {
                 let norm = 1.0 / (fx * fy) as f32;
                 match &self.fold {
                     Some(f) => {
+                        let mut phase = vec![Complex32::default(); fx];
                         for (row, py) in t.chunks_mut(fx).zip(&f.py) {
                             let py = py * norm;
-                            for (v, px) in row.iter_mut().zip(&f.px) {
-                                *v *= px * py;
-                            }
+                            phase.iter_mut().zip(&f.px).for_each(|(p, px)| *p = px * py);
+                            cmul::mul_assign(row, &phase);
                         }
                     }
                     None => t.iter_mut().for_each(|v| *v *= norm),
