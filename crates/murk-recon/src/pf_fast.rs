@@ -408,7 +408,7 @@ impl<'a> Plan<'a> {
                 ws.tstep.push(c32(step));
             }
         }
-        // Exact phase of the point-side leg, per voxel.
+        // Exact phase of the point-side leg, per voxel (y-major, like `ws.field`).
         for ix in 0..nx {
             for iy in 0..ny {
                 let i = iy * nx + ix;
