@@ -11,9 +11,9 @@ pub fn mul_assign(a: &mut [Complex32], b: &[Complex32]) {
         let p = a.as_mut_ptr();
         // SAFETY: AVX2 and FMA were just detected; `n` bounds every access; in place is allowed.
         let done = unsafe { avx::mul(p, p, b.as_ptr(), n, false) };
-        return tail(&mut a[done..n], &b[done..n], |d, b| *d *= b);
+        return tail(&mut a[done..n], &b[done..n]);
     }
-    tail(&mut a[..n], &b[..n], |d, b| *d *= b);
+    tail(&mut a[..n], &b[..n]);
 }
 
 /// `dst[i] += a[i] · b[i]`.
@@ -28,8 +28,8 @@ pub fn mul_add(dst: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {
     tail2(&mut dst[..n], &a[..n], &b[..n]);
 }
 
-fn tail(d: &mut [Complex32], b: &[Complex32], f: impl Fn(&mut Complex32, Complex32)) {
-    d.iter_mut().zip(b).for_each(|(d, b)| f(d, *b));
+fn tail(d: &mut [Complex32], b: &[Complex32]) {
+    d.iter_mut().zip(b).for_each(|(d, b)| *d *= b);
 }
 
 fn tail2(d: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {

@@ -54,25 +54,33 @@ pub struct Plan<'a> {
 /// phases for k > N/2 are folded into the data's spectra once, and the kernel's spectrum is unfolded
 /// by mirroring.
 struct Fold {
-    px: Vec<Complex32>,
-    py: Vec<Complex32>,
+    /// The data's factor per spectrum entry ([ky][kx]): both axes' phases and the inverse FFT's
+    /// 1/(fx·fy), applied in one product per frequency.
+    phases: Vec<Complex32>,
 }
 
 impl Fold {
-    fn phases(n: usize, c: i64) -> Vec<Complex32> {
-        (0..n)
-            .map(|k| {
-                if k <= n / 2 {
-                    Complex32::new(1.0, 0.0)
-                } else {
-                    let turns = 2.0 * ((n - k) as i64 * c) as f64 / n as f64;
-                    c32(Complex64::from_polar(
-                        1.0,
-                        2.0 * std::f64::consts::PI * turns,
-                    ))
-                }
-            })
-            .collect()
+    fn new(fx: usize, fy: usize, cx: i64, cy: i64) -> Fold {
+        let axis = |n: usize, c: i64| -> Vec<Complex64> {
+            (0..n)
+                .map(|k| {
+                    if k <= n / 2 {
+                        Complex64::new(1.0, 0.0)
+                    } else {
+                        let turns = 2.0 * ((n - k) as i64 * c) as f64 / n as f64;
+                        Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * turns)
+                    }
+                })
+                .collect()
+        };
+        let (px, py) = (axis(fx, cx), axis(fy, cy));
+        let norm = 1.0 / (fx * fy) as f64;
+        Fold {
+            phases: py
+                .iter()
+                .flat_map(|y| px.iter().map(move |x| c32(x * y * norm)))
+                .collect(),
+        }
     }
 }
 
@@ -126,10 +134,8 @@ impl<'a> Plan<'a> {
         let cx = grid.nx as i64 - 1 - rx.lo;
         let cy = grid.ny as i64 - 1 - ry.lo;
         let (gx, gy) = (grid.nx + rx.len - 1, grid.ny + ry.len - 1);
-        let fold = (2 * cx + 1 == gx as i64 && 2 * cy + 1 == gy as i64).then(|| Fold {
-            px: Fold::phases(fft.fx, cx),
-            py: Fold::phases(fft.fy, cy),
-        });
+        let fold = (2 * cx + 1 == gx as i64 && 2 * cy + 1 == gy as i64)
+            .then(|| Fold::new(fft.fx, fft.fy, cx, cy));
         Ok(Plan {
             cap,
             vol: *vol,
@@ -352,17 +358,12 @@ impl<'a> Plan<'a> {
                 }
                 self.fft.forward_rows(a, gnx, t, scratch);
                 // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
-                let norm = 1.0 / (fx * fy) as f32;
                 match &self.fold {
-                    Some(f) => {
-                        let mut phase = vec![Complex32::default(); fx];
-                        for (row, py) in t.chunks_mut(fx).zip(&f.py) {
-                            let py = py * norm;
-                            phase.iter_mut().zip(&f.px).for_each(|(p, px)| *p = px * py);
-                            cmul::mul_assign(row, &phase);
-                        }
+                    Some(f) => cmul::mul_assign(t, &f.phases),
+                    None => {
+                        let norm = 1.0 / (fx * fy) as f32;
+                        t.iter_mut().for_each(|v| *v *= norm)
                     }
-                    None => t.iter_mut().for_each(|v| *v *= norm),
                 }
             });
         &out[..nb * fx * fy]
@@ -619,31 +620,39 @@ impl Plan<'_> {
         vy: usize,
         lattice: impl Fn(usize) -> usize,
     ) {
-        // Over the interleaved (re, im) floats: plain f32 loops vectorise without the shuffles that
-        // LLVM puts around a product of complex values by a real one.
         for ix in 0..nx {
             let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
-            let out = floats_mut(&mut ws.tmp[ix * vy..(ix + 1) * vy]);
-            out.iter_mut().for_each(|v| *v = 0.0);
-            for (k, wk) in w.iter().enumerate() {
-                for (x, g) in out.iter_mut().zip(floats(&ws.g[lattice(st + k)..][..vy])) {
-                    *x += g * wk;
-                }
-            }
+            let rows = w
+                .iter()
+                .enumerate()
+                .map(|(k, &wk)| (&ws.g[lattice(st + k)..][..vy], wk));
+            weighted_sum(&mut ws.tmp[ix * vy..(ix + 1) * vy], rows);
         }
         // Then along y on the transposed rows, so each tap is one more contiguous row of nx values
         // (short per-voxel dot products measured half the resampling time).
         transpose::transpose(&ws.tmp[..nx * vy], &mut ws.tmp_t[..nx * vy], vy, nx);
         for (iy, f) in ws.field.chunks_exact_mut(nx).enumerate() {
-            let f = floats_mut(f);
-            f.iter_mut().for_each(|v| *v = 0.0);
             let sy = self.ry.starts[iy];
-            for (k, wk) in self.ry.weights_of(iy).iter().enumerate() {
-                let row = floats(&ws.tmp_t[(sy + k) * nx..(sy + k + 1) * nx]);
-                for (x, g) in f.iter_mut().zip(row) {
-                    *x += g * wk;
-                }
-            }
+            let rows = self
+                .ry
+                .weights_of(iy)
+                .iter()
+                .enumerate()
+                .map(|(k, &wk)| (&ws.tmp_t[(sy + k) * nx..(sy + k + 1) * nx], wk));
+            weighted_sum(f, rows);
+        }
+    }
+}
+
+/// `out` = Σ weight·row over `rows`, over the interleaved (re, im) floats: plain f32 loops vectorise
+/// without the shuffles that LLVM puts around a product of complex values by a real one.
+#[inline(always)]
+fn weighted_sum<'r>(out: &mut [Complex32], rows: impl Iterator<Item = (&'r [Complex32], f32)>) {
+    let out = floats_mut(out);
+    out.iter_mut().for_each(|v| *v = 0.0);
+    for (row, w) in rows {
+        for (x, g) in out.iter_mut().zip(floats(row)) {
+            *x += g * w;
         }
     }
 }
