@@ -146,7 +146,7 @@ pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
         wavelength: Wavelength::WallFactor(factor),
         cycles: 8.0,
         falloff: Falloff::None,
-        compensation: murk_recon::Compensation::None,
+        ..PfParams::default()
     };
     let pfs = [pf_of(8.0), pf_of(4.0)];
     let slab = CdtParams::default().slab;

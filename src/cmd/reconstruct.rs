@@ -6,7 +6,7 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, SlabParams};
 use murk_core::{Axis, Capture, Volume, SPEED_OF_LIGHT_M_PER_S};
-use murk_recon::{Compensation, Falloff, Method, PfParams, Wavelength};
+use murk_recon::{Compensation, Falloff, Lateral, Method, PfParams, Wavelength};
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -48,6 +48,15 @@ pub enum FalloffArg {
     None,
     /// 1/d per leg (the paper's RSD kernel e^{ikd}/d).
     InvR,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LateralArg {
+    /// Only the wall-plane frequencies whose waves reach each depth plane (faster; differs from `full`
+    /// by the kernel's and the data's leakage beyond them, ~1e-4 of the intensity).
+    Propagating,
+    /// Every frequency: the fast form equals the exact discrete RSD sum to rounding.
+    Full,
 }
 
 #[derive(Args)]
@@ -103,6 +112,9 @@ pub struct ReconstructArgs {
     /// Amplitude factor per leg.
     #[arg(long, value_enum, default_value = "none")]
     pub falloff: FalloffArg,
+    /// Lateral frequencies the fast PF form keeps.
+    #[arg(long, value_enum, default_value = "propagating")]
+    pub lateral: LateralArg,
     /// Subtract this much optical path (m) from every time stamp before reconstructing (shifts the
     /// capture's time start), or `slab`: the peak delay of the slab's round trip (--slab-* flags),
     /// so that depth is measured from the back of the slab.
@@ -172,6 +184,10 @@ impl ReconstructArgs {
             cycles: self.cycles,
             falloff,
             compensation,
+            lateral: match self.lateral {
+                LateralArg::Propagating => Lateral::Propagating,
+                LateralArg::Full => Lateral::Full,
+            },
         })
     }
 }

@@ -75,16 +75,27 @@ impl Fft2 {
     }
 
     /// Inverse of [`Fft2::forward`] (unnormalised) into `a` as [x][y], transforming along y only the
-    /// rows x ∈ [x0, x0 + rows) that the caller reads. `t` is clobbered; other rows of `a` are garbage.
+    /// rows x ∈ [x0, x0 + rows) that the caller reads. `t` must be zero on the lines ky whose distance
+    /// min(ky, fy − ky) from ky = 0 exceeds `lines` (they are not transformed; `lines` ≥ fy/2: none).
+    /// `t` is clobbered; other rows of `a` are garbage.
     pub fn inverse_rows(
         &self,
         t: &mut [Complex32],
         a: &mut [Complex32],
         x0: usize,
         rows: usize,
+        lines: usize,
         scratch: &mut [Complex32],
     ) {
-        self.inv_x.process_with_scratch(t, scratch);
+        let (fx, fy) = (self.fx, self.fy);
+        if 2 * lines + 1 >= fy {
+            self.inv_x.process_with_scratch(t, scratch);
+        } else {
+            self.inv_x
+                .process_with_scratch(&mut t[..(lines + 1) * fx], scratch);
+            self.inv_x
+                .process_with_scratch(&mut t[(fy - lines) * fx..], scratch);
+        }
         transpose(t, a, self.fy, self.fx);
         self.inv_y
             .process_with_scratch(&mut a[x0 * self.fy..(x0 + rows) * self.fy], scratch);
@@ -126,12 +137,46 @@ mod tests {
         }
         let got = t[ky * fx + kx];
         assert!((got.re as f64 - want.re).abs() < 1e-4 && (got.im as f64 - want.im).abs() < 1e-4);
-        f.inverse_rows(&mut t, &mut a, 2, 3, &mut s);
+        f.inverse_rows(&mut t, &mut a, 2, 3, fy / 2, &mut s);
         for r in 2..5 {
             for y in 0..fy {
                 let d = a[r * fy + y] / (fx * fy) as f32 - a0[r * fy + y];
                 assert!(d.norm() < 1e-5);
             }
         }
+    }
+
+    /// With the lines beyond `lines` zero, skipping their transforms changes nothing; with them
+    /// non-zero it would (so the skip is real).
+    #[test]
+    fn inverse_skips_only_zero_lines() {
+        let (fx, fy) = (6, 10);
+        let f = Fft2::new(fx, fy);
+        let mut s = f.scratch();
+        let spec: Vec<Complex32> = (0..fx * fy)
+            .map(|i| Complex32::new((i as f32 * 0.29).cos(), (i as f32 * 0.53).sin()))
+            .collect();
+        let inverse = |t: &[Complex32], lines: usize, s: &mut Vec<Complex32>| {
+            let (mut t, mut a) = (t.to_vec(), vec![Complex32::default(); fx * fy]);
+            f.inverse_rows(&mut t, &mut a, 0, fx, lines, s);
+            a
+        };
+        let mut cut = spec.clone();
+        for (ky, line) in cut.chunks_exact_mut(fx).enumerate() {
+            if ky.min(fy - ky) > 2 {
+                line.iter_mut().for_each(|v| *v = Complex32::default());
+            }
+        }
+        let (full, skipped) = (inverse(&cut, fy / 2, &mut s), inverse(&cut, 2, &mut s));
+        assert!(full
+            .iter()
+            .zip(&skipped)
+            .all(|(a, b)| (a - b).norm() < 1e-5));
+        let unzeroed = inverse(&spec, 2, &mut s);
+        let full = inverse(&spec, fy / 2, &mut s);
+        assert!(full
+            .iter()
+            .zip(&unzeroed)
+            .any(|(a, b)| (a - b).norm() > 0.1));
     }
 }

@@ -8,7 +8,7 @@ use crate::cmul;
 use crate::fft2::Fft2;
 use crate::resample::Resampler;
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
-use crate::{Falloff, Progress};
+use crate::{Falloff, Lateral, Progress};
 use murk_core::simd::wide;
 use murk_core::{Axis, Capture, CaptureKind, DVec3, RegularGrid, Result, Volume};
 use rayon::prelude::*;
@@ -46,6 +46,7 @@ pub struct Plan<'a> {
     cy: i64,
     /// Phases that fold a symmetric kernel's spectrum onto its non-negative frequencies.
     fold: Option<Fold>,
+    lateral: Lateral,
 }
 
 /// A kernel K(|dx|, |dy|) whose support is symmetric about its centre (volume columns spanning the
@@ -86,7 +87,12 @@ impl Fold {
 
 impl<'a> Plan<'a> {
     /// Checks the preconditions of the fast form; the error says why it does not apply.
-    pub fn new(cap: &'a Capture, vol: &Volume, falloff: Falloff) -> Result<Plan<'a>, String> {
+    pub fn new(
+        cap: &'a Capture,
+        vol: &Volume,
+        falloff: Falloff,
+        lateral: Lateral,
+    ) -> Result<Plan<'a>, String> {
         let regular = |p: &murk_core::PointSet| p.regular_grid();
         let (grid, side) = match cap.kind() {
             CaptureKind::Confocal => (regular(&cap.illum), GridSide::Confocal),
@@ -148,7 +154,22 @@ impl<'a> Plan<'a> {
             cx,
             cy,
             fold,
+            lateral,
         })
+    }
+
+    /// How many spectrum lines on each side of ky = 0 a plane at `dz` from the wall keeps for the
+    /// kernel wavenumber `k` (rad/m; see [`Lateral`]); fy/2 keeps all.
+    fn lines(&self, k: f64, dz: f64) -> usize {
+        let fy = self.fft.fy;
+        match self.lateral {
+            Lateral::Full => fy / 2,
+            Lateral::Propagating => {
+                let kappa = k.hypot(1e4f64.ln() / dz);
+                let line = kappa * self.grid.step_y.y * fy as f64 / (2.0 * std::f64::consts::PI);
+                (line.ceil() as usize + 6).min(fy / 2)
+            }
+        }
     }
 
     /// Whether the kernel's spectrum is folded (see [`Fold`]).
@@ -439,8 +460,9 @@ impl<'a> Plan<'a> {
         // Summed field, y-major like `ws.field`.
         let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
+            let lines = self.lines(legs * band.k(j), dz);
             if self.fold.is_some() {
-                self.folded_kernel_spectrum(ws, gx, gy, my);
+                self.folded_kernel_spectrum(ws, gx, gy, my, lines);
             } else {
                 wide(
                     #[inline(always)]
@@ -462,9 +484,19 @@ impl<'a> Plan<'a> {
             cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
             if self.fold.is_some() {
-                self.folded_product(ws, h);
+                self.folded_product(ws, h, lines);
             } else {
-                cmul::mul_assign(&mut ws.t, h);
+                for (ky, (t, h)) in
+                    ws.t.chunks_exact_mut(fx)
+                        .zip(h.chunks_exact(fx))
+                        .enumerate()
+                {
+                    if ky.min(fy - ky) <= lines {
+                        cmul::mul_assign(t, h);
+                    } else {
+                        t.iter_mut().for_each(|v| *v = Complex32::default());
+                    }
+                }
             }
             if confocal {
                 wide(
@@ -474,15 +506,21 @@ impl<'a> Plan<'a> {
                 continue;
             }
             self.fft
-                .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
+                .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, lines, &mut ws.scratch);
             self.resample(ws, nx, vy, gnx, gny, fy);
             // Exact phase of the point-side leg.
             cmul::mul_add(&mut acc, &ws.field, &ws.pbase);
             cmul::mul_assign(&mut ws.pbase, &ws.pstep);
         }
         if confocal {
-            self.fft
-                .inverse_rows(&mut ws.spec_acc, &mut ws.g, gnx - 1, vx, &mut ws.scratch);
+            self.fft.inverse_rows(
+                &mut ws.spec_acc,
+                &mut ws.g,
+                gnx - 1,
+                vx,
+                fy / 2,
+                &mut ws.scratch,
+            );
             self.resample(ws, nx, vy, gnx, gny, fy);
             acc.copy_from_slice(&ws.field);
         }
@@ -528,9 +566,16 @@ impl Plan<'_> {
     /// along y only the distinct rows |dx| ≤ cx, keeps ky ≤ fy/2 and transforms those columns along x,
     /// leaving lines ky ≤ fy/2 (kx ≤ fx/2 valid) in `ws.g` for [`Plan::folded_product`] to unfold by
     /// mirroring (the phases live in the data).
-    fn folded_kernel_spectrum(&self, ws: &mut Workspace, gx: usize, gy: usize, my: usize) {
+    fn folded_kernel_spectrum(
+        &self,
+        ws: &mut Workspace,
+        gx: usize,
+        gy: usize,
+        my: usize,
+        lines: usize,
+    ) {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
-        let hy = fy / 2 + 1;
+        let hy = (fy / 2).min(lines) + 1;
         let rows = self.cx as usize + 1;
         let (cx, cy) = (self.cx, self.cy);
         let g = &mut ws.g;
@@ -567,7 +612,7 @@ impl Plan<'_> {
     /// `ws.t` = the kernel's spectrum × `h` ([ky][kx]), unfolding the quarter that
     /// [`Plan::folded_kernel_spectrum`] left in `ws.g` line by line as it is multiplied (one pass over
     /// `ws.t` instead of a copy and a product).
-    fn folded_product(&self, ws: &mut Workspace, h: &[Complex32]) {
+    fn folded_product(&self, ws: &mut Workspace, h: &[Complex32], lines: usize) {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
         let hx = fx / 2 + 1;
         for (ky, (t, h)) in
@@ -576,6 +621,10 @@ impl Plan<'_> {
                 .enumerate()
         {
             let src = if ky <= fy / 2 { ky } else { fy - ky };
+            if src > lines {
+                t.iter_mut().for_each(|v| *v = Complex32::default());
+                continue;
+            }
             unfold(t, &ws.g[src * fx..src * fx + hx]);
             cmul::mul_assign(t, h);
         }

@@ -8,6 +8,11 @@ use rustfft::num_complex::Complex64;
 const POINT: DVec3 = DVec3::new(0.1, -0.2, 0.5);
 
 fn capture(kind: LayoutKind, start_m: f64, devices: bool) -> Capture {
+    capture_of(kind, start_m, devices, POINT)
+}
+
+/// A capture of one point scatterer at `pos`.
+fn capture_of(kind: LayoutKind, start_m: f64, devices: bool, pos: DVec3) -> Capture {
     let layout = CaptureLayout {
         kind,
         wall_size_m: 1.0,
@@ -22,12 +27,7 @@ fn capture(kind: LayoutKind, start_m: f64, devices: bool) -> Capture {
         sensor_xyz: devices.then_some(DVec3::new(0.6, -0.4, -1.5)),
     };
     let mut cap = layout.empty_capture().unwrap();
-    let sc = Target::Point {
-        pos: POINT,
-        albedo: 1.0,
-    }
-    .scatterers()
-    .unwrap();
+    let sc = Target::Point { pos, albedo: 1.0 }.scatterers().unwrap();
     add_first_bounce(&mut cap, &sc, &SynthOptions::default()).unwrap();
     cap
 }
@@ -309,6 +309,7 @@ fn assert_matches_oracle(cap: &Capture, vol: &Volume, tol: f64) {
     for falloff in [Falloff::None, Falloff::InvR] {
         let params = PfParams {
             falloff,
+            lateral: Lateral::Full,
             ..PfParams::default()
         };
         let fast = reconstruct(cap, vol, &params, Method::Fast, &NoProgress).unwrap();
@@ -331,10 +332,81 @@ fn fast_matches_frequency_domain_oracle_on_the_lattice() {
         z: Axis::new(0.5, 0.6, 2),
     };
     let cap = random_capture();
-    assert!(!pf_fast::Plan::new(&cap, &vol, Falloff::None)
-        .unwrap()
-        .folds());
+    assert!(
+        !pf_fast::Plan::new(&cap, &vol, Falloff::None, Lateral::Full)
+            .unwrap()
+            .folds()
+    );
     assert_matches_oracle(&cap, &vol, 2e-4);
+}
+
+/// Largest |U_propagating − U_full| over the peak of |U_full|.
+fn lateral_cut_error(cap: &Capture, vol: &Volume) -> f64 {
+    let field = |lateral| {
+        let p = PfParams {
+            lateral,
+            ..PfParams::default()
+        };
+        reconstruct(cap, vol, &p, Method::Fast, &NoProgress)
+            .unwrap()
+            .field
+    };
+    let (cut, full) = (field(Lateral::Propagating), field(Lateral::Full));
+    let peak = full.iter().map(|u| u.norm()).fold(0.0, f32::max);
+    cut.iter()
+        .zip(&full)
+        .map(|(a, b)| (a - b).norm() / peak)
+        .fold(0.0, f32::max) as f64
+}
+
+/// Keeping only the lateral frequencies that reach a plane changes the field of a physical capture
+/// (a point scatterer, whose data carry little else) by a small fraction of the peak, for every capture
+/// kind, near the wall (weak evanescent damping) and on or off the lattice (measured: ≤ 7.9e-4, the
+/// aperture's leakage; confocal ≤ 6e-5). Random data, which fill the whole spectrum, show that the cut
+/// is taken (measured 4.4e-2). A scatterer 8 cm from the wall seen from planes 4–30 cm deep needs the
+/// evanescent allowance: 5.4e-6 of the peak with it, 5.0e-5 with |κ| ≤ k only (confocal).
+#[test]
+fn propagating_band_keeps_physical_fields() {
+    let c = 0.5 - 0.5 / 32.0;
+    let vols = [
+        aligned_volume(),
+        Volume {
+            x: Axis::new(-0.4, 0.35, 19),
+            y: Axis::new(-0.45, 0.3, 17),
+            z: Axis::new(0.1, 0.6, 11),
+        },
+    ];
+    for (kind, tol) in [
+        (LayoutKind::LaserGridSinglePoint, 1.5e-3),
+        (LayoutKind::SinglePointSensorGrid, 1.5e-3),
+        (LayoutKind::Confocal, 2e-4),
+    ] {
+        let cap = capture(kind, 0.0, false);
+        for vol in &vols {
+            let e = lateral_cut_error(&cap, vol);
+            assert!(e <= tol, "{kind:?}, {vol:?}: {e} of the peak");
+        }
+    }
+    let vol = Volume {
+        x: Axis::new(-c, c, 32),
+        y: Axis::new(-c, c, 32),
+        z: Axis::new(0.5, 0.6, 2),
+    };
+    let e = lateral_cut_error(&random_capture(), &vol);
+    assert!(e > 1e-2, "random data: {e}");
+    let near = capture_of(
+        LayoutKind::Confocal,
+        0.0,
+        false,
+        DVec3::new(0.1, -0.05, 0.08),
+    );
+    let shallow = Volume {
+        x: Axis::new(-0.45, 0.45, 31),
+        y: Axis::new(-0.45, 0.45, 31),
+        z: Axis::new(0.04, 0.3, 27),
+    };
+    let e = lateral_cut_error(&near, &shallow);
+    assert!(e <= 2e-5, "near the wall: {e}");
 }
 
 /// Volumes centred on the wall take the folded kernel spectrum (half the transforms, the rest by
@@ -364,7 +436,7 @@ fn fast_matches_frequency_domain_oracle_on_centred_volumes() {
             1e-3,
         ),
     ] {
-        assert!(pf_fast::Plan::new(&cap, &vol, Falloff::None)
+        assert!(pf_fast::Plan::new(&cap, &vol, Falloff::None, Lateral::Full)
             .unwrap()
             .folds());
         assert_matches_oracle(&cap, &vol, tol);
