@@ -4,6 +4,7 @@
 
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
+use std::ops::Range;
 use std::sync::Arc;
 
 pub struct Fft2 {
@@ -96,15 +97,70 @@ impl Fft2 {
             self.inv_x
                 .process_with_scratch(&mut t[(fy - lines) * fx..], scratch);
         }
-        transpose(t, a, self.fy, self.fx);
+        // Only the columns x that are read, and zeros for the lines that were skipped.
+        let xs = x0..x0 + rows;
+        if 2 * lines + 1 >= fy {
+            transpose_part(t, fx, 0..fy, xs.clone(), a, fy);
+        } else {
+            transpose_part(t, fx, 0..lines + 1, xs.clone(), a, fy);
+            transpose_part(t, fx, fy - lines..fy, xs.clone(), a, fy);
+            for x in xs.clone() {
+                a[x * fy + lines + 1..x * fy + fy - lines]
+                    .iter_mut()
+                    .for_each(|v| *v = Complex32::default());
+            }
+        }
         self.inv_y
-            .process_with_scratch(&mut a[x0 * self.fy..(x0 + rows) * self.fy], scratch);
+            .process_with_scratch(&mut a[x0 * fy..(x0 + rows) * fy], scratch);
     }
 }
 
 /// `src` is rows×cols; `dst` becomes cols×rows.
 fn transpose(src: &[Complex32], dst: &mut [Complex32], rows: usize, cols: usize) {
     transpose::transpose(src, dst, cols, rows);
+}
+
+/// `dst[c·dst_stride + r] = src[r·src_stride + c]` for r ∈ `rows`, c ∈ `cols`: part of a transpose, in
+/// 8 × 8 tiles so that both sides stay in cache.
+pub fn transpose_part(
+    src: &[Complex32],
+    src_stride: usize,
+    rows: Range<usize>,
+    cols: Range<usize>,
+    dst: &mut [Complex32],
+    dst_stride: usize,
+) {
+    const TILE: usize = 8;
+    if rows.is_empty() || cols.is_empty() {
+        return;
+    }
+    // Every index below lies within these two bounds.
+    assert!((rows.end - 1) * src_stride + cols.end <= src.len());
+    assert!((cols.end - 1) * dst_stride + rows.end <= dst.len());
+    let (s, d) = (src.as_ptr(), dst.as_mut_ptr());
+    for r0 in rows.clone().step_by(TILE) {
+        let r1 = (r0 + TILE).min(rows.end);
+        for c0 in cols.clone().step_by(TILE) {
+            let c1 = (c0 + TILE).min(cols.end);
+            // SAFETY: r < rows.end and c < cols.end, checked against both lengths above.
+            unsafe {
+                if r1 - r0 == TILE && c1 - c0 == TILE {
+                    for c in 0..TILE {
+                        for r in 0..TILE {
+                            *d.add((c0 + c) * dst_stride + r0 + r) =
+                                *s.add((r0 + r) * src_stride + c0 + c);
+                        }
+                    }
+                } else {
+                    for c in c0..c1 {
+                        for r in r0..r1 {
+                            *d.add(c * dst_stride + r) = *s.add(r * src_stride + c);
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -142,6 +198,25 @@ mod tests {
             for y in 0..fy {
                 let d = a[r * fy + y] / (fx * fy) as f32 - a0[r * fy + y];
                 assert!(d.norm() < 1e-5);
+            }
+        }
+    }
+
+    /// Full 8 × 8 tiles and ragged edges against the definition; entries outside the part untouched.
+    #[test]
+    fn transpose_part_matches_definition() {
+        let (rows, cols) = (37, 29);
+        let src: Vec<Complex32> = (0..rows * cols)
+            .map(|i| Complex32::new(i as f32, -(i as f32)))
+            .collect();
+        let marker = Complex32::new(-1.0, -1.0);
+        let mut dst = vec![marker; cols * rows];
+        transpose_part(&src, cols, 3..35, 5..27, &mut dst, rows);
+        for c in 0..cols {
+            for r in 0..rows {
+                let inside = (3..35).contains(&r) && (5..27).contains(&c);
+                let want = if inside { src[r * cols + c] } else { marker };
+                assert_eq!(dst[c * rows + r], want, "r {r}, c {c}");
             }
         }
     }

@@ -5,7 +5,7 @@
 //! are not on the wall lattice read the convolution through a windowed-sinc resampler.
 
 use crate::cmul;
-use crate::fft2::Fft2;
+use crate::fft2::{transpose_part, Fft2};
 use crate::resample::Resampler;
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
@@ -590,10 +590,9 @@ impl Plan<'_> {
             },
         );
         self.fft.rows_y(&mut g[..rows * fy], &mut ws.scratch);
-        // All fy columns, by the blocked transpose: a strided copy of only the hy that are read
-        // measured 1.8× slower.
+        // Only the hy columns that are read.
         ws.cols.resize(fy * rows, Complex32::default());
-        transpose::transpose(&g[..rows * fy], &mut ws.cols, fy, rows);
+        transpose_part(&g[..rows * fy], fy, 0..rows, 0..hy, &mut ws.cols, rows);
         wide(
             #[inline(always)]
             || {
