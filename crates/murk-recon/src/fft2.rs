@@ -89,29 +89,33 @@ impl Fft2 {
         scratch: &mut [Complex32],
     ) {
         let (fx, fy) = (self.fx, self.fy);
-        if 2 * lines + 1 >= fy {
-            self.inv_x.process_with_scratch(t, scratch);
-        } else {
-            self.inv_x
-                .process_with_scratch(&mut t[..(lines + 1) * fx], scratch);
-            self.inv_x
-                .process_with_scratch(&mut t[(fy - lines) * fx..], scratch);
-        }
+        let kept = kept_lines(fy, lines);
         // Only the columns x that are read, and zeros for the lines that were skipped.
         let xs = x0..x0 + rows;
-        if 2 * lines + 1 >= fy {
-            transpose_part(t, fx, 0..fy, xs.clone(), a, fy);
-        } else {
-            transpose_part(t, fx, 0..lines + 1, xs.clone(), a, fy);
-            transpose_part(t, fx, fy - lines..fy, xs.clone(), a, fy);
-            for x in xs.clone() {
-                a[x * fy + lines + 1..x * fy + fy - lines]
+        for r in kept.clone() {
+            self.inv_x
+                .process_with_scratch(&mut t[r.start * fx..r.end * fx], scratch);
+            transpose_part(t, fx, r, xs.clone(), a, fy);
+        }
+        if kept[0].end < kept[1].start {
+            for x in xs {
+                a[x * fy + kept[0].end..x * fy + kept[1].start]
                     .iter_mut()
                     .for_each(|v| *v = Complex32::default());
             }
         }
         self.inv_y
             .process_with_scratch(&mut a[x0 * fy..(x0 + rows) * fy], scratch);
+    }
+}
+
+/// The lines ky of a spectrum whose distance min(ky, fy − ky) from ky = 0 is at most `lines`, as two
+/// ranges (the second empty when they cover all fy).
+pub fn kept_lines(fy: usize, lines: usize) -> [Range<usize>; 2] {
+    if 2 * lines + 1 >= fy {
+        [0..fy, fy..fy]
+    } else {
+        [0..lines + 1, fy - lines..fy]
     }
 }
 

@@ -5,7 +5,7 @@
 //! are not on the wall lattice read the convolution through a windowed-sinc resampler.
 
 use crate::cmul;
-use crate::fft2::{transpose_part, Fft2};
+use crate::fft2::{kept_lines, transpose_part, Fft2};
 use crate::resample::Resampler;
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
@@ -483,26 +483,31 @@ impl<'a> Plan<'a> {
             }
             cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
+            // Lines of ws.t outside `kept` are left as they are: nothing reads them.
+            let kept = kept_lines(fy, lines);
             if self.fold.is_some() {
-                self.folded_product(ws, h, lines);
+                self.folded_product(ws, h, kept.clone());
             } else {
-                for (ky, (t, h)) in
-                    ws.t.chunks_exact_mut(fx)
-                        .zip(h.chunks_exact(fx))
-                        .enumerate()
-                {
-                    if ky.min(fy - ky) <= lines {
-                        cmul::mul_assign(t, h);
-                    } else {
-                        t.iter_mut().for_each(|v| *v = Complex32::default());
-                    }
+                for r in kept.clone() {
+                    cmul::mul_assign(
+                        &mut ws.t[r.start * fx..r.end * fx],
+                        &h[r.start * fx..r.end * fx],
+                    );
                 }
             }
             if confocal {
-                wide(
-                    #[inline(always)]
-                    || ws.spec_acc.iter_mut().zip(&ws.t).for_each(|(a, t)| *a += t),
-                );
+                for r in kept {
+                    let span = r.start * fx..r.end * fx;
+                    wide(
+                        #[inline(always)]
+                        || {
+                            ws.spec_acc[span.clone()]
+                                .iter_mut()
+                                .zip(&ws.t[span.clone()])
+                                .for_each(|(a, t)| *a += t)
+                        },
+                    );
+                }
                 continue;
             }
             self.fft
@@ -611,21 +616,14 @@ impl Plan<'_> {
     /// `ws.t` = the kernel's spectrum × `h` ([ky][kx]), unfolding the quarter that
     /// [`Plan::folded_kernel_spectrum`] left in `ws.g` line by line as it is multiplied (one pass over
     /// `ws.t` instead of a copy and a product).
-    fn folded_product(&self, ws: &mut Workspace, h: &[Complex32], lines: usize) {
+    fn folded_product(&self, ws: &mut Workspace, h: &[Complex32], kept: [Range<usize>; 2]) {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
         let hx = fx / 2 + 1;
-        for (ky, (t, h)) in
-            ws.t.chunks_exact_mut(fx)
-                .zip(h.chunks_exact(fx))
-                .enumerate()
-        {
+        for ky in kept.into_iter().flatten() {
             let src = if ky <= fy / 2 { ky } else { fy - ky };
-            if src > lines {
-                t.iter_mut().for_each(|v| *v = Complex32::default());
-                continue;
-            }
+            let t = &mut ws.t[ky * fx..(ky + 1) * fx];
             unfold(t, &ws.g[src * fx..src * fx + hx]);
-            cmul::mul_assign(t, h);
+            cmul::mul_assign(t, &h[ky * fx..(ky + 1) * fx]);
         }
     }
 
