@@ -195,11 +195,9 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
         ))
     })?;
     h.resize(tal_h.len(), 0.0);
-    for (t, row) in tal_h.chunks_exact(n_hist.max(1)).enumerate() {
-        for (i, &v) in row.iter().enumerate() {
-            h[i * bins + t] = v;
-        }
-    }
+    // tal's [t][histogram] to murk's [histogram][t], blocked (an element-wise strided copy of the
+    // paper format's 268 MB took about a second).
+    transpose::transpose(&tal_h, &mut h, n_hist, bins);
     drop(tal_h);
 
     let scalar = |k: &str| -> Result<f64> {
@@ -346,11 +344,7 @@ pub fn write_capture_compressed(path: &Path, cap: &Capture, level: u32) -> Resul
     let bins = cap.time.bins;
     let n_hist = cap.n_hist();
     let mut tal_h = vec![0f32; cap.h.len()];
-    for (i, hist) in cap.h.chunks_exact(bins).enumerate() {
-        for (t, &v) in hist.iter().enumerate() {
-            tal_h[t * n_hist + i] = v;
-        }
-    }
+    transpose::transpose(&cap.h, &mut tal_h, bins, n_hist);
     let mut h_shape = vec![bins as u64];
     h_shape.extend(plan.h_dims.iter().map(|&d| d as u64));
 
