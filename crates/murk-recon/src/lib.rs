@@ -45,9 +45,9 @@ pub enum Lateral {
     /// (round trip for confocal data) at depth z, plus six FFT lines. The RSD kernel propagates
     /// |κ| ≤ k and damps |κ| > k by e^{−z·√(κ² − k²)}; past this bound the sampled, truncated kernel
     /// and data hold leakage of the aperture's edges, and skipping those spectrum lines halves the
-    /// product and the inverse FFTs along x on average over the band (the Z-letter bench: 1.20–1.36 s
-    /// → 1.03–1.12 s in one noisy phase). Measured against `Full`: intensity relL2 6.7e-5 on the
-    /// synthetic Z letter, 3.4e-4 and 6.4e-4 on the real mannequin and letter S (their noise there).
+    /// product, the kernel's and the inverse's FFTs along x and their transposes on average over the
+    /// band. Measured against `Full`: intensity relL2 6.7e-5 on the synthetic Z letter, 3.4e-4 and
+    /// 6.4e-4 on the real mannequin and letter S (their noise there).
     #[default]
     Propagating,
     /// Every frequency of the FFT grid: the fast form equals the exact discrete sum to rounding.
