@@ -75,37 +75,29 @@ impl Fft2 {
         self.fwd_x.process_with_scratch(lines, scratch);
     }
 
-    /// Inverse of [`Fft2::forward`] (unnormalised) into `a` as [x][y], transforming along y only the
-    /// rows x ∈ [x0, x0 + rows) that the caller reads. `t` must be zero on the lines ky whose distance
-    /// min(ky, fy − ky) from ky = 0 exceeds `lines` (they are not transformed; `lines` ≥ fy/2: none).
-    /// `t` is clobbered; other rows of `a` are garbage.
-    pub fn inverse_rows(
+    /// First half of the inverse of [`Fft2::forward`] (unnormalised): along x on the lines of `t`
+    /// ([ky][kx]) that [`kept_lines`] keeps for `lines` (the others are neither read nor transformed),
+    /// written transposed into `a` ([x][ky], rows of fy) for x ∈ `xs` and the kept ky only; the rest
+    /// of `a` is left as it was. `t` is clobbered.
+    pub fn inverse_x(
         &self,
         t: &mut [Complex32],
         a: &mut [Complex32],
-        x0: usize,
-        rows: usize,
+        xs: Range<usize>,
         lines: usize,
         scratch: &mut [Complex32],
     ) {
-        let (fx, fy) = (self.fx, self.fy);
-        let kept = kept_lines(fy, lines);
-        // Only the columns x that are read, and zeros for the lines that were skipped.
-        let xs = x0..x0 + rows;
-        for r in kept.clone() {
+        let fx = self.fx;
+        for r in kept_lines(self.fy, lines) {
             self.inv_x
                 .process_with_scratch(&mut t[r.start * fx..r.end * fx], scratch);
-            transpose_part(t, fx, r, xs.clone(), a, fy);
+            transpose_part(t, fx, r, xs.clone(), a, self.fy);
         }
-        if kept[0].end < kept[1].start {
-            for x in xs {
-                a[x * fy + kept[0].end..x * fy + kept[1].start]
-                    .iter_mut()
-                    .for_each(|v| *v = Complex32::default());
-            }
-        }
-        self.inv_y
-            .process_with_scratch(&mut a[x0 * fy..(x0 + rows) * fy], scratch);
+    }
+
+    /// Second half of the inverse (unnormalised): along y on consecutive rows of length fy.
+    pub fn inverse_y(&self, rows: &mut [Complex32], scratch: &mut [Complex32]) {
+        self.inv_y.process_with_scratch(rows, scratch);
     }
 }
 
@@ -197,7 +189,8 @@ mod tests {
         }
         let got = t[ky * fx + kx];
         assert!((got.re as f64 - want.re).abs() < 1e-4 && (got.im as f64 - want.im).abs() < 1e-4);
-        f.inverse_rows(&mut t, &mut a, 2, 3, fy / 2, &mut s);
+        f.inverse_x(&mut t, &mut a, 2..5, fy / 2, &mut s);
+        f.inverse_y(&mut a[2 * fy..5 * fy], &mut s);
         for r in 2..5 {
             for y in 0..fy {
                 let d = a[r * fy + y] / (fx * fy) as f32 - a0[r * fy + y];
@@ -225,8 +218,8 @@ mod tests {
         }
     }
 
-    /// With the lines beyond `lines` zero, skipping their transforms changes nothing; with them
-    /// non-zero it would (so the skip is real).
+    /// With the lines beyond `lines` zero, skipping their transforms (and zero-filling them after the
+    /// x half) changes nothing; with them non-zero it would (so the skip is real).
     #[test]
     fn inverse_skips_only_zero_lines() {
         let (fx, fy) = (6, 10);
@@ -236,8 +229,15 @@ mod tests {
             .map(|i| Complex32::new((i as f32 * 0.29).cos(), (i as f32 * 0.53).sin()))
             .collect();
         let inverse = |t: &[Complex32], lines: usize, s: &mut Vec<Complex32>| {
-            let (mut t, mut a) = (t.to_vec(), vec![Complex32::default(); fx * fy]);
-            f.inverse_rows(&mut t, &mut a, 0, fx, lines, s);
+            let (mut t, mut a) = (t.to_vec(), vec![Complex32::new(9.0, 9.0); fx * fy]);
+            f.inverse_x(&mut t, &mut a, 0..fx, lines, s);
+            let [lo, hi] = kept_lines(fy, lines);
+            for row in a.chunks_exact_mut(fy) {
+                row[lo.end..hi.start]
+                    .iter_mut()
+                    .for_each(|v| *v = Complex32::default());
+            }
+            f.inverse_y(&mut a, s);
             a
         };
         let mut cut = spec.clone();

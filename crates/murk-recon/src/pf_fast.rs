@@ -405,6 +405,8 @@ impl<'a> Plan<'a> {
         let (vx, vy) = (self.rx.len, self.ry.len);
         let (gx, gy) = (gnx + vx - 1, gny + vy - 1);
         let (nx, ny) = (self.vol.x.n, self.vol.y.n);
+        // The lattice rows x of the convolution that the resampler reads.
+        let xs = gnx - 1..gnx - 1 + vx;
         let z = self.vol.z.at(iz);
         let dz = z - self.grid.origin.z;
         let (dxs, dys) = (self.grid.step_x.x, self.grid.step_y.y);
@@ -512,22 +514,16 @@ impl<'a> Plan<'a> {
                 continue;
             }
             self.fft
-                .inverse_rows(&mut ws.t, &mut ws.g, gnx - 1, vx, lines, &mut ws.scratch);
-            self.resample(ws, nx, vy, gnx, gny, fy);
+                .inverse_x(&mut ws.t, &mut ws.g, xs.clone(), lines, &mut ws.scratch);
+            self.field_at_voxels(ws, lines);
             // Exact phase of the point-side leg.
             cmul::mul_add(&mut acc, &ws.field, &ws.pbase);
             cmul::mul_assign(&mut ws.pbase, &ws.pstep);
         }
         if confocal {
-            self.fft.inverse_rows(
-                &mut ws.spec_acc,
-                &mut ws.g,
-                gnx - 1,
-                vx,
-                fy / 2,
-                &mut ws.scratch,
-            );
-            self.resample(ws, nx, vy, gnx, gny, fy);
+            self.fft
+                .inverse_x(&mut ws.spec_acc, &mut ws.g, xs, fy / 2, &mut ws.scratch);
+            self.field_at_voxels(ws, fy / 2);
             acc.copy_from_slice(&ws.field);
         }
         // The voxels' order in the volume: x-major.
@@ -628,56 +624,64 @@ impl Plan<'_> {
         }
     }
 
-    /// Reads the convolution (lattice rows x ∈ [gnx−1, gnx−1+vx), columns [gny−1, gny−1+vy) of `ws.g`)
-    /// at the voxels into `ws.field` (y-major): a plain gather on the wall lattice, else windowed sinc
-    /// along x, then along y.
-    fn resample(
-        &self,
-        ws: &mut Workspace,
-        nx: usize,
-        vy: usize,
-        gnx: usize,
-        gny: usize,
-        fy: usize,
-    ) {
-        let lattice = |a: usize| (gnx - 1 + a) * fy + gny - 1;
-        if self.rx.taps == 1 && self.ry.taps == 1 {
-            for ix in 0..nx {
-                let row = &ws.g[lattice(self.rx.starts[ix])..][..vy];
+    /// The field at the voxels (`ws.field`, y-major) from the convolution's x-transformed lattice
+    /// rows in `ws.g` ([x][ky], rows [gnx−1, gnx−1+vx), kept lines only): along x first, still in ky
+    /// (resampling along x and the inverse FFT along y commute), so only nx rows, not vx, are
+    /// transformed along y; then along y at the voxels. Off the lattice both are windowed sincs; on
+    /// it, one tap of weight 1.
+    fn field_at_voxels(&self, ws: &mut Workspace, lines: usize) {
+        let (nx, fy) = (self.vol.x.n, self.fft.fy);
+        wide(
+            #[inline(always)]
+            || self.resample_x(ws, lines),
+        );
+        self.fft.inverse_y(&mut ws.tmp[..nx * fy], &mut ws.scratch);
+        wide(
+            #[inline(always)]
+            || self.resample_y(ws),
+        );
+    }
+
+    /// `ws.tmp` ([voxel x][ky]) = the taps' weighted sum of lattice rows of `ws.g`: whole rows,
+    /// contiguous, so it vectorises; zeros on the skipped lines.
+    #[inline(always)]
+    fn resample_x(&self, ws: &mut Workspace, lines: usize) {
+        let fy = self.fft.fy;
+        let x0 = self.grid.nx - 1;
+        let [lo, hi] = kept_lines(fy, lines);
+        for (ix, out) in ws.tmp.chunks_exact_mut(fy).enumerate() {
+            let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
+            for r in [lo.clone(), hi.clone()] {
+                let rows = w.iter().enumerate().map(|(k, &wk)| {
+                    let row = (x0 + st + k) * fy;
+                    (&ws.g[row + r.start..row + r.end], wk)
+                });
+                weighted_sum(&mut out[r.clone()], rows);
+            }
+            out[lo.end..hi.start]
+                .iter_mut()
+                .for_each(|v| *v = Complex32::default());
+        }
+    }
+
+    /// `ws.field` ([y][x]) from the rows of `ws.tmp` ([voxel x][lattice y] after the inverse along
+    /// y): a gather on the lattice, else the taps' weighted sum of transposed rows, so each tap is one
+    /// more contiguous row of nx values (short per-voxel dot products measured half the resampling
+    /// time).
+    #[inline(always)]
+    fn resample_y(&self, ws: &mut Workspace) {
+        let (nx, fy) = (self.vol.x.n, self.fft.fy);
+        let y0 = self.grid.ny - 1;
+        if self.ry.taps == 1 {
+            for (ix, row) in ws.tmp.chunks_exact(fy).enumerate() {
                 for (iy, &sy) in self.ry.starts.iter().enumerate() {
-                    ws.field[iy * nx + ix] = row[sy];
+                    ws.field[iy * nx + ix] = row[y0 + sy];
                 }
             }
             return;
         }
-        // Along x first: whole lattice rows weighted and summed, contiguous, so it vectorises; then
-        // along y at the voxels only (touching nx·ny·taps, not vx·ny·taps, values).
-        wide(
-            #[inline(always)]
-            || self.resample_off_lattice(ws, nx, vy, lattice),
-        );
-    }
-
-    /// Windowed-sinc reads of [`Plan::resample`], kept in one function so it is compiled for AVX2.
-    #[inline(always)]
-    fn resample_off_lattice(
-        &self,
-        ws: &mut Workspace,
-        nx: usize,
-        vy: usize,
-        lattice: impl Fn(usize) -> usize,
-    ) {
-        for ix in 0..nx {
-            let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
-            let rows = w
-                .iter()
-                .enumerate()
-                .map(|(k, &wk)| (&ws.g[lattice(st + k)..][..vy], wk));
-            weighted_sum(&mut ws.tmp[ix * vy..(ix + 1) * vy], rows);
-        }
-        // Then along y on the transposed rows, so each tap is one more contiguous row of nx values
-        // (short per-voxel dot products measured half the resampling time).
-        transpose::transpose(&ws.tmp[..nx * vy], &mut ws.tmp_t[..nx * vy], vy, nx);
+        let vy = self.ry.len;
+        transpose_part(&ws.tmp[y0..], fy, 0..nx, 0..vy, &mut ws.tmp_t, nx);
         for (iy, f) in ws.field.chunks_exact_mut(nx).enumerate() {
             let sy = self.ry.starts[iy];
             let rows = self
@@ -761,7 +765,8 @@ struct Workspace {
     pstep: Vec<Complex32>,
     /// The camera-side field at the voxels for the current frequency, y-major ([y][x]).
     field: Vec<Complex32>,
-    /// The field resampled along x ([x][lattice y]) and its transpose.
+    /// The field resampled along x ([voxel x][ky], then [voxel x][lattice y]) and the part of it that
+    /// the voxels read, transposed ([lattice y][voxel x]).
     tmp: Vec<Complex32>,
     tmp_t: Vec<Complex32>,
 }
@@ -782,7 +787,7 @@ impl Workspace {
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
-            tmp: vec![Complex32::default(); plan.vol.x.n * plan.ry.len],
+            tmp: vec![Complex32::default(); plan.vol.x.n * fy],
             tmp_t: vec![Complex32::default(); plan.vol.x.n * plan.ry.len],
         }
     }
