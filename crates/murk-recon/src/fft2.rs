@@ -1,6 +1,7 @@
 //! 2-D complex FFTs built from rustfft row transforms and blocked transposes, with caller-owned buffers.
 //! The forward transform leaves its spectrum transposed ([ky][kx]); the inverse expects that layout, so a
-//! forward/multiply/inverse round trip costs two transposes instead of four.
+//! forward/multiply/inverse round trip costs two transposes instead of four, each of only the lines and
+//! columns that are read.
 
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
@@ -47,22 +48,30 @@ impl Fft2 {
     }
 
     /// `a` is [x][y] (fx rows of fy); the spectrum is written to `t` as [ky][kx]. `a` is clobbered.
+    #[cfg(test)]
     pub fn forward(&self, a: &mut [Complex32], t: &mut [Complex32], scratch: &mut [Complex32]) {
-        self.forward_rows(a, self.fx, t, scratch);
+        self.forward_lines(a, self.fx, t, self.fy / 2, scratch);
     }
 
-    /// [`Fft2::forward`] for an `a` whose rows x ≥ `rows` are zero (they are left untouched).
-    pub fn forward_rows(
+    /// [`Fft2::forward`] for an `a` whose rows x ≥ `rows` are zero (they are left untouched), on the
+    /// lines ky that [`kept_lines`] keeps for `lines` only: the other lines of `t` are left as they
+    /// were.
+    pub fn forward_lines(
         &self,
         a: &mut [Complex32],
         rows: usize,
         t: &mut [Complex32],
+        lines: usize,
         scratch: &mut [Complex32],
     ) {
+        let (fx, fy) = (self.fx, self.fy);
         self.fwd_y
-            .process_with_scratch(&mut a[..rows * self.fy], scratch);
-        transpose(a, t, self.fx, self.fy);
-        self.fwd_x.process_with_scratch(t, scratch);
+            .process_with_scratch(&mut a[..rows * fy], scratch);
+        for r in kept_lines(fy, lines) {
+            transpose_part(a, fy, 0..fx, r.clone(), t, fx);
+            self.fwd_x
+                .process_with_scratch(&mut t[r.start * fx..r.end * fx], scratch);
+        }
     }
 
     /// Forward 1-D transforms along y of consecutive rows of length `fy`.
@@ -109,11 +118,6 @@ pub fn kept_lines(fy: usize, lines: usize) -> [Range<usize>; 2] {
     } else {
         [0..lines + 1, fy - lines..fy]
     }
-}
-
-/// `src` is rows×cols; `dst` becomes cols×rows.
-fn transpose(src: &[Complex32], dst: &mut [Complex32], rows: usize, cols: usize) {
-    transpose::transpose(src, dst, cols, rows);
 }
 
 /// `dst[c·dst_stride + r] = src[r·src_stride + c]` for r ∈ `rows`, c ∈ `cols`: part of a transpose, in

@@ -224,7 +224,12 @@ impl<'a> Plan<'a> {
         for (k, planes) in slabs.iter().enumerate() {
             let spectra = all.part(k);
             for &src in &sources {
-                let hspec = self.grid_spectra(&spectra, src, &mut grid, &pool);
+                // The planes' kept lines are fewest for the deepest; the grid spectra serve all.
+                let dz_min = planes
+                    .clone()
+                    .map(|iz| self.vol.z.at(iz) - self.grid.origin.z)
+                    .fold(f64::INFINITY, f64::min);
+                let hspec = self.grid_spectra(&spectra, src, dz_min, &mut grid, &pool);
                 let out: Vec<Vec<Complex32>> = planes
                     .clone()
                     .into_par_iter()
@@ -328,12 +333,14 @@ impl<'a> Plan<'a> {
         Ok((ranges, windows))
     }
 
-    /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout;
-    /// the buffers are reused across slabs.
+    /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout, on
+    /// the lines that planes at `dz_min` or deeper keep (the others are garbage); the buffers are
+    /// reused across slabs.
     fn grid_spectra<'b>(
         &self,
         spectra: &Part,
         src: Option<usize>,
+        dz_min: f64,
         buf: &'b mut GridBuffers,
         pool: &[Mutex<Workspace>],
     ) -> &'b [Complex32] {
@@ -363,7 +370,9 @@ impl<'a> Plan<'a> {
         out[..nb * fx * fy]
             .par_chunks_mut(fx * fy)
             .zip(by_freq[..nb * cells].par_chunks(cells))
-            .for_each(|(t, cells)| {
+            .enumerate()
+            .for_each(|(j, (t, cells))| {
+                let lines = self.lines(legs(src) * spectra.band.k(j), dz_min);
                 let mut ws = lock(pool);
                 let Workspace {
                     grid_in: a,
@@ -378,13 +387,16 @@ impl<'a> Plan<'a> {
                         .iter_mut()
                         .for_each(|v| *v = Complex32::default());
                 }
-                self.fft.forward_rows(a, gnx, t, scratch);
+                self.fft.forward_lines(a, gnx, t, lines, scratch);
                 // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
-                match &self.fold {
-                    Some(f) => cmul::mul_assign(t, &f.phases),
-                    None => {
-                        let norm = 1.0 / (fx * fy) as f32;
-                        t.iter_mut().for_each(|v| *v *= norm)
+                for r in kept_lines(fy, lines) {
+                    let span = r.start * fx..r.end * fx;
+                    match &self.fold {
+                        Some(f) => cmul::mul_assign(&mut t[span.clone()], &f.phases[span]),
+                        None => {
+                            let norm = 1.0 / (fx * fy) as f32;
+                            t[span].iter_mut().for_each(|v| *v *= norm)
+                        }
                     }
                 }
             });
@@ -410,8 +422,7 @@ impl<'a> Plan<'a> {
         let z = self.vol.z.at(iz);
         let dz = z - self.grid.origin.z;
         let (dxs, dys) = (self.grid.step_x.x, self.grid.step_y.y);
-        // Round trip for confocal data: both legs share the wall point.
-        let legs = if src.is_none() { 2.0 } else { 1.0 };
+        let legs = legs(src);
         // k_0 = m_lo·Δk, so a phase at k_0 is the per-frequency step to the power m_lo: one sincos
         // per entry instead of two.
         let (m0, dk) = (band.m_lo as u32, band.dk());
@@ -482,7 +493,8 @@ impl<'a> Plan<'a> {
                         }
                     },
                 );
-                self.fft.forward(&mut ws.g, &mut ws.t, &mut ws.scratch);
+                self.fft
+                    .forward_lines(&mut ws.g, gx, &mut ws.t, lines, &mut ws.scratch);
             }
             cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
@@ -530,6 +542,16 @@ impl<'a> Plan<'a> {
         let mut out = vec![Complex32::default(); nx * ny];
         transpose::transpose(&acc, &mut out, nx, ny);
         out
+    }
+}
+
+/// How many times the kernel's leg is travelled: twice for confocal data (no point-side index), whose
+/// legs share the wall point.
+fn legs(src: Option<usize>) -> f64 {
+    if src.is_none() {
+        2.0
+    } else {
+        1.0
     }
 }
 
