@@ -718,13 +718,37 @@ impl Plan<'_> {
 }
 
 /// `out` = Σ weight·row over `rows`, over the interleaved (re, im) floats: plain f32 loops vectorise
-/// without the shuffles that LLVM puts around a product of complex values by a real one.
+/// without the shuffles that LLVM puts around a product of complex values by a real one. Blocks of
+/// 32 floats are summed over all rows in registers and stored once (a pass per row, reading and
+/// writing `out` each time, took 1.5× as long).
 #[inline(always)]
 fn weighted_sum<'r>(out: &mut [Complex32], rows: impl Iterator<Item = (&'r [Complex32], f32)>) {
+    const BLOCK: usize = 32;
+    const MAX_ROWS: usize = 2 * crate::resample::HALF_TAPS as usize;
     let out = floats_mut(out);
-    out.iter_mut().for_each(|v| *v = 0.0);
+    let n = out.len();
+    let mut taps: [(&[f32], f32); MAX_ROWS] = [(&[], 0.0); MAX_ROWS];
+    let mut count = 0;
     for (row, w) in rows {
-        for (x, g) in out.iter_mut().zip(floats(row)) {
+        taps[count] = (&floats(row)[..n], w);
+        count += 1;
+    }
+    let taps = &taps[..count];
+    let full = n - n % BLOCK;
+    for c in (0..full).step_by(BLOCK) {
+        let mut acc = [0f32; BLOCK];
+        for &(row, w) in taps {
+            let src: &[f32; BLOCK] = row[c..c + BLOCK].try_into().expect("a block of the row");
+            for (a, g) in acc.iter_mut().zip(src) {
+                *a += g * w;
+            }
+        }
+        out[c..c + BLOCK].copy_from_slice(&acc);
+    }
+    let tail = &mut out[full..];
+    tail.iter_mut().for_each(|v| *v = 0.0);
+    for &(row, w) in taps {
+        for (x, g) in tail.iter_mut().zip(&row[full..]) {
             *x += g * w;
         }
     }

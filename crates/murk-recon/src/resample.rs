@@ -4,7 +4,7 @@
 //! interpolation is accurate away from that limit.
 
 /// Half-width of the windowed sinc in samples (16 taps).
-const HALF_TAPS: i64 = 8;
+pub const HALF_TAPS: i64 = 8;
 /// Kaiser shape: trades main-lobe width (passband droop near Nyquist) for side-lobe leakage.
 const KAISER_BETA: f64 = 6.5;
 
