@@ -224,7 +224,7 @@ impl<'a> Plan<'a> {
         for (k, planes) in slabs.iter().enumerate() {
             let spectra = all.part(k);
             for &src in &sources {
-                // The planes' kept lines are fewest for the deepest; the grid spectra serve all.
+                // The shallowest plane keeps the most lines: grid spectra on its lines serve all.
                 let dz_min = planes
                     .clone()
                     .map(|iz| self.vol.z.at(iz) - self.grid.origin.z)
