@@ -10,13 +10,19 @@
 pub fn wide<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if has_avx2_fma() {
             // SAFETY: the features `avx2_fma` is compiled for were just detected on this CPU.
             return unsafe { avx2_fma(f) };
         }
     }
     f()
+}
+
+/// Whether this CPU has AVX2 and FMA (for hand-written kernels that `wide` cannot express).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub fn has_avx2_fma() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -1,13 +1,15 @@
 //! Element-wise complex products over slices, with an AVX2 + FMA kernel where the CPU has one: LLVM
 //! wraps num-complex's product in lane shuffles.
 
+#[cfg(target_arch = "x86_64")]
+use murk_core::simd::has_avx2_fma;
 use rustfft::num_complex::Complex32;
 
 /// `a[i] *= b[i]`.
 pub fn mul_assign(a: &mut [Complex32], b: &[Complex32]) {
     let n = a.len().min(b.len());
     #[cfg(target_arch = "x86_64")]
-    if avx2_fma() {
+    if has_avx2_fma() {
         let p = a.as_mut_ptr();
         // SAFETY: AVX2 and FMA were just detected; `n` bounds every access; in place is allowed.
         let done = unsafe { avx::mul(p, p, b.as_ptr(), n, false) };
@@ -20,7 +22,7 @@ pub fn mul_assign(a: &mut [Complex32], b: &[Complex32]) {
 pub fn mul_add(dst: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {
     let n = dst.len().min(a.len()).min(b.len());
     #[cfg(target_arch = "x86_64")]
-    if avx2_fma() {
+    if has_avx2_fma() {
         // SAFETY: as in `mul_assign`; `dst` does not alias `a` or `b` (borrow rules).
         let done = unsafe { avx::mul(dst.as_mut_ptr(), a.as_ptr(), b.as_ptr(), n, true) };
         return tail2(&mut dst[done..n], &a[done..n], &b[done..n]);
@@ -36,11 +38,6 @@ fn tail2(d: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {
     d.iter_mut()
         .zip(a.iter().zip(b))
         .for_each(|(d, (a, b))| *d += a * b);
-}
-
-#[cfg(target_arch = "x86_64")]
-fn avx2_fma() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -444,22 +444,16 @@ impl<'a> Plan<'a> {
                 ws.tstep.push(c32(step));
             }
         }
-        // Exact phase of the point-side leg, per voxel (y-major, like `ws.field`).
-        for ix in 0..nx {
-            for iy in 0..ny {
-                let i = iy * nx + ix;
-                match src {
-                    Some(s) => {
-                        let v = DVec3::new(self.vol.x.at(ix), self.vol.y.at(iy), z);
-                        let d = (v - self.source_point(s)).length();
-                        let step = Complex64::from_polar(1.0, dk * d);
-                        ws.pbase[i] = c32(step.powu(m0) * amplitude(self.falloff, d));
-                        ws.pstep[i] = c32(step);
-                    }
-                    None => {
-                        ws.pbase[i] = Complex32::new(1.0, 0.0);
-                        ws.pstep[i] = Complex32::new(1.0, 0.0);
-                    }
+        // Exact phase of the point-side leg, per voxel (y-major, like `ws.field`); confocal data have
+        // none.
+        if let Some(s) = src {
+            for ix in 0..nx {
+                for iy in 0..ny {
+                    let v = DVec3::new(self.vol.x.at(ix), self.vol.y.at(iy), z);
+                    let d = (v - self.source_point(s)).length();
+                    let step = Complex64::from_polar(1.0, dk * d);
+                    ws.pbase[iy * nx + ix] = c32(step.powu(m0) * amplitude(self.falloff, d));
+                    ws.pstep[iy * nx + ix] = c32(step);
                 }
             }
         }
@@ -615,7 +609,6 @@ impl Plan<'_> {
         );
         self.fft.rows_y(&mut g[..rows * fy], &mut ws.scratch);
         // Only the hy columns that are read.
-        ws.cols.resize(fy * rows, Complex32::default());
         transpose_part(&g[..rows * fy], fy, 0..rows, 0..hy, &mut ws.cols, rows);
         wide(
             #[inline(always)]
@@ -829,7 +822,11 @@ impl Workspace {
             tcur: Vec::new(),
             tstep: Vec::new(),
             spec_acc: vec![Complex32::default(); fx * fy],
-            cols: Vec::new(),
+            // Folded kernel spectrum: the distinct rows' columns ky ≤ fy/2, the most it keeps.
+            cols: match plan.fold {
+                Some(_) => vec![Complex32::default(); (fy / 2 + 1) * (plan.cx as usize + 1)],
+                None => Vec::new(),
+            },
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
