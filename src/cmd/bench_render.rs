@@ -134,7 +134,7 @@ fn t_case(
     say(quiet, format!(
         "{}: {} points × {} spp, median of {runs}: relL2 {e:.4} ({}), CPU {cpu:.2} s, {:.2} M paths/CPU-s; to mitransient's {em:.4} ({source}) we need {ours:.2} CPU-s vs its {cm:.2} s: {:.1}× less CPU",
         c.file,
-        plan.n_units(),
+        plan.n_points(),
         c.spp,
         c.window.map_or("all bins".to_string(), |w| format!("object window {}–{} m", w.0, w.1)),
         rate / 1e6,
@@ -235,12 +235,12 @@ fn paper_format(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
     let e = median(pairs.iter().map(|p| p.0).collect());
     let cpu_per_path = median(pairs.iter().map(|p| p.1).collect());
     let spp6 = SPP as f64 * (e / 0.06).powi(2);
-    let cpu6 = cpu_per_path * plan.n_units() as f64 * spp6;
+    let cpu6 = cpu_per_path * plan.n_points() as f64 * spp6;
     // Peak memory of a whole render at 1 spp (the histograms do not grow with spp).
     timed_render(&plan, 1, 0, None)?;
     say(quiet, format!(
         "paper format (z-letter.toml, {} laser points × {} bins): {SPP} spp gives object-window ({}–{} m) relL2 {e:.3} (median of {} pairs, 1024 central laser points), {:.3} M paths/CPU-s; extrapolated (error ∝ spp^−½): 6 % needs {spp6:.0} spp = {:.2} CPU-hours; peak RSS of a full-grid render {:.0} MiB",
-        plan.n_units(),
+        plan.n_points(),
         scene.capture.time.bins,
         WINDOW.0,
         WINDOW.1,

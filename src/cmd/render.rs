@@ -133,10 +133,11 @@ fn render(a: &RenderArgs, scene: &Scene, quiet: bool) -> anyhow::Result<()> {
         let _ = std::fs::remove_file(&ckpt);
     }
     if !quiet {
-        let paths = n_units as f64 * spp as f64;
+        let points = plan.shard_points(a.shard);
+        let paths = points as f64 * spp as f64;
         eprintln!(
             "murk: {} points × {spp} spp in {secs:.2} s ({:.2} M paths/s) → {}",
-            n_units,
+            points,
             paths / secs / 1e6,
             a.out.display()
         );
@@ -159,9 +160,10 @@ fn spp_for_budget(plan: &Plan, budget_s: f64, n_units: usize) -> anyhow::Result<
     pilot.par_iter().for_each(|&u| {
         plan.render_unit(u, pilot_spp, u64::MAX);
     });
-    let per_path =
+    // CPU seconds per unit (a tile of traced points) and sample.
+    let per_unit_spp =
         t0.elapsed().as_secs_f64() * threads as f64 / (pilot.len() as f64 * pilot_spp as f64);
-    let spp = (0.9 * budget_s * threads as f64 / (n_units as f64 * per_path)).floor();
+    let spp = (0.9 * budget_s * threads as f64 / (n_units as f64 * per_unit_spp)).floor();
     Ok((spp as u64).max(1))
 }
 

@@ -43,7 +43,7 @@ fn main() {
     println!(
         "{}: {} points × {spp} spp, {runs} runs (median): object-window [{}, {}] m relL2 {:.4}, CPU {:.2} s, wall {:.2} s, {:.2} M paths/CPU-s",
         a[1],
-        plan.n_units(),
+        plan.n_points(),
         window.0,
         window.1,
         med(|r| r.0),

@@ -56,7 +56,7 @@ pub fn timed_render(
         h: cap.h,
         cpu_s: cpu_seconds().zip(c0).map_or(wall_s, |(c1, c0)| c1 - c0),
         wall_s,
-        paths: plan.shard_units(shard).len() as f64 * spp as f64,
+        paths: plan.shard_points(shard) as f64 * spp as f64,
     })
 }
 

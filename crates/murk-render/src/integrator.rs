@@ -47,6 +47,17 @@
 //!   rare phase directions meeting the Z (18 % of the second moment from 0.1 % of the samples); relL2 at
 //!   128 spp 2.79 → 2.38 for 15 % more CPU per path (8.5 → 7.3 CPU-h). On t-wall-medium (relL2 1.10 → 1.01
 //!   for ~40 % more CPU per path) it pays nothing, so that scene turns it off.
+//! - Traced points share their paths' tails in tiles (`share_tile`: 4 × 4 by default where a medium
+//!   scatters and every traced point has the same targets; `Plan` makes the tiles). What a path adds past
+//!   its first hidden vertex (from the techniques that leave that vertex on) is replayed for every point
+//!   of the tile: the first vertex is joined to each point again, weighted by the balance heuristic over
+//!   the tile's densities of that vertex (each point traces spp paths), shifted by the difference in
+//!   optical path, and scaled by the phase function's ratio at the first vertex when it is anisotropic.
+//!   Each point's first-segment techniques (single scattering, the direct object return) stay its own.
+//!   On z-letter the techniques past the first vertex carried ~90 % of the object window's second
+//!   moment. Paper format (`murk bench --render --only z-letter`, 128 spp): relL2 2.37 → 1.35 (2 × 2),
+//!   0.91 (4 × 4), 0.75 (8 × 8) for 1.1×, 1.7×, 2.9× the CPU per path: 6.65 → 3.06, 1.72, 2.13 CPU-h.
+//!   t-wall-medium: 8.1× → 14.6× less CPU than mitransient (8 × 8: 8.0×, its first segments dominate).
 //! - Equiangular distances toward the targets are off by default (`equiangular`): once target-side
 //!   sampling handles the points near a target and roulette is gone, they took a third of the CPU time
 //!   for no lower error. t-wall-medium (median of 7 seeds, 256 spp): relL2 1.35 at 0.90 CPU-s with them,
@@ -370,6 +381,39 @@ impl Toward {
     }
 }
 
+/// What a path adds past its first hidden vertex, kept to be shared by the traced points of a tile: target
+/// index, optical path (jitter included), value, and the direction that left the first vertex on the way
+/// to it (for the phase function's ratio there).
+struct Tail {
+    k: usize,
+    opl: f64,
+    value: f64,
+    w: DVec3,
+}
+
+/// A path's first hidden vertex: a medium vertex (`normal` None) or a surface one (its normal facing the
+/// arriving path).
+#[derive(Clone, Copy)]
+struct First {
+    y: DVec3,
+    normal: Option<DVec3>,
+}
+
+/// Where a path's contributions go: the traced point's histograms (`targets × bins` at `base` in the
+/// unit's buffer), or, while `recording`, the tail list shared with the rest of the tile.
+struct Sink<'o> {
+    out: &'o mut [f64],
+    base: usize,
+    /// Whether the unit is a tile of more than one traced point.
+    share: bool,
+    recording: bool,
+    /// Whether the techniques now running leave from the first vertex (each sets `w`).
+    at_first: bool,
+    w: DVec3,
+    first: Option<First>,
+    tail: Vec<Tail>,
+}
+
 /// Per-scene precomputation shared by all work units.
 pub struct Tracer<'a> {
     scene: &'a Scene,
@@ -465,16 +509,30 @@ impl<'a> Tracer<'a> {
         best
     }
 
-    /// Adds `spp` paths from `origin` into `out` (`targets.len()` histograms of `bins`), unnormalised.
+    /// Adds `spp` paths from each of `origins` into `out` (per origin, `targets.len()` histograms of
+    /// `bins`), unnormalised. With more than one origin (a tile), what each path adds past its first
+    /// hidden vertex is shared by all of them (`share_tail`).
     pub fn trace(
         &self,
-        origin: &Endpoint,
+        origins: &[Endpoint],
         targets: &[Endpoint],
         spp: u64,
         s: &mut Sampler,
         out: &mut [f64],
     ) {
         let mut seg = Vec::new();
+        let unit = targets.len() * self.scene.capture.time.bins;
+        let mut sink = Sink {
+            out,
+            base: 0,
+            share: origins.len() > 1,
+            recording: false,
+            at_first: false,
+            w: DVec3::ZERO,
+            first: None,
+            tail: Vec::new(),
+        };
+        let mut legs = Vec::new();
         let g = {
             // Every unit of a render has the same spp: search once.
             let mut last = self.lattice.lock().unwrap_or_else(|e| e.into_inner());
@@ -484,20 +542,112 @@ impl<'a> Tracer<'a> {
             last.1
         };
         let n = spp as f64;
-        let (s1, s2) = (s.next(), s.next());
-        // j·g mod spp, kept incrementally (no division per path).
-        let mut jg = 0;
-        for j in 0..spp {
-            let u = ((s1 + j as f64 / n).fract(), (s2 + jg as f64 / n).fract());
-            self.path(origin, targets, u, s, out, &mut seg);
-            jg += g;
-            if jg >= spp {
-                jg -= spp;
+        for (i, origin) in origins.iter().enumerate() {
+            sink.base = i * unit;
+            let (s1, s2) = (s.next(), s.next());
+            // j·g mod spp, kept incrementally (no division per path).
+            let mut jg = 0;
+            for j in 0..spp {
+                let u = ((s1 + j as f64 / n).fract(), (s2 + jg as f64 / n).fract());
+                sink.first = None;
+                sink.tail.clear();
+                self.path(origin, targets, u, s, &mut sink, &mut seg);
+                if !sink.tail.is_empty() {
+                    self.share_tail(origins, i, &mut sink, &mut legs);
+                }
+                jg += g;
+                if jg >= spp {
+                    jg -= spp;
+                }
             }
         }
     }
 
-    fn splat(&self, out: &mut [f64], k: usize, opl: f64, value: f64, s: &mut Sampler) {
+    /// The first leg from origin `o` to the first vertex `f`: (integrand f, density p with which tracing
+    /// from `o` places that vertex, optical path to it, direction), in the measure of the vertex (volume or
+    /// area); None where `o` cannot reach it (behind, occluded, outside the medium along the leg).
+    fn leg(&self, o: &Endpoint, f: &First) -> Option<(f64, f64, f64, DVec3)> {
+        let v = f.y - o.p;
+        let t = v.length();
+        let w = v / t;
+        let cos = o.n.dot(w);
+        if cos.is_nan() || cos <= 0.0 {
+            return None;
+        }
+        let (pdf, hit) = self.origin_pdf(o.p, o.n, w);
+        let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
+        let g = cos / PI / (t * t);
+        match f.normal {
+            None => {
+                let m = self.medium()?;
+                if t_hit < t - EPS {
+                    return None;
+                }
+                let (m0, m1) = m.region.clip(o.p, w, t_hit)?;
+                if t < m0 || t > m1 {
+                    return None;
+                }
+                let tr = (-m.sigma_t * (t - m0)).exp();
+                let opl = o.extra_m + t + (m.ior - 1.0) * (t - m0);
+                Some((g * tr * m.sigma_s(), pdf * m.sigma_t * tr / (t * t), opl, w))
+            }
+            Some(n) => {
+                // The same surface point, seen from its front (the side the shared path left from).
+                let cos_y = -n.dot(w);
+                if (t_hit - t).abs() > 1e-6 * t.max(1.0) || cos_y <= 0.0 {
+                    return None;
+                }
+                let (tr, extra) = self.transmit(o.p, w, t);
+                let a = tr * cos_y;
+                Some((g * a, pdf * a / (t * t), o.extra_m + t + extra, w))
+            }
+        }
+    }
+
+    /// Adds the tail of a path traced from `origins[src]` to every origin of the tile: the first vertex is
+    /// re-joined to each origin and weighted by the balance heuristic over all origins' densities of that
+    /// vertex (every origin traces the same spp), so each origin's estimate stays unbiased and gets the
+    /// tails of the whole tile.
+    fn share_tail(
+        &self,
+        origins: &[Endpoint],
+        src: usize,
+        sink: &mut Sink,
+        legs: &mut Vec<Option<(f64, f64, f64, DVec3)>>,
+    ) {
+        let Some(first) = sink.first else { return };
+        legs.clear();
+        legs.extend(origins.iter().map(|o| self.leg(o, &first)));
+        let sum_p: f64 = legs.iter().flatten().map(|l| l.1).sum();
+        let Some((f_src, p_src, opl_src, d_src)) = legs[src] else {
+            return;
+        };
+        if !(f_src > 0.0 && p_src > 0.0) {
+            return;
+        }
+        let t = &self.scene.capture.time;
+        let unit = sink.out.len() / origins.len();
+        let phase = self
+            .medium()
+            .map(|m| m.phase)
+            .filter(|p| first.normal.is_none() && !matches!(p, crate::medium::Phase::Isotropic));
+        for (i, leg) in legs.iter().enumerate() {
+            let Some((f, _, opl, d)) = *leg else { continue };
+            let scale = f * p_src / (f_src * sum_p);
+            let shift = opl - opl_src;
+            let hist = &mut sink.out[i * unit..(i + 1) * unit];
+            for tl in &sink.tail {
+                let x = (tl.opl + shift - t.start_m) / t.bin_width_m;
+                if x >= 0.0 && x < t.bins as f64 {
+                    let ratio =
+                        phase.map_or(1.0, |p| p.eval(d.dot(tl.w)) / p.eval(d_src.dot(tl.w)));
+                    hist[tl.k * t.bins + x as usize] += tl.value * scale * ratio;
+                }
+            }
+        }
+    }
+
+    fn splat(&self, out: &mut Sink, k: usize, opl: f64, value: f64, s: &mut Sampler) {
         let t = &self.scene.capture.time;
         let jitter = self.scene.settings.time_jitter;
         let opl = if jitter > 0.0 {
@@ -505,9 +655,18 @@ impl<'a> Tracer<'a> {
         } else {
             opl
         };
+        if out.recording {
+            out.tail.push(Tail {
+                k,
+                opl,
+                value,
+                w: out.w,
+            });
+            return;
+        }
         let x = (opl - t.start_m) / t.bin_width_m;
         if x >= 0.0 && x < t.bins as f64 {
-            out[k * t.bins + x as usize] += value;
+            out.out[out.base + k * t.bins + x as usize] += value;
         }
     }
 
@@ -616,13 +775,12 @@ impl<'a> Tracer<'a> {
         from: &Start,
         targets: &[Endpoint],
         s: &mut Sampler,
-        out: &mut [f64],
+        out: &mut Sink,
     ) {
-        let bins = self.scene.capture.time.bins;
         for (k, tgt) in targets.iter().enumerate() {
             let n = self.target_draws(from, tgt);
             for _ in 0..n {
-                self.draw_from_target(m, from, tgt, n, s, &mut out[k * bins..(k + 1) * bins]);
+                self.draw_from_target(m, from, (k, tgt), n, s, out);
             }
         }
     }
@@ -643,15 +801,15 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// One of `n` target-side draws toward `tgt`, into its histogram `out`.
+    /// One of `n` target-side draws toward target `k`, `tgt`.
     fn draw_from_target(
         &self,
         m: &Medium,
         from: &Start,
-        tgt: &Endpoint,
+        (k, tgt): (usize, &Endpoint),
         n: u32,
         s: &mut Sampler,
-        out: &mut [f64],
+        out: &mut Sink,
     ) {
         let wl = cosine_hemisphere(tgt.n, s.next(), s.next());
         let u = s.next();
@@ -675,6 +833,9 @@ impl<'a> Tracer<'a> {
         if f <= 0.0 {
             return;
         }
+        if out.at_first {
+            out.w = w;
+        }
         let hit = self.intersect(from.x, w).map_or(f64::INFINITY, |h| h.0.t);
         if hit < t - EPS {
             return;
@@ -696,7 +857,7 @@ impl<'a> Tracer<'a> {
             / (PI * tl * tl)
             / (n as f64 * p_l + p_path);
         let opl = from.opl + t + tl + (m.ior - 1.0) * ((t - m0) + (tl - a)) + tgt.extra_m;
-        self.splat(out, 0, opl, value, s);
+        self.splat(out, k, opl, value, s);
     }
 
     /// The balance weight of a path's own surface connection along direction `d` from `from` against
@@ -728,7 +889,7 @@ impl<'a> Tracer<'a> {
         opl: f64,
         targets: &[Endpoint],
         s: &mut Sampler,
-        out: &mut [f64],
+        out: &mut Sink,
     ) {
         if !self.medium_objects {
             return;
@@ -749,6 +910,9 @@ impl<'a> Tracer<'a> {
             return;
         }
         let b = beta * ph / (ph + p_h);
+        if out.at_first {
+            out.w = w;
+        }
         self.connect_hit(x, w, &h, b, opl, targets, s, out);
     }
 
@@ -772,7 +936,7 @@ impl<'a> Tracer<'a> {
         opl: f64,
         targets: &[Endpoint],
         s: &mut Sampler,
-        out: &mut [f64],
+        out: &mut Sink,
     ) {
         let (tr, extra) = self.transmit(x, w, h.t);
         let v = Vertex::Surface {
@@ -780,11 +944,21 @@ impl<'a> Tracer<'a> {
             albedo: h.albedo,
         };
         let o = opl + h.t + extra;
-        self.connect(x + w * h.t, x, &v, beta * tr, o, targets, |_| 1.0, s, out);
+        self.connect(
+            x + w * h.t,
+            x,
+            &v,
+            beta * tr,
+            o,
+            (0, targets),
+            |_| 1.0,
+            s,
+            out,
+        );
     }
 
-    /// Connects vertex `y` (reached with throughput `beta` at optical path `opl`) to every target.
-    /// `mis(k)` weights the connection to target k. `seen` is the start of the segment that reached y, which
+    /// Connects vertex `y` (reached with throughput `beta` at optical path `opl`) to every target of
+    /// `(k0, targets)` (the first one is target k0). `mis(k)` weights the connection to `targets[k]`. `seen` is the start of the segment that reached y, which
     /// sees y: a target there (confocal: the origin at the first vertex) needs no occlusion test.
     #[allow(clippy::too_many_arguments)]
     fn connect(
@@ -794,10 +968,10 @@ impl<'a> Tracer<'a> {
         v: &Vertex,
         beta: f64,
         opl: f64,
-        targets: &[Endpoint],
+        (k0, targets): (usize, &[Endpoint]),
         mis: impl Fn(usize) -> f64,
         s: &mut Sampler,
-        out: &mut [f64],
+        out: &mut Sink,
     ) {
         for (k, tgt) in targets.iter().enumerate() {
             let v_y = tgt.p - y;
@@ -814,7 +988,7 @@ impl<'a> Tracer<'a> {
             }
             let (tr, extra) = self.transmit(y, w, r);
             let value = beta * f * tr * cos_t / (PI * r2) * mis(k);
-            self.splat(out, k, opl + r + extra + tgt.extra_m, value, s);
+            self.splat(out, k0 + k, opl + r + extra + tgt.extra_m, value, s);
         }
     }
 
@@ -824,11 +998,10 @@ impl<'a> Tracer<'a> {
         targets: &[Endpoint],
         (u, v): (f64, f64),
         s: &mut Sampler,
-        out: &mut [f64],
+        out: &mut Sink,
         seg: &mut Vec<Toward>,
     ) {
         let set = &self.scene.settings;
-        let bins = self.scene.capture.time.bins;
         // (u, v) picks the technique (hidden geometry with probability p_hidden) and, rescaled, its sample.
         let mut d = if u < self.p_hidden {
             (self.hidden.sample(u / self.p_hidden, v) - origin.p).normalize()
@@ -859,12 +1032,18 @@ impl<'a> Tracer<'a> {
         let mut opl = origin.extra_m;
         let mut depth = 0u32;
         loop {
+            // Past the first vertex, everything goes to the tail the tile shares.
+            out.recording = out.share && !from.origin;
+            out.at_first = out.recording && depth == 1;
             // The medium that scatters, when target-side sampling runs in it.
             let scattering = self
                 .medium()
                 .filter(|m| m.sigma_s() > 0.0 && set.target_sampling);
             if let Some(m) = scattering {
                 self.sample_from_target(m, &from, targets, s, out);
+            }
+            if out.at_first {
+                out.w = d;
             }
             // Target-side density of a path-side vertex y at distance t, per unit length along d.
             let pd = if scattering.is_some() {
@@ -930,10 +1109,10 @@ impl<'a> Tracer<'a> {
                                     &v,
                                     b,
                                     o,
-                                    &targets[k..=k],
+                                    (k, &targets[k..=k]),
                                     |_| w,
                                     s,
-                                    &mut out[k * bins..],
+                                    out,
                                 );
                             }
                         }
@@ -950,6 +1129,8 @@ impl<'a> Tracer<'a> {
                         let t = m0 - (1.0 - s.next()).ln() / m.sigma_t;
                         if t < m1 {
                             depth += 1;
+                            // What leaves this vertex keeps the first vertex's outgoing direction.
+                            out.at_first = false;
                             let y = pos + d * t;
                             let pff = pdf_ff(t);
                             let mis =
@@ -963,13 +1144,22 @@ impl<'a> Tracer<'a> {
                                 &Vertex::Medium { dir: d },
                                 beta,
                                 opl,
-                                targets,
+                                (0, targets),
                                 mis,
                                 s,
                                 out,
                             );
                             if depth >= set.max_depth {
                                 return;
+                            }
+                            if depth == 1 {
+                                // The first vertex: what leaves it is shared.
+                                out.first = Some(First {
+                                    y: pos,
+                                    normal: None,
+                                });
+                                out.recording = out.share;
+                                out.at_first = out.share;
                             }
                             self.connect_object(m, pos, d, beta, opl, targets, s, out);
                             if !self.roulette(&mut beta, depth, s) {
@@ -1002,11 +1192,17 @@ impl<'a> Tracer<'a> {
             };
             if !on_relay && !connected {
                 let b = beta * self.object_weight(&from, d);
-                self.connect(pos, from.x, &v, b, opl, targets, |_| 1.0, s, out);
+                self.connect(pos, from.x, &v, b, opl, (0, targets), |_| 1.0, s, out);
             }
             beta *= h.albedo;
             if beta <= 0.0 || depth >= set.max_depth || !self.roulette(&mut beta, depth, s) {
                 return;
+            }
+            if depth == 1 {
+                out.first = Some(First {
+                    y: pos,
+                    normal: Some(h.n),
+                });
             }
             from = Start {
                 x: pos,

@@ -1,12 +1,13 @@
 //! Work units, parallel rendering, checkpoints, shards and merging.
 //!
-//! A work unit is one traced wall point (a laser point when tracing from lasers) with its own PCG stream
-//! (seed, unit index), rendered by one thread into histograms nobody else writes. So the result does not
-//! depend on the thread count, on how units are sharded, or on an interruption and `--resume`.
+//! A work unit is a tile of traced wall points (laser points when tracing from lasers; one point unless
+//! they share path tails, `share_tile`) with its own PCG stream (seed, unit index), rendered by one
+//! thread into histograms nobody else writes. So the result does not depend on the thread count, on how
+//! units are sharded, or on an interruption and `--resume`.
 
 use crate::integrator::{Endpoint, Sampler, Tracer};
 use crate::scene::{Scene, TraceFrom};
-use murk_core::{Capture, DVec3, Error, Pairing, Result};
+use murk_core::{Capture, DVec3, Error, Pairing, PointLayout, Result};
 use rayon::prelude::*;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -29,6 +30,10 @@ pub struct Plan<'a> {
     pub scene: &'a Scene,
     tracer: Tracer<'a>,
     from_laser: bool,
+    /// The traced points' grid (nx, ny; a list is n × 1) and the tile (tx, ty) of one unit; tiles divide
+    /// the grid.
+    grid: (usize, usize),
+    tile: (usize, usize),
 }
 
 impl<'a> Plan<'a> {
@@ -40,20 +45,56 @@ impl<'a> Plan<'a> {
             // Trace from the larger side: each vertex then connects to the few points of the other side.
             TraceFrom::Auto => c.illum.len() >= c.sensor.len(),
         };
+        let traced = if from_laser { &c.illum } else { &c.sensor };
+        let grid = match traced.layout {
+            PointLayout::Grid { nx, ny } => (nx, ny),
+            PointLayout::List => (traced.len(), 1),
+        };
+        // Tails are shared where a medium scatters (their density model) and every traced point has the
+        // same targets; the tile side is the largest divisor of each grid side up to `share_tile`.
+        let scatters = scene.medium.as_ref().is_some_and(|m| m.sigma_s() > 0.0);
+        let side =
+            if scatters && c.pairing == Pairing::Product && traced.layout != PointLayout::List {
+                scene.settings.share_tile.max(1) as usize
+            } else {
+                1
+            };
+        let fit = |n: usize| {
+            (1..=side.min(n))
+                .rev()
+                .find(|t| n.is_multiple_of(*t))
+                .unwrap_or(1)
+        };
         Plan {
             scene,
             tracer: Tracer::new(scene),
             from_laser,
+            grid,
+            tile: (fit(grid.0), fit(grid.1)),
         }
     }
 
+    /// Work units: tiles.
     pub fn n_units(&self) -> usize {
-        let c = &self.scene.capture;
-        if self.from_laser {
-            c.illum.len()
-        } else {
-            c.sensor.len()
-        }
+        (self.grid.0 / self.tile.0) * (self.grid.1 / self.tile.1)
+    }
+
+    /// Traced wall points (laser points when tracing from lasers).
+    pub fn n_points(&self) -> usize {
+        self.grid.0 * self.grid.1
+    }
+
+    /// The traced points of unit `u`, a tile (x-major like the grid, so tile rows are grid rows).
+    fn unit_points(&self, u: usize) -> impl Iterator<Item = usize> + '_ {
+        let (tx, ty) = self.tile;
+        let tiles_y = self.grid.1 / ty;
+        let (a, b) = (u / tiles_y, u % tiles_y);
+        (0..tx).flat_map(move |i| (0..ty).map(move |j| (a * tx + i) * self.grid.1 + b * ty + j))
+    }
+
+    /// Traced points in shard `(i, n)`.
+    pub fn shard_points(&self, shard: Option<(usize, usize)>) -> usize {
+        self.shard_units(shard).len() * self.tile.0 * self.tile.1
     }
 
     fn endpoint(&self, laser: bool, i: usize) -> Endpoint {
@@ -75,36 +116,41 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// The traced point of unit `u` and its targets with their histogram indices.
-    fn unit(&self, u: usize) -> (Endpoint, Vec<(Endpoint, usize)>) {
+    /// Traced point `p` and its targets with their histogram indices.
+    fn point(&self, p: usize) -> (Endpoint, Vec<(Endpoint, usize)>) {
         let c = &self.scene.capture;
-        let origin = self.endpoint(self.from_laser, u);
+        let origin = self.endpoint(self.from_laser, p);
         let targets = match c.pairing {
-            Pairing::Paired => vec![(self.endpoint(!self.from_laser, u), u)],
+            Pairing::Paired => vec![(self.endpoint(!self.from_laser, p), p)],
             Pairing::Product if self.from_laser => (0..c.sensor.len())
-                .map(|s| (self.endpoint(false, s), u * c.sensor.len() + s))
+                .map(|s| (self.endpoint(false, s), p * c.sensor.len() + s))
                 .collect(),
             Pairing::Product => (0..c.illum.len())
-                .map(|l| (self.endpoint(true, l), l * c.sensor.len() + u))
+                .map(|l| (self.endpoint(true, l), l * c.sensor.len() + p))
                 .collect(),
         };
         (origin, targets)
     }
 
-    /// Renders unit `u`: one normalised histogram per target, in target order.
+    /// Renders unit `u`: per traced point of the tile, one normalised histogram per target, in order.
     pub fn render_unit(&self, u: usize, spp: u64, seed: u64) -> Vec<f32> {
-        let (origin, targets) = self.unit(u);
-        let ends: Vec<Endpoint> = targets.iter().map(|t| t.0).collect();
-        let mut acc = vec![0.0f64; ends.len() * self.scene.capture.time.bins];
+        let points: Vec<_> = self.unit_points(u).map(|p| self.point(p)).collect();
+        let origins: Vec<Endpoint> = points.iter().map(|p| p.0).collect();
+        let mut acc = vec![0.0f64; self.unit_len()];
         let mut s = Sampler::new(seed, u as u64);
-        self.tracer.trace(&origin, &ends, spp, &mut s, &mut acc);
+        // A tile of more than one point has product pairing: its points share their targets.
+        let ends: Vec<Endpoint> = points[0].1.iter().map(|t| t.0).collect();
+        self.tracer.trace(&origins, &ends, spp, &mut s, &mut acc);
         let norm = 1.0 / spp as f64;
         acc.iter().map(|v| (v * norm) as f32).collect()
     }
 
     fn store(&self, h: &mut [f32], u: usize, buf: &[f32]) {
         let nt = self.scene.capture.time.bins;
-        for (k, (_, hist)) in self.unit(u).1.iter().enumerate() {
+        let hists = self
+            .unit_points(u)
+            .flat_map(|p| self.point(p).1.into_iter().map(|t| t.1));
+        for (k, hist) in hists.enumerate() {
             h[hist * nt..(hist + 1) * nt].copy_from_slice(&buf[k * nt..(k + 1) * nt]);
         }
     }
@@ -211,7 +257,7 @@ impl<'a> Plan<'a> {
             Pairing::Product if self.from_laser => c.sensor.len(),
             Pairing::Product => c.illum.len(),
         };
-        targets * c.time.bins
+        targets * c.time.bins * self.tile.0 * self.tile.1
     }
 }
 

@@ -127,6 +127,10 @@ pub struct RenderDef {
     pub target_split: u32,
     /// Distance (m) from a target within which `target_split` applies; 0: off.
     pub target_split_radius: f64,
+    /// Side (in grid points) of the tiles of traced points that share their paths past the first hidden
+    /// vertex, where a medium scatters and every traced point has the same targets (see the integrator);
+    /// at most 16. 0 or 1: off.
+    pub share_tile: u32,
     pub trace_from: TraceFrom,
 }
 
@@ -145,6 +149,7 @@ impl Default for RenderDef {
             target_sampling: true,
             target_split: 64,
             target_split_radius: 0.5,
+            share_tile: 4,
             trace_from: TraceFrom::Auto,
         }
     }
@@ -452,6 +457,12 @@ impl Scene {
             if n > 4096 {
                 return Err(bad(field, format!("must be at most 4096, got {n}")));
             }
+        }
+        if s.share_tile > 16 {
+            return Err(bad(
+                "render.share_tile",
+                format!("must be at most 16, got {}", s.share_tile),
+            ));
         }
         if !(s.target_split_radius.is_finite() && s.target_split_radius >= 0.0) {
             return Err(bad(

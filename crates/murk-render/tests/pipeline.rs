@@ -13,6 +13,8 @@ kind = "laser-grid"
 grid = [4, 3]
 bins = 64
 bin_width = 0.05
+[render]
+share_tile = 2   # tiles of 2 × 1 laser points: six work units
 [medium]
 mu_t = 1.0
 albedo = 0.5
@@ -124,20 +126,21 @@ fn bad_scenes_name_file_and_field() {
             "capture.bins/bin_width/start",
         ),
         (
-            "[medium]",
-            "[render]\ntime_samples = 100000\n[medium]",
+            "[render]",
+            "[render]\ntime_samples = 100000",
             "render.time_samples",
         ),
         (
-            "[medium]",
-            "[render]\ntarget_split = 5000\n[medium]",
+            "[render]",
+            "[render]\ntarget_split = 5000",
             "render.target_split",
         ),
         (
-            "[medium]",
-            "[render]\ntarget_split_radius = -0.1\n[medium]",
+            "[render]",
+            "[render]\ntarget_split_radius = -0.1",
             "render.target_split_radius",
         ),
+        ("share_tile = 2", "share_tile = 17", "render.share_tile"),
         ("kind = \"wall\"", "kind = \"wal\"", "line 3"),
         ("[capture]", "[capture\n", "line"),
         (
