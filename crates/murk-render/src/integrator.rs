@@ -66,7 +66,7 @@
 use crate::geometry::{Geometry, Hit, Shape, EPS};
 use crate::medium::Medium;
 use crate::scene::Scene;
-use murk_core::DVec3;
+use murk_core::{DVec3, TimeAxis};
 use rand_core::Rng;
 use rand_pcg::Pcg64;
 use std::f64::consts::PI;
@@ -391,6 +391,24 @@ struct Tail {
     w: DVec3,
 }
 
+/// Adds `tail` to one traced point's histograms `hist`, scaled, shifted by `shift` metres of optical path,
+/// each entry times `ratio` of its direction at the first vertex.
+fn replay(
+    t: &TimeAxis,
+    hist: &mut [f64],
+    tail: &[Tail],
+    scale: f64,
+    shift: f64,
+    ratio: impl Fn(DVec3) -> f64,
+) {
+    for tl in tail {
+        let x = (tl.opl + shift - t.start_m) / t.bin_width_m;
+        if x >= 0.0 && x < t.bins as f64 {
+            hist[tl.k * t.bins + x as usize] += tl.value * scale * ratio(tl.w);
+        }
+    }
+}
+
 /// A path's first hidden vertex: a medium vertex (`normal` None) or a surface one (its normal facing the
 /// arriving path).
 #[derive(Clone, Copy)]
@@ -619,14 +637,15 @@ impl<'a> Tracer<'a> {
         legs.clear();
         legs.extend(origins.iter().map(|o| self.leg(o, &first)));
         let sum_p: f64 = legs.iter().flatten().map(|l| l.1).sum();
-        let Some((f_src, p_src, opl_src, d_src)) = legs[src] else {
-            return;
-        };
-        if !(f_src > 0.0 && p_src > 0.0) {
-            return;
-        }
-        let t = &self.scene.capture.time;
         let unit = sink.out.len() / origins.len();
+        let t = &self.scene.capture.time;
+        let Some((f_src, p_src, opl_src, d_src)) = legs[src].filter(|l| l.0 > 0.0 && l.1 > 0.0)
+        else {
+            // Rounding kept the source from re-joining its own vertex (a grazing or boundary leg): the
+            // tail stays the source's own, unshared.
+            let hist = &mut sink.out[src * unit..(src + 1) * unit];
+            return replay(t, hist, &sink.tail, 1.0, 0.0, |_| 1.0);
+        };
         let phase = self
             .medium()
             .map(|m| m.phase)
@@ -634,16 +653,10 @@ impl<'a> Tracer<'a> {
         for (i, leg) in legs.iter().enumerate() {
             let Some((f, _, opl, d)) = *leg else { continue };
             let scale = f * p_src / (f_src * sum_p);
-            let shift = opl - opl_src;
             let hist = &mut sink.out[i * unit..(i + 1) * unit];
-            for tl in &sink.tail {
-                let x = (tl.opl + shift - t.start_m) / t.bin_width_m;
-                if x >= 0.0 && x < t.bins as f64 {
-                    let ratio =
-                        phase.map_or(1.0, |p| p.eval(d.dot(tl.w)) / p.eval(d_src.dot(tl.w)));
-                    hist[tl.k * t.bins + x as usize] += tl.value * scale * ratio;
-                }
-            }
+            replay(t, hist, &sink.tail, scale, opl - opl_src, |w| {
+                phase.map_or(1.0, |p| p.eval(d.dot(w)) / p.eval(d_src.dot(w)))
+            });
         }
     }
 
@@ -958,8 +971,9 @@ impl<'a> Tracer<'a> {
     }
 
     /// Connects vertex `y` (reached with throughput `beta` at optical path `opl`) to every target of
-    /// `(k0, targets)` (the first one is target k0). `mis(k)` weights the connection to `targets[k]`. `seen` is the start of the segment that reached y, which
-    /// sees y: a target there (confocal: the origin at the first vertex) needs no occlusion test.
+    /// `(k0, targets)` (the first one is target k0). `mis(k)` weights the connection to `targets[k]`.
+    /// `seen` is the start of the segment that reached y, which sees y: a target there (confocal: the
+    /// origin at the first vertex) needs no occlusion test.
     #[allow(clippy::too_many_arguments)]
     fn connect(
         &self,
