@@ -368,19 +368,42 @@ fn assert_same_expectation(
 /// them agrees within 3 %, and their difference stays within the seed noise of the unsplit render.
 #[test]
 fn target_split_keeps_the_expectation() {
-    let mk = |split: u32| {
+    assert_setting_keeps_the_expectation(
+        "grid = [2, 2]",
+        |split| format!("target_split = {split}\ntarget_split_radius = 0.5"),
+        "",
+        (1, 64),
+        (200_000, 11),
+        0.03,
+        ("unsplit", "split"),
+    );
+}
+
+/// On the fog T scene (a laser grid over 0.4 m, SPAD at the centre, reflective relay, μt = 1/m, α = 0.8,
+/// at most 4 vertices), the render setting `setting(off)` and `setting(on)` give the same expectation:
+/// two seeds of `off` and one of `on` at `spp` (seeds from `seed`) through `assert_same_expectation`.
+fn assert_setting_keeps_the_expectation(
+    grid: &str,
+    setting: impl Fn(u32) -> String,
+    medium: &str,
+    (off, on): (u32, u32),
+    (spp, seed): (u64, u64),
+    tol: f64,
+    names: (&str, &str),
+) {
+    let mk = |v: u32| {
         fog_t_scene(
             1.0,
-            "grid = [2, 2]\nextent = [0.4, 0.4]\nspad_point = [0.0, 0.0]\nbin_width = 0.1",
-            &format!("max_depth = 4\ntarget_split = {split}\ntarget_split_radius = 0.5"),
-            "mu_t = 1.0\nalbedo = 0.8",
+            &format!("{grid}\nextent = [0.4, 0.4]\nspad_point = [0.0, 0.0]\nbin_width = 0.1"),
+            &format!("max_depth = 4\n{}", setting(v)),
+            &format!("mu_t = 1.0\nalbedo = 0.8\n{medium}"),
         )
     };
-    let (off, on) = (mk(1), mk(64));
-    let a = render(&off, 200_000, 11).h;
-    let a2 = render(&off, 200_000, 12).h;
-    let b = render(&on, 200_000, 13).h;
-    assert_same_expectation(&a, &a2, &b, 30, 0.03, 2.0, ("unsplit", "split"));
+    let (off, on) = (mk(off), mk(on));
+    let a = render(&off, spp, seed).h;
+    let a2 = render(&off, spp, seed + 1).h;
+    let b = render(&on, spp, seed + 2).h;
+    assert_same_expectation(&a, &a2, &b, 30, tol, 2.0, names);
 }
 
 /// Tiles of laser points that share their paths past the first hidden vertex (`share_tile`) keep every
@@ -390,19 +413,15 @@ fn target_split_keeps_the_expectation() {
 /// rendering.
 #[test]
 fn shared_tails_keep_the_expectation() {
-    let mk = |side: u32| {
-        fog_t_scene(
-            1.0,
-            "grid = [4, 4]\nextent = [0.4, 0.4]\nspad_point = [0.0, 0.0]\nbin_width = 0.1",
-            &format!("max_depth = 4\nshare_tile = {side}"),
-            "mu_t = 1.0\nalbedo = 0.8\ng = 0.6",
-        )
-    };
-    let (off, on) = (mk(1), mk(4));
-    let a = render(&off, 60_000, 31).h;
-    let a2 = render(&off, 60_000, 32).h;
-    let b = render(&on, 60_000, 33).h;
-    assert_same_expectation(&a, &a2, &b, 30, 0.05, 2.0, ("unshared", "shared"));
+    assert_setting_keeps_the_expectation(
+        "grid = [4, 4]",
+        |side| format!("share_tile = {side}"),
+        "g = 0.6",
+        (1, 4),
+        (60_000, 31),
+        0.05,
+        ("unshared", "shared"),
+    );
 }
 
 /// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 64 000-spp reference
