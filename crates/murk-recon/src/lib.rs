@@ -251,21 +251,21 @@ pub fn reconstruct(
         let spectra = spectrum::spectra(cap, std::slice::from_ref(&window));
         pf_exact::run(cap, volume, &spectra.part(0), params.falloff, progress)
     };
-    let (field, evaluated_with, slabs) = match (
-        method,
-        pf_fast::Plan::new(cap, volume, params.falloff, params.lateral),
-    ) {
-        (Method::Fast, Ok(plan)) => {
-            let (field, slabs) = plan.run(sigma_m, wavelength_m, progress)?;
-            (field, "fast", slabs)
-        }
-        (Method::Fast, Err(why)) => {
-            warnings.push(format!(
-                "fast form not applicable ({why}); used the exact form"
-            ));
-            (exact(progress), "exact", Vec::new())
-        }
-        (Method::Exact, _) => (exact(progress), "exact", Vec::new()),
+    // The fast plan (FFT plans, resamplers) is built only when the fast form is asked for.
+    let (field, evaluated_with, slabs) = match method {
+        Method::Exact => (exact(progress), "exact", Vec::new()),
+        Method::Fast => match pf_fast::Plan::new(cap, volume, params.falloff, params.lateral) {
+            Ok(plan) => {
+                let (field, slabs) = plan.run(sigma_m, wavelength_m, progress)?;
+                (field, "fast", slabs)
+            }
+            Err(why) => {
+                warnings.push(format!(
+                    "fast form not applicable ({why}); used the exact form"
+                ));
+                (exact(progress), "exact", Vec::new())
+            }
+        },
     };
     let (point, aperture) = compensation_points(cap);
     let intensity = field

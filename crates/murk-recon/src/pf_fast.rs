@@ -223,12 +223,12 @@ impl<'a> Plan<'a> {
             .collect();
         for (k, planes) in slabs.iter().enumerate() {
             let spectra = all.part(k);
+            // The shallowest plane keeps the most lines: grid spectra on its lines serve all.
+            let dz_min = planes
+                .clone()
+                .map(|iz| self.vol.z.at(iz) - self.grid.origin.z)
+                .fold(f64::INFINITY, f64::min);
             for &src in &sources {
-                // The shallowest plane keeps the most lines: grid spectra on its lines serve all.
-                let dz_min = planes
-                    .clone()
-                    .map(|iz| self.vol.z.at(iz) - self.grid.origin.z)
-                    .fold(f64::INFINITY, f64::min);
                 let hspec = self.grid_spectra(&spectra, src, dz_min, &mut grid, &pool);
                 let out: Vec<Vec<Complex32>> = planes
                     .clone()

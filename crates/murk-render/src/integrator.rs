@@ -409,6 +409,17 @@ fn replay(
     }
 }
 
+/// The leg from a traced point to a path's first vertex, in the measure of that vertex (volume or area):
+/// its integrand `f`, the density `p` with which tracing from the point places the vertex there, the
+/// optical path `opl` to it and the direction `d`.
+#[derive(Clone, Copy)]
+struct Leg {
+    f: f64,
+    p: f64,
+    opl: f64,
+    d: DVec3,
+}
+
 /// A path's first hidden vertex: a medium vertex (`normal` None) or a surface one (its normal facing the
 /// arriving path).
 #[derive(Clone, Copy)]
@@ -417,11 +428,13 @@ struct First {
     normal: Option<DVec3>,
 }
 
-/// Where a path's contributions go: the traced point's histograms (`targets × bins` at `base` in the
-/// unit's buffer), or, while `recording`, the tail list shared with the rest of the tile.
+/// Where a path's contributions go: the traced point's histograms (`unit` values at `origin · unit`
+/// in the work unit's buffer), or, while `recording`, the tail list shared with the rest of the tile.
 struct Sink<'o> {
     out: &'o mut [f64],
-    base: usize,
+    /// Length of one traced point's histograms, and the point now traced.
+    unit: usize,
+    origin: usize,
     /// Whether the unit is a tile of more than one traced point.
     share: bool,
     recording: bool,
@@ -539,10 +552,10 @@ impl<'a> Tracer<'a> {
         out: &mut [f64],
     ) {
         let mut seg = Vec::new();
-        let unit = targets.len() * self.scene.capture.time.bins;
         let mut sink = Sink {
             out,
-            base: 0,
+            unit: targets.len() * self.scene.capture.time.bins,
+            origin: 0,
             share: origins.len() > 1,
             recording: false,
             at_first: false,
@@ -561,7 +574,7 @@ impl<'a> Tracer<'a> {
         };
         let n = spp as f64;
         for (i, origin) in origins.iter().enumerate() {
-            sink.base = i * unit;
+            sink.origin = i;
             let (s1, s2) = (s.next(), s.next());
             // j·g mod spp, kept incrementally (no division per path).
             let mut jg = 0;
@@ -581,10 +594,9 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// The first leg from origin `o` to the first vertex `f`: (integrand f, density p with which tracing
-    /// from `o` places that vertex, optical path to it, direction), in the measure of the vertex (volume or
-    /// area); None where `o` cannot reach it (behind, occluded, outside the medium along the leg).
-    fn leg(&self, o: &Endpoint, f: &First) -> Option<(f64, f64, f64, DVec3)> {
+    /// The first leg from origin `o` to the first vertex `f`; None where `o` cannot reach it (behind,
+    /// occluded, outside the medium along the leg).
+    fn leg(&self, o: &Endpoint, f: &First) -> Option<Leg> {
         let v = f.y - o.p;
         let t = v.length();
         let w = v / t;
@@ -607,7 +619,12 @@ impl<'a> Tracer<'a> {
                 }
                 let tr = (-m.sigma_t * (t - m0)).exp();
                 let opl = o.extra_m + t + (m.ior - 1.0) * (t - m0);
-                Some((g * tr * m.sigma_s(), pdf * m.sigma_t * tr / (t * t), opl, w))
+                Some(Leg {
+                    f: g * tr * m.sigma_s(),
+                    p: pdf * m.sigma_t * tr / (t * t),
+                    opl,
+                    d: w,
+                })
             }
             Some(n) => {
                 // The same surface point, seen from its front (the side the shared path left from).
@@ -617,7 +634,12 @@ impl<'a> Tracer<'a> {
                 }
                 let (tr, extra) = self.transmit(o.p, w, t);
                 let a = tr * cos_y;
-                Some((g * a, pdf * a / (t * t), o.extra_m + t + extra, w))
+                Some(Leg {
+                    f: g * a,
+                    p: pdf * a / (t * t),
+                    opl: o.extra_m + t + extra,
+                    d: w,
+                })
             }
         }
     }
@@ -631,16 +653,14 @@ impl<'a> Tracer<'a> {
         origins: &[Endpoint],
         src: usize,
         sink: &mut Sink,
-        legs: &mut Vec<Option<(f64, f64, f64, DVec3)>>,
+        legs: &mut Vec<Option<Leg>>,
     ) {
         let Some(first) = sink.first else { return };
         legs.clear();
         legs.extend(origins.iter().map(|o| self.leg(o, &first)));
-        let sum_p: f64 = legs.iter().flatten().map(|l| l.1).sum();
-        let unit = sink.out.len() / origins.len();
-        let t = &self.scene.capture.time;
-        let Some((f_src, p_src, opl_src, d_src)) = legs[src].filter(|l| l.0 > 0.0 && l.1 > 0.0)
-        else {
+        let sum_p: f64 = legs.iter().flatten().map(|l| l.p).sum();
+        let (t, unit) = (&self.scene.capture.time, sink.unit);
+        let Some(own) = legs[src].filter(|l| l.f > 0.0 && l.p > 0.0) else {
             // Rounding kept the source from re-joining its own vertex (a grazing or boundary leg): the
             // tail stays the source's own, unshared.
             let hist = &mut sink.out[src * unit..(src + 1) * unit];
@@ -650,12 +670,18 @@ impl<'a> Tracer<'a> {
             .medium()
             .map(|m| m.phase)
             .filter(|p| first.normal.is_none() && !matches!(p, crate::medium::Phase::Isotropic));
+        if let Some(p) = phase {
+            // The source's phase at the first vertex, divided out once; each origin multiplies its own.
+            for tl in &mut sink.tail {
+                tl.value /= p.eval(own.d.dot(tl.w));
+            }
+        }
         for (i, leg) in legs.iter().enumerate() {
-            let Some((f, _, opl, d)) = *leg else { continue };
-            let scale = f * p_src / (f_src * sum_p);
+            let Some(leg) = leg else { continue };
+            let scale = leg.f * own.p / (own.f * sum_p);
             let hist = &mut sink.out[i * unit..(i + 1) * unit];
-            replay(t, hist, &sink.tail, scale, opl - opl_src, |w| {
-                phase.map_or(1.0, |p| p.eval(d.dot(w)) / p.eval(d_src.dot(w)))
+            replay(t, hist, &sink.tail, scale, leg.opl - own.opl, |w| {
+                phase.map_or(1.0, |p| p.eval(leg.d.dot(w)))
             });
         }
     }
@@ -679,7 +705,7 @@ impl<'a> Tracer<'a> {
         }
         let x = (opl - t.start_m) / t.bin_width_m;
         if x >= 0.0 && x < t.bins as f64 {
-            out.out[out.base + k * t.bins + x as usize] += value;
+            out.out[out.origin * out.unit + k * t.bins + x as usize] += value;
         }
     }
 

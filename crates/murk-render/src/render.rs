@@ -116,31 +116,48 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// Traced point `p` and its targets with their histogram indices.
-    fn point(&self, p: usize) -> (Endpoint, Vec<(Endpoint, usize)>) {
+    /// How many targets each traced point has: the other side's points, or its partner (paired).
+    fn n_targets(&self) -> usize {
         let c = &self.scene.capture;
-        let origin = self.endpoint(self.from_laser, p);
-        let targets = match c.pairing {
-            Pairing::Paired => vec![(self.endpoint(!self.from_laser, p), p)],
-            Pairing::Product if self.from_laser => (0..c.sensor.len())
-                .map(|s| (self.endpoint(false, s), p * c.sensor.len() + s))
+        match c.pairing {
+            Pairing::Paired => 1,
+            Pairing::Product if self.from_laser => c.sensor.len(),
+            Pairing::Product => c.illum.len(),
+        }
+    }
+
+    /// The targets of traced point `p`.
+    fn targets(&self, p: usize) -> Vec<Endpoint> {
+        match self.scene.capture.pairing {
+            Pairing::Paired => vec![self.endpoint(!self.from_laser, p)],
+            Pairing::Product => (0..self.n_targets())
+                .map(|k| self.endpoint(!self.from_laser, k))
                 .collect(),
-            Pairing::Product => (0..c.illum.len())
-                .map(|l| (self.endpoint(true, l), l * c.sensor.len() + p))
-                .collect(),
-        };
-        (origin, targets)
+        }
+    }
+
+    /// The histogram of traced point `p` with its target `k`.
+    fn hist(&self, p: usize, k: usize) -> usize {
+        let n_sensor = self.scene.capture.sensor.len();
+        match self.scene.capture.pairing {
+            Pairing::Paired => p,
+            Pairing::Product if self.from_laser => p * n_sensor + k,
+            Pairing::Product => k * n_sensor + p,
+        }
     }
 
     /// Renders unit `u`: per traced point of the tile, one normalised histogram per target, in order.
     pub fn render_unit(&self, u: usize, spp: u64, seed: u64) -> Vec<f32> {
-        let points: Vec<_> = self.unit_points(u).map(|p| self.point(p)).collect();
-        let origins: Vec<Endpoint> = points.iter().map(|p| p.0).collect();
+        let points: Vec<usize> = self.unit_points(u).collect();
+        let origins: Vec<Endpoint> = points
+            .iter()
+            .map(|&p| self.endpoint(self.from_laser, p))
+            .collect();
+        // A tile of more than one point has product pairing: its points share their targets.
+        let targets = self.targets(points[0]);
         let mut acc = vec![0.0f64; self.unit_len()];
         let mut s = Sampler::new(seed, u as u64);
-        // A tile of more than one point has product pairing: its points share their targets.
-        let ends: Vec<Endpoint> = points[0].1.iter().map(|t| t.0).collect();
-        self.tracer.trace(&origins, &ends, spp, &mut s, &mut acc);
+        self.tracer.trace(&origins, &targets, spp, &mut s, &mut acc);
         let norm = 1.0 / spp as f64;
         acc.iter().map(|v| (v * norm) as f32).collect()
     }
@@ -149,7 +166,7 @@ impl<'a> Plan<'a> {
         let nt = self.scene.capture.time.bins;
         let hists = self
             .unit_points(u)
-            .flat_map(|p| self.point(p).1.into_iter().map(|t| t.1));
+            .flat_map(|p| (0..self.n_targets()).map(move |k| self.hist(p, k)));
         for (k, hist) in hists.enumerate() {
             h[hist * nt..(hist + 1) * nt].copy_from_slice(&buf[k * nt..(k + 1) * nt]);
         }
@@ -251,13 +268,7 @@ impl<'a> Plan<'a> {
     }
 
     fn unit_len(&self) -> usize {
-        let c = &self.scene.capture;
-        let targets = match c.pairing {
-            Pairing::Paired => 1,
-            Pairing::Product if self.from_laser => c.sensor.len(),
-            Pairing::Product => c.illum.len(),
-        };
-        targets * c.time.bins * self.tile.0 * self.tile.1
+        self.n_targets() * self.scene.capture.time.bins * self.tile.0 * self.tile.1
     }
 }
 
