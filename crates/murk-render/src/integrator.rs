@@ -37,11 +37,25 @@
 //! - `time_samples` stratified time-window distances per segment and target (`TimeWindow`, the n draws
 //!   counted as n·pdf in every balance weight): on z-letter 4 take 12.4 → 10.1 CPU-h; on t-wall-medium
 //!   they cost more than they remove (the draws of one segment are correlated through it), so it keeps 0.
+//!   The segment leaving the traced point has its own count (`first_time_samples`): once tails are
+//!   shared, its vertices (each point's single scattering) are what no other point helps with. Splitting
+//!   the object window's variance by technique (two seeds, a tag per splat) after sharing: the first
+//!   segment's medium vertices held 0.19 of t-wall-medium's relative variance 0.38 for 3 % of its
+//!   signal², almost all from free-flight vertices that rarely land in the window; 4 draws there took
+//!   0.26 → 0.14 for 20 % more CPU. On z-letter (tile 8) 4 → 8 → 16 → 32 draws gave relL2 0.53 → 0.45 →
+//!   0.40 → 0.37 at 128 spp, 0.77 → 0.67 → 0.55 → 0.61 CPU-h.
 //! - Segment starts near a target get more target-side draws (`target_split` up to 64 within
 //!   `target_split_radius` 0.5 m, ∝ radius/distance): on t-wall-medium relay vertices within 5 cm of the
 //!   laser spot carried 42 % of the object window's second moment for 1.4 % of its mean, mostly through
 //!   their one target-side draw. Variance × CPU (16 seeds) 1.80 → 0.88; `murk bench --render`: 5.8× →
 //!   8.1× less CPU than mitransient; z-letter 3.32 → 3.21 relL2 at 128 spp.
+//! - Each path also draws `object_draws` directions from its traced point toward stratified uniform points
+//!   of the hidden geometry and connects only the surface each first meets (`draw_objects`; balance
+//!   heuristic with the path's own first direction, `n·p_hidden-geometry` against the mixture's density).
+//!   The first segment's object return had become the largest single term: 0.28 of z-letter's relative
+//!   variance 0.80 for 6 % of the signal², 0.11 of t-wall-medium's 0.38. Two draws took those to 0.03 and
+//!   0.01, and with them fewer first directions need the hidden geometry: z-letter (tile 4) 1.72 →
+//!   0.82–0.96 CPU-h with `hidden_geometry_sampling` 0.05–0.2 (0 lost the paths that scatter near the Z).
 //! - Medium vertices also connect through a uniform point of the hidden geometry (`object_connections`,
 //!   MIS with the phase direction): on z-letter the object return after one scattering event came from
 //!   rare phase directions meeting the Z (18 % of the second moment from 0.1 % of the samples); relL2 at
@@ -58,6 +72,11 @@
 //!   moment. Paper format (`murk bench --render --only z-letter`, 128 spp): relL2 2.37 → 1.35 (2 × 2),
 //!   0.91 (4 × 4), 0.75 (8 × 8) for 1.1×, 1.7×, 2.9× the CPU per path: 6.65 → 3.06, 1.72, 2.13 CPU-h.
 //!   t-wall-medium: 8.1× → 14.6× less CPU than mitransient (8 × 8: 8.0×, its first segments dominate).
+//!   Once object draws and first-segment time draws cut the first segments' share, 8 × 8 pays on both
+//!   fog scenes (z-letter relL2 0.72 → 0.53, t-wall-medium 0.36 → 0.29; `share_tile = 8` in both). The
+//!   tile's weights are ∝ each point's leg integrand f where every first direction has a cosine share
+//!   (`Leg`), which needs only the nearest hit up to the vertex, not the mixture density's walk along
+//!   the whole ray. Replaying the tails of 16–256 paths at once, for cache locality, measured no faster.
 //! - Equiangular distances toward the targets are off by default (`equiangular`): once target-side
 //!   sampling handles the points near a target and roulette is gone, they took a third of the CPU time
 //!   for no lower error. t-wall-medium (median of 7 seeds, 256 spp): relL2 1.35 at 0.90 CPU-s with them,
@@ -66,7 +85,7 @@
 use crate::geometry::{Geometry, Hit, Shape, EPS};
 use crate::medium::Medium;
 use crate::scene::Scene;
-use murk_core::{DVec3, TimeAxis};
+use murk_core::DVec3;
 use rand_core::Rng;
 use rand_pcg::Pcg64;
 use std::f64::consts::PI;
@@ -382,19 +401,20 @@ impl Toward {
 }
 
 /// What a path adds past its first hidden vertex, kept to be shared by the traced points of a tile: target
-/// index, optical path (jitter included), value, and the direction that left the first vertex on the way
-/// to it (for the phase function's ratio there).
+/// index, optical path (jitter included) in bins from the capture's start (a replay then shifts it
+/// without a division per entry), value, and the direction that left the first vertex on the way to it
+/// (for the phase function's ratio there).
 struct Tail {
     k: usize,
-    opl: f64,
+    bin: f64,
     value: f64,
     w: DVec3,
 }
 
-/// Adds `tail` to one traced point's histograms `hist`, scaled, shifted by `shift` metres of optical path,
-/// each entry times `ratio` of its direction at the first vertex.
+/// Adds `tail` to one traced point's histograms `hist`, scaled, shifted by `shift` bins, each entry times
+/// `ratio` of its direction at the first vertex.
 fn replay(
-    t: &TimeAxis,
+    bins: usize,
     hist: &mut [f64],
     tail: &[Tail],
     scale: f64,
@@ -402,16 +422,19 @@ fn replay(
     ratio: impl Fn(DVec3) -> f64,
 ) {
     for tl in tail {
-        let x = (tl.opl + shift - t.start_m) / t.bin_width_m;
-        if x >= 0.0 && x < t.bins as f64 {
-            hist[tl.k * t.bins + x as usize] += tl.value * scale * ratio(tl.w);
+        let x = tl.bin + shift;
+        if x >= 0.0 && x < bins as f64 {
+            hist[tl.k * bins + x as usize] += tl.value * scale * ratio(tl.w);
         }
     }
 }
 
 /// The leg from a traced point to a path's first vertex, in the measure of that vertex (volume or area):
-/// its integrand `f`, the density `p` with which tracing from the point places the vertex there, the
-/// optical path `opl` to it and the direction `d`.
+/// its integrand `f`, its balance weight `p` over the tile, the optical path `opl` to it and the direction
+/// `d`. The weight is the density with which tracing from the point places the vertex there or, where
+/// every first direction has a cosine share (`hidden_geometry_sampling` < 1), `f` itself: weights ∝ f are
+/// then the balance heuristic of that share's densities (f times one constant for every point of the
+/// tile), nonzero wherever a point can place the vertex, so each point's estimate stays unbiased.
 #[derive(Clone, Copy)]
 struct Leg {
     f: f64,
@@ -455,6 +478,8 @@ pub struct Tracer<'a> {
     rr_depth: u32,
     /// Survival probability past the first hidden vertex.
     q_first: f64,
+    /// Direct object-return draws per path from the traced point (`draw_objects`).
+    object_draws: u32,
     /// The last (spp, lattice generator) pair `trace` used.
     lattice: Mutex<(u64, u64)>,
 }
@@ -495,6 +520,11 @@ impl<'a> Tracer<'a> {
             .unwrap_or(if scatters { 1.0 } else { 0.1 });
         let rr_depth = set.rr_depth.unwrap_or(if scatters { u32::MAX } else { 5 });
         let medium_objects = set.object_connections && scatters && hidden.total > 0.0;
+        let object_draws = if hidden.total > 0.0 {
+            set.object_draws
+        } else {
+            0
+        };
         Tracer {
             scene,
             hidden,
@@ -502,6 +532,7 @@ impl<'a> Tracer<'a> {
             medium_objects,
             q_first,
             rr_depth,
+            object_draws,
             lattice: Mutex::new((0, 0)),
         }
     }
@@ -604,8 +635,17 @@ impl<'a> Tracer<'a> {
         if cos.is_nan() || cos <= 0.0 {
             return None;
         }
-        let (pdf, hit) = self.origin_pdf(o.p, o.n, w);
-        let t_hit = hit.map_or(f64::INFINITY, |h| h.t);
+        // Where every first direction has a cosine share, the weight is `f` itself (see `Leg`): only the
+        // nearest hit up to the vertex is needed, not the mixture's walk along the whole ray.
+        let by_f = self.p_hidden < 1.0;
+        let (pdf, t_hit) = if by_f {
+            let reach = t * (1.0 + 1e-6) + 1e-6;
+            let hit = self.scene.geometry.intersect(o.p, w, reach);
+            (f64::NAN, hit.map_or(f64::INFINITY, |h| h.t))
+        } else {
+            let (pdf, hit) = self.origin_pdf(o.p, o.n, w);
+            (pdf, hit.map_or(f64::INFINITY, |h| h.t))
+        };
         let g = cos / PI / (t * t);
         match f.normal {
             None => {
@@ -619,9 +659,14 @@ impl<'a> Tracer<'a> {
                 }
                 let tr = (-m.sigma_t * (t - m0)).exp();
                 let opl = o.extra_m + t + (m.ior - 1.0) * (t - m0);
+                let f = g * tr * m.sigma_s();
                 Some(Leg {
-                    f: g * tr * m.sigma_s(),
-                    p: pdf * m.sigma_t * tr / (t * t),
+                    f,
+                    p: if by_f {
+                        f
+                    } else {
+                        pdf * m.sigma_t * tr / (t * t)
+                    },
                     opl,
                     d: w,
                 })
@@ -636,7 +681,7 @@ impl<'a> Tracer<'a> {
                 let a = tr * cos_y;
                 Some(Leg {
                     f: g * a,
-                    p: pdf * a / (t * t),
+                    p: if by_f { g * a } else { pdf * a / (t * t) },
                     opl: o.extra_m + t + extra,
                     d: w,
                 })
@@ -645,9 +690,9 @@ impl<'a> Tracer<'a> {
     }
 
     /// Adds the tail of a path traced from `origins[src]` to every origin of the tile: the first vertex is
-    /// re-joined to each origin and weighted by the balance heuristic over all origins' densities of that
-    /// vertex (every origin traces the same spp), so each origin's estimate stays unbiased and gets the
-    /// tails of the whole tile.
+    /// re-joined to each origin and weighted by the balance heuristic over all origins' weights of that
+    /// vertex (`Leg`; every origin traces the same spp), so each origin's estimate stays unbiased and gets
+    /// the tails of the whole tile.
     fn share_tail(
         &self,
         origins: &[Endpoint],
@@ -664,7 +709,7 @@ impl<'a> Tracer<'a> {
             // Rounding kept the source from re-joining its own vertex (a grazing or boundary leg): the
             // tail stays the source's own, unshared.
             let hist = &mut sink.out[src * unit..(src + 1) * unit];
-            return replay(t, hist, &sink.tail, 1.0, 0.0, |_| 1.0);
+            return replay(t.bins, hist, &sink.tail, 1.0, 0.0, |_| 1.0);
         };
         let phase = self
             .medium()
@@ -679,8 +724,9 @@ impl<'a> Tracer<'a> {
         for (i, leg) in legs.iter().enumerate() {
             let Some(leg) = leg else { continue };
             let scale = leg.f * own.p / (own.f * sum_p);
+            let shift = (leg.opl - own.opl) / t.bin_width_m;
             let hist = &mut sink.out[i * unit..(i + 1) * unit];
-            replay(t, hist, &sink.tail, scale, leg.opl - own.opl, |w| {
+            replay(t.bins, hist, &sink.tail, scale, shift, |w| {
                 phase.map_or(1.0, |p| p.eval(leg.d.dot(w)))
             });
         }
@@ -697,7 +743,7 @@ impl<'a> Tracer<'a> {
         if out.recording {
             out.tail.push(Tail {
                 k,
-                opl,
+                bin: (opl - t.start_m) / t.bin_width_m,
                 value,
                 w: out.w,
             });
@@ -737,23 +783,60 @@ impl<'a> Tracer<'a> {
     /// The density of the origin's first direction `w` (the hidden-geometry/cosine mixture), with the
     /// nearest hidden-geometry hit along it.
     fn origin_pdf(&self, o: DVec3, n: DVec3, w: DVec3) -> (f64, Option<Hit>) {
+        let (p, _, hit) = self.origin_pdfs(o, n, w);
+        (p, hit)
+    }
+
+    /// `origin_pdf`, with the hidden-geometry density of `w` on its own.
+    fn origin_pdfs(&self, o: DVec3, n: DVec3, w: DVec3) -> (f64, f64, Option<Hit>) {
         let (p, hit) = self.hidden.pdf(&self.scene.geometry, o, w);
         let c = n.dot(w).max(0.0);
-        (self.p_hidden * p + (1.0 - self.p_hidden) * c / PI, hit)
+        (self.p_hidden * p + (1.0 - self.p_hidden) * c / PI, p, hit)
+    }
+
+    /// The direct object return from the traced point `origin` by `object_draws` directions toward
+    /// stratified uniform points of the hidden geometry: each connects the surface it first meets to the
+    /// targets, through the segment's transmittance. Balance heuristic with the path's own first direction
+    /// (`first_object_weight`).
+    fn draw_objects(
+        &self,
+        origin: &Endpoint,
+        targets: &[Endpoint],
+        s: &mut Sampler,
+        out: &mut Sink,
+    ) {
+        let n = self.object_draws;
+        for j in 0..n {
+            let u = (j as f64 + s.next()) / n as f64;
+            let y = self.hidden.sample(u, s.next());
+            let w = (y - origin.p).normalize();
+            let cos = origin.n.dot(w);
+            if cos.is_nan() || cos <= 0.0 {
+                continue;
+            }
+            let (p_mix, p_h, hit) = self.origin_pdfs(origin.p, origin.n, w);
+            let Some(h) = hit else { continue };
+            let b = cos / PI / (p_mix + n as f64 * p_h);
+            self.connect_hit(origin.p, w, &h, b, origin.extra_m, targets, s, out);
+        }
     }
 
     /// The path side's distance samplers toward `tgt` on the medium part `[m0, m1]` of the segment
-    /// `x + t·d` that starts at optical path `opl`.
+    /// `x + t·d` that starts at optical path `opl`; `first`: the segment leaves the traced point.
     fn toward(
         &self,
         m: &Medium,
-        x: DVec3,
-        d: DVec3,
+        (x, d): (DVec3, DVec3),
         opl: f64,
         m01: (f64, f64),
         tgt: &Endpoint,
+        first: bool,
     ) -> Toward {
         let set = &self.scene.settings;
+        let n_time = match set.first_time_samples {
+            Some(n) if first => n,
+            _ => set.time_samples,
+        };
         let tw = &self.scene.capture.time;
         let base = opl + tgt.extra_m;
         Toward {
@@ -761,7 +844,7 @@ impl<'a> Tracer<'a> {
                 .equiangular
                 .then(|| Equiangular::new(x, d, tgt.p, m01.0, m01.1))
                 .flatten(),
-            time: (set.time_samples > 0 && m.ior == 1.0)
+            time: (n_time > 0 && m.ior == 1.0)
                 .then(|| {
                     TimeWindow::new(
                         x,
@@ -770,7 +853,7 @@ impl<'a> Tracer<'a> {
                         m01.0,
                         m01.1,
                         (tw.start_m - base, tw.end_m() - base),
-                        set.time_samples,
+                        n_time,
                     )
                 })
                 .flatten(),
@@ -884,7 +967,10 @@ impl<'a> Tracer<'a> {
         };
         let pff = m.sigma_t * (-m.sigma_t * (t - m0)).exp();
         let p_path = self.dir_pdf(from, w)
-            * (pff + self.toward(m, from.x, w, from.opl, (m0, m1), tgt).pdf(t))
+            * (pff
+                + self
+                    .toward(m, (from.x, w), from.opl, (m0, m1), tgt, from.origin)
+                    .pdf(t))
             / t2;
         let cos_l = tgt.n.dot(wl);
         let p_l = cos_l / PI * peq / (tl * tl);
@@ -901,8 +987,9 @@ impl<'a> Tracer<'a> {
 
     /// The balance weight of a path's own surface connection along direction `d` from `from` against
     /// `connect_object` (only from medium vertices).
-    fn object_weight(&self, from: &Start, d: DVec3) -> f64 {
+    fn object_weight(&self, from: &Start, d: DVec3, first: f64) -> f64 {
         match (from.v, self.medium()) {
+            _ if from.origin => first,
             (Vertex::Medium { dir }, Some(m)) if self.medium_objects => {
                 let ph = m.phase.eval(dir.dot(d));
                 let (p_h, _) = self.hidden.pdf(&self.scene.geometry, from.x, d);
@@ -1062,12 +1149,19 @@ impl<'a> Tracer<'a> {
             return;
         }
         // The density's walk also finds the first segment's hit.
-        let (pdf0, hit0) = self.origin_pdf(origin.p, origin.n, d);
+        let (pdf0, p_h0, hit0) = self.origin_pdfs(origin.p, origin.n, d);
         let mut first_hit = Some(hit0);
         if pdf0 <= 0.0 {
             return;
         }
         let mut beta = d.dot(origin.n) / PI / pdf0;
+        if self.object_draws > 0 {
+            // The traced point's own return, never shared.
+            out.recording = false;
+            self.draw_objects(origin, targets, s, out);
+        }
+        // The balance weight of the first segment's own object return against `draw_objects`.
+        let first_object_weight = pdf0 / (pdf0 + self.object_draws as f64 * p_h0);
         let mut pos = origin.p;
         let mut opl = origin.extra_m;
         let mut depth = 0u32;
@@ -1123,7 +1217,7 @@ impl<'a> Tracer<'a> {
                         seg.extend(
                             targets
                                 .iter()
-                                .map(|t| self.toward(m, pos, d, opl, (m0, m1), t)),
+                                .map(|t| self.toward(m, (pos, d), opl, (m0, m1), t, from.origin)),
                         );
                         for k in 0..targets.len() {
                             let n_time = seg[k].time.as_ref().map_or(0, |e| e.n);
@@ -1161,7 +1255,7 @@ impl<'a> Tracer<'a> {
                         // path toward the hidden object contributes its return; a pass below does not connect
                         // again.
                         if let Some((h, false)) = hit {
-                            let b = beta * self.object_weight(&from, d);
+                            let b = beta * self.object_weight(&from, d, first_object_weight);
                             self.connect_hit(pos, d, &h, b, opl, targets, s, out);
                             connected = true;
                         }
@@ -1231,7 +1325,7 @@ impl<'a> Tracer<'a> {
                 albedo: h.albedo,
             };
             if !on_relay && !connected {
-                let b = beta * self.object_weight(&from, d);
+                let b = beta * self.object_weight(&from, d, first_object_weight);
                 self.connect(pos, from.x, &v, b, opl, (0, targets), |_| 1.0, s, out);
             }
             beta *= h.albedo;

@@ -111,6 +111,10 @@ pub struct RenderDef {
     /// Medium vertices also connect to the other side through a uniform point of the hidden geometry
     /// (next-event estimation of the object return after scattering), MIS-combined with the phase direction.
     pub object_connections: bool,
+    /// Extra directions per path from the traced point toward uniform points of the hidden geometry, each
+    /// only connected where it first meets a surface (the direct object return), MIS-combined with the
+    /// path's own first direction. 0: off.
+    pub object_draws: u32,
     /// Equiangular sampling of medium points toward the wall points, MIS-combined with free flight. Off by
     /// default: with target-side sampling and without Russian roulette it cost more than it removed
     /// (see the integrator).
@@ -119,6 +123,9 @@ pub struct RenderDef {
     /// time window, stratified (MIS-combined with equiangular and free flight); used where the medium's ior
     /// is 1. 0: off.
     pub time_samples: u32,
+    /// `time_samples` for the segment leaving the traced point (default: `time_samples`): its medium
+    /// vertices are the single scattering of each traced point, which no tile shares.
+    pub first_time_samples: Option<u32>,
     /// Medium vertices also drawn from the wall points' side (cosine lobe, equiangular toward the path
     /// vertex), MIS-combined with the path side: removes the fireflies of fog paths passing near a wall point.
     pub target_sampling: bool,
@@ -144,8 +151,10 @@ impl Default for RenderDef {
             hidden_geometry_sampling: None,
             first_vertex_survival: None,
             object_connections: true,
+            object_draws: 0,
             equiangular: false,
             time_samples: 0,
+            first_time_samples: None,
             target_sampling: true,
             target_split: 64,
             target_split_radius: 0.5,
@@ -452,7 +461,12 @@ impl Scene {
         // Per-segment draw counts: capped so a typo cannot stall a render.
         for (field, n) in [
             ("render.time_samples", s.time_samples),
+            (
+                "render.first_time_samples",
+                s.first_time_samples.unwrap_or(0),
+            ),
             ("render.target_split", s.target_split),
+            ("render.object_draws", s.object_draws),
         ] {
             if n > 4096 {
                 return Err(bad(field, format!("must be at most 4096, got {n}")));
