@@ -74,9 +74,9 @@
 //!   t-wall-medium: 8.1× → 14.6× less CPU than mitransient (8 × 8: 8.0×, its first segments dominate).
 //!   Once object draws and first-segment time draws cut the first segments' share, 8 × 8 pays on both
 //!   fog scenes (z-letter relL2 0.72 → 0.53, t-wall-medium 0.36 → 0.29; `share_tile = 8` in both). The
-//!   tile's weights are ∝ each point's leg integrand f where every first direction has a cosine share
-//!   (`Leg`), which needs only the nearest hit up to the vertex, not the mixture density's walk along
-//!   the whole ray. Replaying the tails of 16–256 paths at once, for cache locality, measured no faster.
+//!   tile's weights are ∝ each point's leg integrand f (`share_tail`), which needs only the nearest hit
+//!   up to the vertex, not the mixture density's walk along the whole ray. Replaying the tails of 16–256
+//!   paths at once, for cache locality, measured no faster.
 //! - Equiangular distances toward the targets are off by default (`equiangular`): once target-side
 //!   sampling handles the points near a target and roulette is gone, they took a third of the CPU time
 //!   for no lower error. t-wall-medium (median of 7 seeds, 256 spp): relL2 1.35 at 0.90 CPU-s with them,
@@ -430,15 +430,10 @@ fn replay(
 }
 
 /// The leg from a traced point to a path's first vertex, in the measure of that vertex (volume or area):
-/// its integrand `f`, its balance weight `p` over the tile, the optical path `opl` to it and the direction
-/// `d`. The weight is the density with which tracing from the point places the vertex there or, where
-/// every first direction has a cosine share (`hidden_geometry_sampling` < 1), `f` itself: weights ∝ f are
-/// then the balance heuristic of that share's densities (f times one constant for every point of the
-/// tile), nonzero wherever a point can place the vertex, so each point's estimate stays unbiased.
+/// its integrand `f`, the optical path `opl` to it and the direction `d`.
 #[derive(Clone, Copy)]
 struct Leg {
     f: f64,
-    p: f64,
     opl: f64,
     d: DVec3,
 }
@@ -635,17 +630,12 @@ impl<'a> Tracer<'a> {
         if cos.is_nan() || cos <= 0.0 {
             return None;
         }
-        // Where every first direction has a cosine share, the weight is `f` itself (see `Leg`): only the
-        // nearest hit up to the vertex is needed, not the mixture's walk along the whole ray.
-        let by_f = self.p_hidden < 1.0;
-        let (pdf, t_hit) = if by_f {
-            let reach = t * (1.0 + 1e-6) + 1e-6;
-            let hit = self.scene.geometry.intersect(o.p, w, reach);
-            (f64::NAN, hit.map_or(f64::INFINITY, |h| h.t))
-        } else {
-            let (pdf, hit) = self.origin_pdf(o.p, o.n, w);
-            (pdf, hit.map_or(f64::INFINITY, |h| h.t))
-        };
+        let reach = t * (1.0 + 1e-6) + 1e-6;
+        let t_hit = self
+            .scene
+            .geometry
+            .intersect(o.p, w, reach)
+            .map_or(f64::INFINITY, |h| h.t);
         let g = cos / PI / (t * t);
         match f.normal {
             None => {
@@ -659,14 +649,8 @@ impl<'a> Tracer<'a> {
                 }
                 let tr = (-m.sigma_t * (t - m0)).exp();
                 let opl = o.extra_m + t + (m.ior - 1.0) * (t - m0);
-                let f = g * tr * m.sigma_s();
                 Some(Leg {
-                    f,
-                    p: if by_f {
-                        f
-                    } else {
-                        pdf * m.sigma_t * tr / (t * t)
-                    },
+                    f: g * tr * m.sigma_s(),
                     opl,
                     d: w,
                 })
@@ -678,10 +662,8 @@ impl<'a> Tracer<'a> {
                     return None;
                 }
                 let (tr, extra) = self.transmit(o.p, w, t);
-                let a = tr * cos_y;
                 Some(Leg {
-                    f: g * a,
-                    p: if by_f { g * a } else { pdf * a / (t * t) },
+                    f: g * tr * cos_y,
                     opl: o.extra_m + t + extra,
                     d: w,
                 })
@@ -690,9 +672,13 @@ impl<'a> Tracer<'a> {
     }
 
     /// Adds the tail of a path traced from `origins[src]` to every origin of the tile: the first vertex is
-    /// re-joined to each origin and weighted by the balance heuristic over all origins' weights of that
-    /// vertex (`Leg`; every origin traces the same spp), so each origin's estimate stays unbiased and gets
-    /// the tails of the whole tile.
+    /// re-joined to each origin, and origin i takes the share f_i/Σf of the tail divided by the source's
+    /// own f (every origin traces the same spp). That is the balance heuristic over the densities of the
+    /// cosine part of the origins' first directions (each is its f times one constant for the whole tile),
+    /// which is nonzero wherever an origin can place the vertex because every first direction has a cosine
+    /// share where a medium scatters (scene validation): each origin's estimate stays unbiased and gets the
+    /// tails of the whole tile. Weighting by the full mixture density instead would walk the hidden
+    /// geometry along every leg's whole ray; this needs only the nearest hit up to the vertex.
     fn share_tail(
         &self,
         origins: &[Endpoint],
@@ -703,9 +689,9 @@ impl<'a> Tracer<'a> {
         let Some(first) = sink.first else { return };
         legs.clear();
         legs.extend(origins.iter().map(|o| self.leg(o, &first)));
-        let sum_p: f64 = legs.iter().flatten().map(|l| l.p).sum();
+        let sum_f: f64 = legs.iter().flatten().map(|l| l.f).sum();
         let (t, unit) = (&self.scene.capture.time, sink.unit);
-        let Some(own) = legs[src].filter(|l| l.f > 0.0 && l.p > 0.0) else {
+        let Some(own) = legs[src].filter(|l| l.f > 0.0) else {
             // Rounding kept the source from re-joining its own vertex (a grazing or boundary leg): the
             // tail stays the source's own, unshared.
             let hist = &mut sink.out[src * unit..(src + 1) * unit];
@@ -723,7 +709,7 @@ impl<'a> Tracer<'a> {
         }
         for (i, leg) in legs.iter().enumerate() {
             let Some(leg) = leg else { continue };
-            let scale = leg.f * own.p / (own.f * sum_p);
+            let scale = leg.f / sum_f;
             let shift = (leg.opl - own.opl) / t.bin_width_m;
             let hist = &mut sink.out[i * unit..(i + 1) * unit];
             replay(t.bins, hist, &sink.tail, scale, shift, |w| {
@@ -986,7 +972,8 @@ impl<'a> Tracer<'a> {
     }
 
     /// The balance weight of a path's own surface connection along direction `d` from `from` against
-    /// `connect_object` (only from medium vertices).
+    /// `connect_object` (only from medium vertices), or `first` from the traced point (against
+    /// `draw_objects`).
     fn object_weight(&self, from: &Start, d: DVec3, first: f64) -> f64 {
         match (from.v, self.medium()) {
             _ if from.origin => first,

@@ -541,6 +541,19 @@ impl Scene {
             }
         };
 
+        if let Some(p) = s
+            .hidden_geometry_sampling
+            .filter(|p| *p >= 1.0 && medium.as_ref().is_some_and(|m| m.sigma_s() > 0.0))
+        {
+            return Err(bad(
+                "render.hidden_geometry_sampling",
+                format!(
+                    "must be below 1 where the medium scatters (paths whose first vertex lies off the \
+                     hidden geometry's directions would never be drawn), got {p}"
+                ),
+            ));
+        }
+
         // Hidden geometry.
         let mut objects = Vec::new();
         for (i, o) in f.objects.iter().enumerate() {

@@ -141,6 +141,21 @@ fn bad_scenes_name_file_and_field() {
             "render.target_split_radius",
         ),
         ("share_tile = 2", "share_tile = 17", "render.share_tile"),
+        (
+            "[render]",
+            "[render]\nhidden_geometry_sampling = 1.0",
+            "render.hidden_geometry_sampling",
+        ),
+        (
+            "[render]",
+            "[render]\nfirst_time_samples = 5000",
+            "render.first_time_samples",
+        ),
+        (
+            "[render]",
+            "[render]\nobject_draws = 5000",
+            "render.object_draws",
+        ),
         ("kind = \"wall\"", "kind = \"wal\"", "line 3"),
         ("[capture]", "[capture\n", "line"),
         (
