@@ -144,6 +144,10 @@ impl Aabb {
             max: self.max.max(o.max),
         }
     }
+    /// Whether the two boxes share a point.
+    pub fn overlaps(&self, o: &Aabb) -> bool {
+        self.min.cmple(o.max).all() && o.min.cmple(self.max).all()
+    }
     /// The part `[t0, t1]` of the ray inside the box, clipped to `[0, t_max]`; `None` if empty.
     pub fn clip(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64)> {
         self.clip_inv(o, d.recip(), t_max)

@@ -475,6 +475,8 @@ pub struct Tracer<'a> {
     q_first: f64,
     /// Direct object-return draws per path from the traced point (`draw_objects`).
     object_draws: u32,
+    /// The hidden geometry's bounds, grown by a margin: a leg outside them meets nothing.
+    hidden_bounds: crate::geometry::Aabb,
     /// The last (spp, lattice generator) pair `trace` used.
     lattice: Mutex<(u64, u64)>,
 }
@@ -528,6 +530,20 @@ impl<'a> Tracer<'a> {
             q_first,
             rr_depth,
             object_draws,
+            hidden_bounds: {
+                let b = scene.geometry.bounds();
+                // Rounding of the leg's end points; none to cover when there is no geometry (empty box).
+                let scale = if b.min.cmple(b.max).all() {
+                    b.min.abs().max(b.max.abs()).max_element()
+                } else {
+                    0.0
+                };
+                let m = DVec3::splat(1e-6 * (1.0 + scale));
+                crate::geometry::Aabb {
+                    min: b.min - m,
+                    max: b.max + m,
+                }
+            },
             lattice: Mutex::new((0, 0)),
         }
     }
@@ -631,11 +647,19 @@ impl<'a> Tracer<'a> {
             return None;
         }
         let reach = t * (1.0 + 1e-6) + 1e-6;
-        let t_hit = self
-            .scene
-            .geometry
-            .intersect(o.p, w, reach)
-            .map_or(f64::INFINITY, |h| h.t);
+        // Most legs stay clear of the hidden geometry's box: no walk for them.
+        let clear = !crate::geometry::Aabb::empty()
+            .grow(o.p)
+            .grow(o.p + w * reach)
+            .overlaps(&self.hidden_bounds);
+        let t_hit = if clear {
+            f64::INFINITY
+        } else {
+            self.scene
+                .geometry
+                .intersect(o.p, w, reach)
+                .map_or(f64::INFINITY, |h| h.t)
+        };
         let g = cos / PI / (t * t);
         match f.normal {
             None => {
