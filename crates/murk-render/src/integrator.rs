@@ -41,9 +41,10 @@
 //!   shared, its vertices (each point's single scattering) are what no other point helps with. Splitting
 //!   the object window's variance by technique (two seeds, a tag per splat) after sharing: the first
 //!   segment's medium vertices held 0.19 of t-wall-medium's relative variance 0.38 for 3 % of its
-//!   signal², almost all from free-flight vertices that rarely land in the window; 4 draws there took
-//!   0.26 → 0.14 for 20 % more CPU. On z-letter (tile 8) 4 → 8 → 16 → 32 draws gave relL2 0.53 → 0.45 →
-//!   0.40 → 0.37 at 128 spp, 0.77 → 0.67 → 0.55 → 0.61 CPU-h.
+//!   signal², almost all from free-flight vertices that rarely land in the window; with object draws
+//!   (below), 4 draws there took it 0.26 → 0.14 for 20 % more CPU. On z-letter (tile 8) 4 → 8 → 16 → 32
+//!   draws gave relL2 0.53 → 0.45 → 0.40 → 0.37 at 128 spp, 0.77 → 0.67 → 0.55 → 0.61 CPU-h in one
+//!   series (this VM's timings drift by ±20 %); the scene keeps 16.
 //! - Segment starts near a target get more target-side draws (`target_split` up to 64 within
 //!   `target_split_radius` 0.5 m, ∝ radius/distance): on t-wall-medium relay vertices within 5 cm of the
 //!   laser spot carried 42 % of the object window's second moment for 1.4 % of its mean, mostly through
@@ -54,8 +55,9 @@
 //!   heuristic with the path's own first direction, `n·p_hidden-geometry` against the mixture's density).
 //!   The first segment's object return had become the largest single term: 0.28 of z-letter's relative
 //!   variance 0.80 for 6 % of the signal², 0.11 of t-wall-medium's 0.38. Two draws took those to 0.03 and
-//!   0.01, and with them fewer first directions need the hidden geometry: z-letter (tile 4) 1.72 →
-//!   0.82–0.96 CPU-h with `hidden_geometry_sampling` 0.05–0.2 (0 lost the paths that scatter near the Z).
+//!   0.01, and with them fewer first directions need the hidden geometry: z-letter (tile 4, two draws)
+//!   1.72 → 0.91 CPU-h with `hidden_geometry_sampling` 0.05, 0.82–0.96 with 0.1, 1.01 with 0 (which
+//!   loses the paths that scatter near the Z).
 //! - Medium vertices also connect through a uniform point of the hidden geometry (`object_connections`,
 //!   MIS with the phase direction): on z-letter the object return after one scattering event came from
 //!   rare phase directions meeting the Z (18 % of the second moment from 0.1 % of the samples); relL2 at
@@ -73,7 +75,8 @@
 //!   0.91 (4 × 4), 0.75 (8 × 8) for 1.1×, 1.7×, 2.9× the CPU per path: 6.65 → 3.06, 1.72, 2.13 CPU-h.
 //!   t-wall-medium: 8.1× → 14.6× less CPU than mitransient (8 × 8: 8.0×, its first segments dominate).
 //!   Once object draws and first-segment time draws cut the first segments' share, 8 × 8 pays on both
-//!   fog scenes (z-letter relL2 0.72 → 0.53, t-wall-medium 0.36 → 0.29; `share_tile = 8` in both). The
+//!   fog scenes (4 × 4 → 8 × 8: z-letter relL2 0.72 → 0.53, t-wall-medium 0.36 → 0.29, for ~1.5× the
+//!   CPU per path; `share_tile = 8` in both). The
 //!   tile's weights are ∝ each point's leg integrand f (`share_tail`), which needs only the nearest hit
 //!   up to the vertex, not the mixture density's walk along the whole ray. Replaying the tails of 16–256
 //!   paths at once, for cache locality, measured no faster.

@@ -103,7 +103,7 @@ pub struct RenderDef {
     pub time_jitter: f64,
     /// Probability of sampling the first direction toward the hidden geometry (mixed with cosine sampling).
     /// Default: 1 where no medium scatters (every first direction that contributes then meets the hidden
-    /// geometry), else 0.8.
+    /// geometry), else 0.8; below 1 where a medium scatters (first vertices lie in every direction).
     pub hidden_geometry_sampling: Option<f64>,
     /// Probability that a path goes on past its first hidden vertex (weighted by its inverse). Default: 0.1
     /// where no medium scatters (the direct return needs only the first vertex; see the integrator), else 1.
