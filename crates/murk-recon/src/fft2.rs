@@ -120,6 +120,11 @@ pub fn kept_lines(fy: usize, lines: usize) -> [Range<usize>; 2] {
     }
 }
 
+/// The element ranges of [`kept_lines`] in a [ky][kx] spectrum with lines of `fx`.
+pub fn kept_spans(fy: usize, lines: usize, fx: usize) -> [Range<usize>; 2] {
+    kept_lines(fy, lines).map(|r| r.start * fx..r.end * fx)
+}
+
 /// `dst[c·dst_stride + r] = src[r·src_stride + c]` for r ∈ `rows`, c ∈ `cols`: part of a transpose, in
 /// 8 × 8 tiles so that both sides stay in cache.
 pub fn transpose_part(

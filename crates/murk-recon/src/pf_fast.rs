@@ -5,7 +5,7 @@
 //! are not on the wall lattice read the convolution through a windowed-sinc resampler.
 
 use crate::cmul;
-use crate::fft2::{kept_lines, transpose_part, Fft2};
+use crate::fft2::{kept_lines, kept_spans, transpose_part, Fft2};
 use crate::resample::Resampler;
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
@@ -389,8 +389,7 @@ impl<'a> Plan<'a> {
                 }
                 self.fft.forward_lines(a, gnx, t, lines, scratch);
                 // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
-                for r in kept_lines(fy, lines) {
-                    let span = r.start * fx..r.end * fx;
+                for span in kept_spans(fy, lines, fx) {
                     match &self.fold {
                         Some(f) => cmul::mul_assign(&mut t[span.clone()], &f.phases[span]),
                         None => {
@@ -492,21 +491,16 @@ impl<'a> Plan<'a> {
             }
             cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
-            // Lines of ws.t outside `kept` are left as they are: nothing reads them.
-            let kept = kept_lines(fy, lines);
+            // Lines of ws.t outside the kept ones are left as they are: nothing reads them.
             if self.fold.is_some() {
-                self.folded_product(ws, h, kept.clone());
+                self.folded_product(ws, h, kept_lines(fy, lines));
             } else {
-                for r in kept.clone() {
-                    cmul::mul_assign(
-                        &mut ws.t[r.start * fx..r.end * fx],
-                        &h[r.start * fx..r.end * fx],
-                    );
+                for span in kept_spans(fy, lines, fx) {
+                    cmul::mul_assign(&mut ws.t[span.clone()], &h[span]);
                 }
             }
             if confocal {
-                for r in kept {
-                    let span = r.start * fx..r.end * fx;
+                for span in kept_spans(fy, lines, fx) {
                     wide(
                         #[inline(always)]
                         || {

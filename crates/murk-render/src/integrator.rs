@@ -508,7 +508,7 @@ impl<'a> Tracer<'a> {
     pub fn new(scene: &'a Scene) -> Self {
         let hidden = HiddenSampler::new(scene);
         let set = &scene.settings;
-        let scatters = scene.medium.as_ref().is_some_and(|m| m.sigma_s() > 0.0);
+        let scatters = scene.scatters();
         let p_hidden = if hidden.total > 0.0 {
             set.hidden_geometry_sampling
                 .unwrap_or(if scatters { 0.8 } else { 1.0 })
@@ -625,7 +625,9 @@ impl<'a> Tracer<'a> {
             let mut jg = 0;
             for j in 0..spp {
                 let u = ((s1 + j as f64 / n).fract(), (s2 + jg as f64 / n).fract());
+                // A path starts at its traced point: nothing of it is shared yet.
                 sink.first = None;
+                sink.recording = false;
                 sink.tail.clear();
                 self.path(origin, targets, u, s, &mut sink, &mut seg);
                 if !sink.tail.is_empty() {
@@ -1170,8 +1172,6 @@ impl<'a> Tracer<'a> {
         }
         let mut beta = d.dot(origin.n) / PI / pdf0;
         if self.object_draws > 0 {
-            // The traced point's own return, never shared.
-            out.recording = false;
             self.draw_objects(origin, targets, s, out);
         }
         // The balance weight of the first segment's own object return against `draw_objects`.
@@ -1186,7 +1186,7 @@ impl<'a> Tracer<'a> {
             // The medium that scatters, when target-side sampling runs in it.
             let scattering = self
                 .medium()
-                .filter(|m| m.sigma_s() > 0.0 && set.target_sampling);
+                .filter(|m| m.scatters() && set.target_sampling);
             if let Some(m) = scattering {
                 self.sample_from_target(m, &from, targets, s, out);
             }

@@ -68,6 +68,11 @@ impl Medium {
     pub fn sigma_s(&self) -> f64 {
         self.sigma_t * self.albedo
     }
+
+    /// Whether it scatters light (not only absorbs it).
+    pub fn scatters(&self) -> bool {
+        self.sigma_s() > 0.0
+    }
     /// Length of the segment `o + t·d`, t ∈ [0, t_max], inside the medium (d must be unit).
     pub fn overlap(&self, o: DVec3, d: DVec3, t_max: f64) -> f64 {
         self.region

@@ -52,13 +52,14 @@ impl<'a> Plan<'a> {
         };
         // Tails are shared where a medium scatters (their density model) and every traced point has the
         // same targets; the tile side is the largest divisor of each grid side up to `share_tile`.
-        let scatters = scene.medium.as_ref().is_some_and(|m| m.sigma_s() > 0.0);
-        let side =
-            if scatters && c.pairing == Pairing::Product && traced.layout != PointLayout::List {
-                scene.settings.share_tile.max(1) as usize
-            } else {
-                1
-            };
+        let side = if scene.scatters()
+            && c.pairing == Pairing::Product
+            && traced.layout != PointLayout::List
+        {
+            scene.settings.share_tile.max(1) as usize
+        } else {
+            1
+        };
         let fit = |n: usize| {
             (1..=side.min(n))
                 .rev()

@@ -282,6 +282,11 @@ fn v3(a: [f64; 3]) -> DVec3 {
 }
 
 impl Scene {
+    /// Whether a medium scatters light in the scene (where tiles share tails and paths never roulette).
+    pub fn scatters(&self) -> bool {
+        self.medium.as_ref().is_some_and(Medium::scatters)
+    }
+
     pub fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Scene::from_str(&text, path, ov)
@@ -543,7 +548,7 @@ impl Scene {
 
         if let Some(p) = s
             .hidden_geometry_sampling
-            .filter(|p| *p >= 1.0 && medium.as_ref().is_some_and(|m| m.sigma_s() > 0.0))
+            .filter(|p| *p >= 1.0 && medium.as_ref().is_some_and(Medium::scatters))
         {
             return Err(bad(
                 "render.hidden_geometry_sampling",
