@@ -1,12 +1,13 @@
 //! `murk demo`: the whole pipeline on a built-in scene, in seconds, with pictures to look at.
 
 use crate::cmd::progress::{say, Bar};
-use crate::cmd::{pictures, reconstruct};
+use crate::cmd::reconstruct;
 use anyhow::Context;
 use clap::Args;
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
 use murk_recon::{Method, PfParams};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
+use murk_view::pictures;
 use std::path::PathBuf;
 
 #[derive(Args)]

@@ -4,7 +4,6 @@
 //! (rows CDT, PF, PF; a column per scene) and an index.html with parameters, depths and timings.
 
 use crate::cmd::import::{import, Format, ImportOptions, CDT_SCENES};
-use crate::cmd::pictures::{self, Plane};
 use crate::cmd::progress::{say, Bar};
 use crate::cmd::reconstruct::slab_delay_m;
 use anyhow::Context;
@@ -12,6 +11,7 @@ use clap::{Args, ValueEnum};
 use murk_baselines::{CdtParams, CdtPlan};
 use murk_core::{Capture, Volume};
 use murk_recon::{Falloff, Method, PfParams, Wavelength};
+use murk_view::pictures::{self, Plane};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

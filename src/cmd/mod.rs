@@ -6,7 +6,6 @@ pub mod demo;
 pub mod figure;
 pub mod import;
 pub mod info;
-pub mod pictures;
 pub mod progress;
 pub mod reconstruct;
 pub mod render;

@@ -1,12 +1,12 @@
 //! `murk reconstruct`: a capture file in, a volume (.npy / .h5) and pictures out.
 
-use crate::cmd::pictures;
 use crate::cmd::progress::{say, Bar};
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, SlabParams};
 use murk_core::{Axis, Capture, Volume, SPEED_OF_LIGHT_M_PER_S};
 use murk_recon::{Compensation, Falloff, Lateral, Method, PfParams, Wavelength};
+use murk_view::pictures;
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

@@ -9,6 +9,12 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 #[derive(Args)]
+#[command(after_help = "Examples:\n  \
+murk render scenes/t-wall-medium.toml --out fog.h5 --spp 64\n  \
+murk render scenes/z-letter.toml --out z.h5 --grid 32 --bins 1024 --set medium.albedo=0.83 --set medium.g=0.7\n  \
+murk render scenes/shelf.toml --out shelf.h5 --truth shelf-truth.h5\n  \
+murk render scenes/z-letter.toml --out part0.h5 --shard 0/4   # then murk merge part*.h5 --out z.h5\n  \
+murk render scenes/z-letter.toml --out z.h5 --resume          # continue from z.h5.ckpt")]
 pub struct RenderArgs {
     /// Scene file (TOML; examples in scenes/).
     pub scene: PathBuf,
@@ -33,6 +39,15 @@ pub struct RenderArgs {
     /// Override the number of time bins.
     #[arg(long, value_name = "N")]
     pub bins: Option<usize>,
+    /// Override any key of the scene file (repeatable): a dotted key and a TOML value, e.g.
+    /// `medium.albedo=0.83`, `object[0].center=[0, 0, 1.5]`, `relay.kind=wall`. Recorded in the capture's
+    /// scene_info and covered by --resume's check.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Also write the scene's ground truth (HDF5): per wall-grid point the depth of the first hidden surface
+    /// along the relay normal and its object, plus the geometry's bounds.
+    #[arg(long, value_name = "OUT.h5")]
+    pub truth: Option<PathBuf>,
     /// Render only part i of N (0-based), for `murk merge`.
     #[arg(long, value_name = "i/N", value_parser = parse_shard)]
     pub shard: Option<(usize, usize)>,
@@ -80,8 +95,12 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let ov = Overrides {
         grid: a.grid,
         bins: a.bins,
+        set: a.set.clone(),
     };
     let scene = Scene::load(&a.scene, &ov)?;
+    if let Some(t) = &a.truth {
+        murk_io::write_truth_h5(t, &scene.ground_truth())?;
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads.unwrap_or(0))
         .build()

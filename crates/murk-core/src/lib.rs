@@ -14,12 +14,14 @@ mod capture;
 mod error;
 mod points;
 pub mod simd;
+mod truth;
 mod volume;
 
 pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
 pub use error::{Error, Result};
 pub use glam::DVec3;
 pub use points::{PointLayout, PointSet, RegularGrid};
+pub use truth::GroundTruth;
 pub use volume::{Axis, Volume};
 
 /// Speed of light in vacuum (m/s), the constant y-tal uses to convert paths to seconds.

@@ -14,6 +14,7 @@ mod mat;
 mod npy;
 mod scene_info;
 mod tal;
+mod truth;
 mod volume;
 
 pub use atomic::write_atomic;
@@ -24,4 +25,5 @@ pub use tal::{
     read_capture, read_capture_with_limit, write_capture, write_capture_compressed,
     DEFAULT_READ_LIMIT_BYTES, TAL_FIELDS,
 };
+pub use truth::{read_truth_h5, write_truth_h5};
 pub use volume::{write_volume_h5, AttrValue};

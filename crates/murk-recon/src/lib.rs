@@ -267,16 +267,7 @@ pub fn reconstruct(
             }
         },
     };
-    let (point, aperture) = compensation_points(cap);
-    let intensity = field
-        .iter()
-        .enumerate()
-        .map(|(i, u)| {
-            let (ix, rest) = (i / (volume.y.n * volume.z.n), i % (volume.y.n * volume.z.n));
-            let v = volume.centre(ix, rest / volume.z.n, rest % volume.z.n);
-            (u.norm_sqr() as f64 * params.compensation.gain(v, point, aperture, confocal)) as f32
-        })
-        .collect();
+    let intensity = intensity(cap, volume, &field, params.compensation);
     Ok(Reconstruction {
         volume: *volume,
         field,
@@ -292,6 +283,26 @@ pub fn reconstruct(
             warnings,
         },
     })
+}
+
+/// |U|²·K of a field on `volume` reconstructed from `cap`, so that one field serves every compensation.
+pub fn intensity(
+    cap: &Capture,
+    volume: &Volume,
+    field: &[Complex32],
+    compensation: Compensation,
+) -> Vec<f32> {
+    let confocal = cap.kind() == CaptureKind::Confocal;
+    let (point, aperture) = compensation_points(cap);
+    field
+        .iter()
+        .enumerate()
+        .map(|(i, u)| {
+            let (ix, rest) = (i / (volume.y.n * volume.z.n), i % (volume.y.n * volume.z.n));
+            let v = volume.centre(ix, rest / volume.z.n, rest % volume.z.n);
+            (u.norm_sqr() as f64 * compensation.gain(v, point, aperture, confocal)) as f32
+        })
+        .collect()
 }
 
 /// The paper's x_c for K(x_v) (the single wall point of a one-point capture, else the sensor centroid)

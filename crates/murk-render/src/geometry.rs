@@ -383,6 +383,16 @@ impl Geometry {
         best.map(|(p, k, t)| self.hit(p, k, t, d))
     }
 
+    /// The nearest hit of the ray `o + t·d` (t > EPS) as (object index, t).
+    pub fn first_object(&self, o: DVec3, d: DVec3) -> Option<(usize, f64)> {
+        let mut best = None;
+        self.bvh.walk(o, d, f64::INFINITY, |_, k, t| {
+            best = Some((k as usize, t));
+            Step::Shrink
+        });
+        best
+    }
+
     /// Visits every hit of the ray `o + t·d`, t > EPS, as `(primitive, its object, t)`, and returns the
     /// nearest (what `intersect` finds).
     pub fn all_hits(

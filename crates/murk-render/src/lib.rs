@@ -15,14 +15,17 @@ pub mod bench;
 mod geometry;
 mod integrator;
 mod medium;
+mod overrides;
 mod render;
 mod scene;
+mod truth;
 
 pub use geometry::{Aabb, Geometry, Object, Shape};
 pub use integrator::{Endpoint, Sampler, Tracer};
 pub use medium::{Medium, Phase};
-pub use render::{merge, scene_info, Plan, RenderOptions};
+pub use overrides::{canonical, differences, Overrides};
+pub use render::{fingerprint, merge, render_key, scene_info, Plan, RenderOptions};
 pub use scene::{
-    CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, ObjectDef, Overrides, Relay, RelayDef,
-    RelayKind, RenderDef, Scene, SceneFile, TraceFrom,
+    CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, ObjectDef, Relay, RelayDef, RelayKind,
+    RenderDef, Scene, SceneFile, TraceFrom,
 };

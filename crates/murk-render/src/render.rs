@@ -222,7 +222,7 @@ impl<'a> Plan<'a> {
         let mut ckpt = match &opt.checkpoint {
             Some(p) => Some(Checkpoint::open(
                 p,
-                fingerprint(self.scene, opt),
+                &render_key(self.scene, opt.spp, opt.seed, opt.shard),
                 self.unit_len(),
             )?),
             None => None,
@@ -273,13 +273,21 @@ impl<'a> Plan<'a> {
     }
 }
 
-/// YAML for the capture's `scene_info`: the scene file, spp, seed, murk version (and the shard of a part).
+/// YAML for the capture's `scene_info`: the scene file, spp, seed, murk version, the overrides and the
+/// resolved scene (and the shard of a part).
 pub fn scene_info(scene: &Scene, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> String {
     let mut s = format!(
-        "generator: murk render\nmurk_version: {}\nscene_file: {:?}\nspp: {spp}\nseed: {seed}\nscene: |\n",
+        "generator: murk render\nmurk_version: {}\nscene_file: {:?}\nspp: {spp}\nseed: {seed}\n",
         env!("CARGO_PKG_VERSION"),
         scene.file_name
     );
+    if !scene.overrides.is_empty() {
+        s.push_str("overrides:\n");
+        for o in &scene.overrides {
+            s.push_str(&format!("- {o:?}\n"));
+        }
+    }
+    s.push_str("scene: |\n");
     for line in scene.source.lines() {
         s.push_str("  ");
         s.push_str(line);
@@ -345,23 +353,27 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
     Ok(out)
 }
 
-/// FNV-1a over everything that determines the rendered numbers.
-fn fingerprint(scene: &Scene, opt: &RenderOptions) -> u64 {
-    let key = format!(
-        "{}\n{}\n{}\n{:?}\n{}",
-        scene.source,
-        opt.spp,
-        opt.seed,
-        opt.shard,
+/// Everything that determines the rendered numbers, as `key = value` lines: the resolved scene, spp,
+/// seed, shard and murk version. Two renders with the same key give the same bytes.
+pub fn render_key(scene: &Scene, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> String {
+    let shard = shard.map_or_else(|| "none".to_string(), |(i, n)| format!("{i}/{n}"));
+    format!(
+        "{}\nrender.spp_used = {spp}\nrender.seed = {seed}\nrender.shard = {shard}\nmurk_version = {}",
+        scene.resolved,
         env!("CARGO_PKG_VERSION")
-    );
+    )
+}
+
+/// FNV-1a, 64 bits: a short name for a render key.
+pub fn fingerprint(key: &str) -> u64 {
     key.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
         (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
     })
 }
 
-/// An append-only file of finished units: a header (magic, fingerprint, unit length), then records of
-/// (unit index: u64, values: f32 × unit length), little-endian. A record cut short by a kill is ignored.
+/// An append-only file of finished units: a header (magic, fingerprint, unit length, key length, the
+/// render key), then records of (unit index: u64, values: f32 × unit length), little-endian. A record cut
+/// short by a kill is ignored; a key that differs is refused, naming what differs.
 struct Checkpoint {
     file: std::fs::File,
     path: PathBuf,
@@ -369,23 +381,28 @@ struct Checkpoint {
     loaded: Vec<(usize, Vec<f32>)>,
 }
 
-const MAGIC: &[u8; 8] = b"MURKCKP1";
+const MAGIC: &[u8; 8] = b"MURKCKP2";
 
 impl Checkpoint {
-    fn open(path: &Path, fp: u64, unit_len: usize) -> Result<Self> {
+    fn open(path: &Path, key: &str, unit_len: usize) -> Result<Self> {
         let io = |e| Error::io(path, e);
-        let mut header = Vec::with_capacity(24);
+        let mut header = Vec::with_capacity(32 + key.len());
         header.extend_from_slice(MAGIC);
-        header.extend_from_slice(&fp.to_le_bytes());
+        header.extend_from_slice(&fingerprint(key).to_le_bytes());
         header.extend_from_slice(&(unit_len as u64).to_le_bytes());
+        header.extend_from_slice(&(key.len() as u64).to_le_bytes());
+        header.extend_from_slice(key.as_bytes());
         let mut loaded = Vec::new();
         let mut valid_len = 0u64;
         if let Ok(mut f) = std::fs::File::open(path) {
             let mut bytes = Vec::new();
             f.read_to_end(&mut bytes).map_err(io)?;
-            if bytes.len() >= 24 && bytes[..24] == header[..] {
+            if !bytes.is_empty() && !bytes.starts_with(&header) {
+                return Err(Error::format(path, refusal(&bytes, key)));
+            }
+            if !bytes.is_empty() {
                 let rec = 8 + 4 * unit_len;
-                let mut off = 24;
+                let mut off = header.len();
                 while off + rec <= bytes.len() {
                     let u = u64::from_le_bytes(bytes[off..off + 8].try_into().expect("8 bytes"))
                         as usize;
@@ -397,8 +414,6 @@ impl Checkpoint {
                     off += rec;
                 }
                 valid_len = off as u64;
-            } else if !bytes.is_empty() {
-                return Err(Error::format(path, "checkpoint of a different render (scene, spp, seed or shard changed); delete it or drop --resume"));
             }
         }
         let mut file = std::fs::OpenOptions::new()
@@ -432,4 +447,24 @@ impl Checkpoint {
         self.file.write_all(&buf).map_err(io)?;
         self.file.sync_data().map_err(io)
     }
+}
+
+/// Why a checkpoint's header does not match this render, naming the keys that differ where it can.
+fn refusal(bytes: &[u8], key: &str) -> String {
+    let theirs = (bytes.len() >= 32 && bytes[..8] == MAGIC[..])
+        .then(|| u64::from_le_bytes(bytes[24..32].try_into().expect("8 bytes")) as usize)
+        .and_then(|n| bytes.get(32..32usize.checked_add(n)?))
+        .and_then(|k| std::str::from_utf8(k).ok());
+    let what = match theirs {
+        Some(k) => {
+            let diffs = crate::overrides::differences(k, key, 4);
+            if diffs.is_empty() {
+                "its layout differs".to_string()
+            } else {
+                diffs.join("; ")
+            }
+        }
+        None => "it is not a checkpoint of this murk version".to_string(),
+    };
+    format!("checkpoint of a different render ({what}); delete it or drop --resume")
 }

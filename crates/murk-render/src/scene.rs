@@ -3,6 +3,7 @@
 
 use crate::geometry::{triangulate, Aabb, Geometry, Object, Shape};
 use crate::medium::{Medium, Phase};
+use crate::overrides::{apply, canonical, Overrides};
 use murk_core::{DVec3, Error, Pairing, PointSet, Result, TimeAxis};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -200,6 +201,8 @@ pub enum ObjectDef {
         up: [f64; 3],
         #[serde(default = "one")]
         albedo: f64,
+        /// A label for ground truth and reports (default: `object[i] (shape)`).
+        name: Option<String>,
     },
     /// An axis-aligned box; `omit` drops faces ("-x", "+x", "-y", "+y", "-z", "+z"), e.g. a room's relay side.
     Box {
@@ -209,6 +212,8 @@ pub enum ObjectDef {
         omit: Vec<String>,
         #[serde(default = "one")]
         albedo: f64,
+        /// A label for ground truth and reports (default: `object[i] (shape)`).
+        name: Option<String>,
     },
     /// y-tal's planar Z letter (0.8 m × 0.8 m at `scale` 1) in the plane z = center.z.
     ZLetter {
@@ -217,6 +222,8 @@ pub enum ObjectDef {
         scale: f64,
         #[serde(default = "one")]
         albedo: f64,
+        /// A label for ground truth and reports (default: `object[i] (shape)`).
+        name: Option<String>,
     },
     /// A Wavefront OBJ mesh (path relative to the scene file), scaled then translated.
     Mesh {
@@ -227,6 +234,8 @@ pub enum ObjectDef {
         translate: [f64; 3],
         #[serde(default = "one")]
         albedo: f64,
+        /// A label for ground truth and reports (default: `object[i] (shape)`).
+        name: Option<String>,
     },
 }
 
@@ -265,16 +274,16 @@ pub struct Scene {
     pub medium: Option<Medium>,
     pub capture: CaptureSpec,
     pub settings: RenderDef,
-    /// The scene file's text, recorded in the capture's `scene_info`.
+    /// The scene file's text, or the resolved TOML where overrides apply; recorded in `scene_info`.
     pub source: String,
+    /// The resolved scene as sorted `key = value` lines ([`canonical`]): what a checkpoint and a study's
+    /// task key compare.
+    pub resolved: String,
+    /// The overrides as the user wrote them (`--set medium.g=0.7`, `--grid 32`).
+    pub overrides: Vec<String>,
+    /// One label per `[[object]]`, in order (ground truth's object ids index it).
+    pub object_names: Vec<String>,
     pub file_name: String,
-}
-
-/// Command-line overrides applied on top of the file.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Overrides {
-    pub grid: Option<usize>,
-    pub bins: Option<usize>,
 }
 
 fn v3(a: [f64; 3]) -> DVec3 {
@@ -294,22 +303,38 @@ impl Scene {
 
     /// Parses and validates `text`; `path` names the file in errors and anchors relative mesh paths.
     pub fn from_str(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
+        // The file alone first, so that its own mistakes are reported with their line.
         let mut f: SceneFile = toml::from_str(text).map_err(|e| {
             let line = e
                 .span()
                 .map(|s| 1 + text[..s.start.min(text.len())].matches('\n').count());
-            let msg = e.message().trim().replace('\n', " ");
+            let msg = one_line(e.message());
             match line {
                 Some(l) => Error::format(path, format!("line {l}: {msg}")),
                 None => Error::format(path, msg),
             }
         })?;
-        if let Some(n) = ov.grid {
-            f.capture.grid = [n, n];
+        let mut table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| Error::format(path, one_line(e.message())))?;
+        let assignments = ov.assignments().map_err(|m| Error::format(path, m))?;
+        // One override at a time, so that a bad one is named.
+        for (key, value, written) in &assignments {
+            apply(&mut table, key, value.clone())
+                .and_then(|()| {
+                    table
+                        .clone()
+                        .try_into::<SceneFile>()
+                        .map_err(|e| one_line(e.message()))
+                })
+                .map(|parsed| f = parsed)
+                .map_err(|m| Error::format(path, format!("{written}: {m}")))?;
         }
-        if let Some(b) = ov.bins {
-            f.capture.bins = b;
-        }
+        let source = if assignments.is_empty() {
+            text.to_string()
+        } else {
+            toml::to_string(&table).map_err(|e| Error::format(path, e.to_string()))?
+        };
         let bad = |field: &str, msg: String| Error::format(path, format!("{field}: {msg}"));
         let dir = path.parent().unwrap_or(Path::new("."));
 
@@ -570,6 +595,7 @@ impl Scene {
                     normal,
                     up,
                     albedo,
+                    ..
                 } => {
                     let n = v3(*normal).normalize_or_zero();
                     let u = v3(*up);
@@ -598,6 +624,7 @@ impl Scene {
                     max,
                     omit,
                     albedo,
+                    ..
                 } => {
                     let (a, b) = (v3(*min), v3(*max));
                     if !(a.cmplt(b).all()) {
@@ -641,6 +668,7 @@ impl Scene {
                     center,
                     scale,
                     albedo,
+                    ..
                 } => {
                     let outline = murk_synth::z_letter_outline();
                     let c = v3(*center);
@@ -660,6 +688,7 @@ impl Scene {
                     scale,
                     translate,
                     albedo,
+                    ..
                 } => {
                     let full = dir.join(file);
                     let opts = tobj::LoadOptions {
@@ -723,7 +752,15 @@ impl Scene {
             medium,
             capture,
             settings: f.render.clone(),
-            source: text.to_string(),
+            source,
+            resolved: canonical(&table),
+            overrides: assignments.into_iter().map(|(_, _, w)| w).collect(),
+            object_names: f
+                .objects
+                .iter()
+                .enumerate()
+                .map(|(i, o)| o.label(i))
+                .collect(),
             file_name: path
                 .file_name()
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
@@ -775,6 +812,10 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+fn one_line(msg: &str) -> String {
+    msg.trim().replace('\n', " ")
 }
 
 fn check_albedo(a: f64, field: &str, bad: &impl Fn(&str, String) -> Error) -> Result<()> {

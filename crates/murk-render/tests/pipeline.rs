@@ -195,3 +195,87 @@ fn bad_scenes_name_file_and_field() {
     assert!(e.contains("object[0].file") && e.contains("bad.obj"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--set` overrides: a bad key or value is named on one line, every override and `--grid` land in
+/// scene_info, and a checkpoint of other overrides is refused naming the key that differs.
+#[test]
+fn overrides_are_named_recorded_and_guard_resume() {
+    let load = |ov: &Overrides| Scene::from_str(SCENE, Path::new("ov.toml"), ov);
+    let set = |s: &[&str]| Overrides {
+        set: s.iter().map(|s| s.to_string()).collect(),
+        ..Overrides::default()
+    };
+    for (ov, want) in [
+        (
+            "medium.albedox=0.8",
+            "--set medium.albedox=0.8: unknown field `albedox`",
+        ),
+        (
+            "medium.albedo=abc",
+            "--set medium.albedo=abc: invalid type: string \"abc\"",
+        ),
+        (
+            "medium.albedo=1.5",
+            "medium.albedo: must be in [0, 1], got 1.5",
+        ),
+        ("object[4].albedo=1", "object[4] does not exist"),
+        ("medium", "expected KEY=VALUE"),
+    ] {
+        let e = load(&set(&[ov])).unwrap_err().to_string();
+        assert!(e.starts_with("ov.toml: ") && e.contains(want), "{ov}: {e}");
+        assert!(!e.contains('\n'));
+    }
+
+    let base = load(&Overrides::default()).unwrap();
+    let fog = load(&Overrides {
+        grid: Some(2),
+        ..set(&["medium.g=0.7", "relay.kind=diffuser"])
+    })
+    .unwrap();
+    assert_eq!(base.source, SCENE, "no overrides: the file's own text");
+    assert!(
+        matches!(fog.medium.unwrap().phase, murk_render::Phase::HenyeyGreenstein { g } if g == 0.7)
+    );
+    assert_eq!(fog.capture.illum.len(), 4);
+    let info = murk_render::scene_info(&fog, 8, 1, None);
+    for want in [
+        "- \"--grid 2\"",
+        "- \"--set medium.g=0.7\"",
+        "grid = [2, 2]",
+        "g = 0.7",
+        "kind = \"diffuser\"",
+    ] {
+        assert!(info.contains(want), "{want} not in {info}");
+    }
+
+    let dir = std::env::temp_dir().join(format!("murk-render-ov-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let ck = dir.join("c.ckpt");
+    Plan::new(&base)
+        .render(&opts(None, Some(ck.clone())), &|_, _| {})
+        .unwrap();
+    let other = load(&set(&["medium.g=0.7"])).unwrap();
+    let e = Plan::new(&other)
+        .render(&opts(None, Some(ck.clone())), &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("different render (medium.g is unset there, 0.7 now)"),
+        "{e}"
+    );
+    let e = Plan::new(
+        &load(&Overrides {
+            grid: Some(2),
+            ..Overrides::default()
+        })
+        .unwrap(),
+    )
+    .render(&opts(None, Some(ck.clone())), &|_, _| {})
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("capture.grid is [4, 3] there, [2, 2] now"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

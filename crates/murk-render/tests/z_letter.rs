@@ -20,7 +20,7 @@ fn rendered_z_letter_reconstructs_at_two_metres() {
         &path,
         &Overrides {
             grid: Some(32),
-            bins: None,
+            ..Overrides::default()
         },
     )
     .expect("scene");

@@ -15,7 +15,7 @@ const INFERNO: [[f32; 3]; 6] = [
 ];
 
 /// Colour of `v` ∈ [0, 1].
-fn colour(v: f32) -> [u8; 3] {
+pub(crate) fn colour(v: f32) -> [u8; 3] {
     let x = v.clamp(0.0, 1.0) * (INFERNO.len() - 1) as f32;
     let i = (x.floor() as usize).min(INFERNO.len() - 2);
     let f = x - i as f32;
