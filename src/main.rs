@@ -42,6 +42,8 @@ enum Command {
     Import(cmd::import::ImportArgs),
     /// Reproduce a figure: `real` reconstructs the CDT captures with CDT and Phasor Fields.
     Figure(cmd::figure::FigureArgs),
+    /// Run a study: `paper` renders, reconstructs and scores every experiment of Luesia et al.
+    Experiment(cmd::experiment::ExperimentArgs),
     /// Sum the parts of a sharded render (`murk render --shard i/N`) into one capture.
     Merge(cmd::render::MergeArgs),
 }
@@ -71,6 +73,7 @@ fn main() {
         Command::Render(a) => cmd::render::run(a, cli.quiet),
         Command::Import(a) => cmd::import::run(a, cli.quiet),
         Command::Figure(a) => cmd::figure::run(a, cli.quiet),
+        Command::Experiment(a) => cmd::experiment::run(a, cli.quiet),
         Command::Merge(a) => cmd::render::run_merge(a, cli.quiet),
     };
     if let Err(e) = result {

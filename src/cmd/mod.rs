@@ -3,6 +3,7 @@ pub mod bench_confocal;
 pub mod bench_real;
 pub mod bench_render;
 pub mod demo;
+pub mod experiment;
 pub mod figure;
 pub mod import;
 pub mod info;

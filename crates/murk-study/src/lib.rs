@@ -1,4 +1,49 @@
 //! The study of Luesia et al. as a plan of independent render tasks, their reconstructions, metrics
 //! against the renderer's ground truth, figures and an HTML report.
+//!
+//! ```no_run
+//! use murk_study::{plan::{Scale, StudyOptions}, run::Silent};
+//! let opt = StudyOptions {
+//!     scale: Scale::Quick,
+//!     only: vec![],
+//!     seeds: 1,
+//!     shards: 1,
+//!     spp: None,
+//!     scenes_dir: "scenes".into(),
+//! };
+//! let index = murk_study::run_study(std::path::Path::new("study"), &opt, &Silent).unwrap();
+//! ```
 
 pub mod metrics;
+pub mod plan;
+pub mod report;
+pub mod run;
+
+use murk_core::{Error, Result};
+use plan::{Plan, StudyOptions};
+use run::{Event, Observer};
+use std::path::{Path, PathBuf};
+
+/// Plans the study and writes `DIR/plan.json` (kept when it already describes the same plan).
+pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
+    let plan = Plan::new(opt)?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let path = dir.join("plan.json");
+    let json = serde_json::to_string_pretty(&plan)
+        .map_err(|e| Error::param(format!("cannot serialise the plan: {e}")))?;
+    murk_io::write_atomic(&path, |w| {
+        w.write_all(json.as_bytes())
+            .map_err(|e| Error::io(&path, e))
+    })?;
+    Ok(plan)
+}
+
+/// Plans, renders what is missing, reconstructs and scores every cell, and writes the report; returns
+/// the path of `index.html`.
+pub fn run_study(dir: &Path, opt: &StudyOptions, obs: &dyn Observer) -> Result<PathBuf> {
+    let plan = prepare(dir, opt)?;
+    run::render_missing(&plan, dir, obs)?;
+    let results = run::evaluate(&plan, dir, obs)?;
+    obs.event(Event::Step("writing the report"));
+    report::write(&plan, &results, dir)
+}

@@ -1,0 +1,564 @@
+//! The study as data: figure cells (what to reconstruct and compare) over render tasks (what to
+//! simulate), each task keyed by the fingerprint of its resolved scene so finished work is found again.
+
+use murk_core::{Error, Result};
+use murk_render::{fingerprint, render_key, Overrides, Scene};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// How big the study is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Scale {
+    /// 64² laser points, 1 200 bins: the whole study in minutes on a laptop.
+    Quick,
+    /// The paper's 128² laser points × 4096 bins.
+    Paper,
+}
+
+/// The paper's figures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Figure {
+    /// Z letter, no medium.
+    Fig3a,
+    /// Z letter, μt × α, g = 0.
+    Fig3b,
+    /// Z letter, μt = 1, g × α.
+    Fig3c,
+    /// Z letter, μt = 1, α = 0.83, λ ∈ {λ0, 2λ0, 3λ0}.
+    Fig4,
+    /// Shelf in a room, μt ∈ {0, 1, 1.5}, α = 0.5.
+    Fig5,
+}
+
+impl Figure {
+    pub const ALL: [Figure; 5] = [
+        Figure::Fig3a,
+        Figure::Fig3b,
+        Figure::Fig3c,
+        Figure::Fig4,
+        Figure::Fig5,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Figure::Fig3a => "fig3a",
+            Figure::Fig3b => "fig3b",
+            Figure::Fig3c => "fig3c",
+            Figure::Fig4 => "fig4",
+            Figure::Fig5 => "fig5",
+        }
+    }
+
+    pub fn parse(s: &str) -> Result<Figure> {
+        Figure::ALL
+            .into_iter()
+            .find(|f| f.name() == s.trim())
+            .ok_or_else(|| {
+                Error::param(format!(
+                    "unknown figure '{s}' (use fig3a, fig3b, fig3c, fig4, fig5)"
+                ))
+            })
+    }
+
+    pub fn caption(self) -> &'static str {
+        match self {
+            Figure::Fig3a => "Fig. 3a: the Z letter without a medium",
+            Figure::Fig3b => "Fig. 3b: the Z letter in fog of increasing density μt (rows) and albedo α (columns), g = 0",
+            Figure::Fig3c => "Fig. 3c: the Z letter in fog of anisotropy g (rows) and albedo α (columns), μt = 1 /m",
+            Figure::Fig4 => "Fig. 4: the Z letter in fog (μt = 1 /m, α = 0.83) for a longer virtual wavelength λ",
+            Figure::Fig5 => "Fig. 5: the shelf in a room filled with fog of increasing density, α = 0.5",
+        }
+    }
+}
+
+/// The hidden scenes of the study.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SceneKind {
+    ZLetter,
+    Shelf,
+}
+
+impl SceneKind {
+    pub fn file(self) -> &'static str {
+        match self {
+            SceneKind::ZLetter => "z-letter.toml",
+            SceneKind::Shelf => "shelf.toml",
+        }
+    }
+}
+
+/// A homogeneous medium; μt = 0 is none.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MediumParams {
+    pub mu_t: f64,
+    pub albedo: f64,
+    pub g: f64,
+}
+
+/// The capture format and reconstruction volume of one scene at one scale.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Format {
+    pub grid: usize,
+    pub bins: usize,
+    pub bin_width_m: f64,
+    pub start_m: f64,
+    pub spp: u64,
+    /// Reconstruction volume `x0:x1:nx,y0:y1:ny,z0:z1:nz`.
+    pub volume: String,
+}
+
+impl Format {
+    /// The study's choice per scene and scale (see `docs/study.md` for why each window is where it is).
+    pub fn of(scene: SceneKind, scale: Scale) -> Format {
+        // The window starts 1 m of path before the nearest voxel's shortest path, so its cut stays far from
+        // the volume, and ends ≥ 2.5 m of path after the farthest voxel's longest one: ≥ 6σ of the longest
+        // pulse (3λ0) at both ends. `tail_share` in the report measures what the fog still carries there.
+        match (scene, scale) {
+            (SceneKind::ZLetter, Scale::Quick) => Format {
+                grid: 64,
+                bins: 1200,
+                bin_width_m: 0.005,
+                start_m: 2.0,
+                spp: 256,
+                volume: "-0.984375:0.984375:64,-0.984375:0.984375:64,1.5:2.5:41".into(),
+            },
+            (SceneKind::ZLetter, Scale::Paper) => Format {
+                grid: 128,
+                bins: 4096,
+                bin_width_m: 0.0015,
+                start_m: 2.0,
+                spp: 1024,
+                volume: "-0.99:0.99:73,-0.99:0.99:59,1.5:2.5:73".into(),
+            },
+            (SceneKind::Shelf, Scale::Quick) => Format {
+                grid: 64,
+                bins: 1200,
+                bin_width_m: 0.005,
+                start_m: 2.0,
+                spp: 128,
+                volume: "-0.984375:0.984375:64,-0.984375:0.984375:64,1.5:2.5:41".into(),
+            },
+            (SceneKind::Shelf, Scale::Paper) => Format {
+                grid: 128,
+                bins: 4096,
+                bin_width_m: 0.0015,
+                start_m: 2.0,
+                spp: 256,
+                volume: "-0.99:0.99:142,-0.99:0.99:142,1.5:2.5:142".into(),
+            },
+        }
+    }
+}
+
+/// One simulated capture (a cell's medium at one seed), rendered as `shards` tasks.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaptureJob {
+    /// Fingerprint of the unsharded render key: names the merged capture `renders/<id>.h5`.
+    pub id: String,
+    pub scene: SceneKind,
+    pub medium: MediumParams,
+    pub seed: u64,
+    /// Overrides of the scene file, as `murk render --set` takes them.
+    pub set: Vec<String>,
+    pub spp: u64,
+    pub tasks: Vec<RenderTask>,
+}
+
+/// One `murk render` run: a shard of a capture.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RenderTask {
+    /// Fingerprint of the task's render key (resolved scene, spp, seed, shard, murk version).
+    pub id: String,
+    pub shard: Option<(usize, usize)>,
+    /// Output path relative to the study folder.
+    pub out: PathBuf,
+}
+
+/// One picture of a figure: a capture (per seed) reconstructed with one wavelength.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Cell {
+    pub figure: Figure,
+    pub row: String,
+    pub col: String,
+    pub scene: SceneKind,
+    pub medium: MediumParams,
+    /// λ as a multiple of the paper's λ0 = 4Δc.
+    pub lambda_factor: f64,
+    /// The capture job per seed.
+    pub captures: Vec<String>,
+    /// The same scene without a medium, per seed (PSNR and SSIM compare against it).
+    pub reference: Vec<String>,
+}
+
+impl Cell {
+    pub fn label(&self) -> String {
+        format!("{} {} {}", self.figure.name(), self.row, self.col)
+    }
+}
+
+/// The whole study: cells over capture jobs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    pub scale: Scale,
+    pub seeds: u64,
+    pub shards: usize,
+    pub scenes_dir: PathBuf,
+    pub cells: Vec<Cell>,
+    pub captures: Vec<CaptureJob>,
+}
+
+/// What the user asks for.
+#[derive(Clone, Debug)]
+pub struct StudyOptions {
+    pub scale: Scale,
+    pub only: Vec<Figure>,
+    pub seeds: u64,
+    pub shards: usize,
+    /// Paths per laser point; default: the scale's.
+    pub spp: Option<u64>,
+    /// Where `z-letter.toml` and `shelf.toml` are.
+    pub scenes_dir: PathBuf,
+}
+
+pub const ALBEDOS: [f64; 5] = [0.15, 0.33, 0.5, 0.67, 0.83];
+
+fn fmt_num(v: f64) -> String {
+    let s = format!("{v}");
+    if s.contains('.') || s.contains('e') {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+impl Plan {
+    pub fn new(opt: &StudyOptions) -> Result<Plan> {
+        if opt.seeds == 0 || opt.seeds > 64 {
+            return Err(Error::param(format!(
+                "--seeds must be in 1..=64, got {}",
+                opt.seeds
+            )));
+        }
+        if opt.shards == 0 || opt.shards > 1024 {
+            return Err(Error::param(format!(
+                "--shards must be in 1..=1024, got {}",
+                opt.shards
+            )));
+        }
+        let mut plan = Plan {
+            scale: opt.scale,
+            seeds: opt.seeds,
+            shards: opt.shards,
+            scenes_dir: opt.scenes_dir.clone(),
+            cells: Vec::new(),
+            captures: Vec::new(),
+        };
+        let none = MediumParams {
+            mu_t: 0.0,
+            albedo: 0.5,
+            g: 0.0,
+        };
+        let fog = |mu_t, albedo, g| MediumParams { mu_t, albedo, g };
+        let wanted = |f: Figure| opt.only.is_empty() || opt.only.contains(&f);
+        let mut cells: Vec<(Figure, String, String, SceneKind, MediumParams, f64)> = Vec::new();
+        let z = SceneKind::ZLetter;
+        if wanted(Figure::Fig3a) {
+            cells.push((
+                Figure::Fig3a,
+                "no medium".into(),
+                String::new(),
+                z,
+                none,
+                1.0,
+            ));
+        }
+        if wanted(Figure::Fig3b) {
+            for mu_t in [0.5, 1.0, 2.0] {
+                for a in ALBEDOS {
+                    let (r, c) = (format!("μt = {mu_t}"), format!("α = {a}"));
+                    cells.push((Figure::Fig3b, r, c, z, fog(mu_t, a, 0.0), 1.0));
+                }
+            }
+        }
+        if wanted(Figure::Fig3c) {
+            for g in [0.7, 0.0, -0.7] {
+                for a in ALBEDOS {
+                    let (r, c) = (format!("g = {g}"), format!("α = {a}"));
+                    cells.push((Figure::Fig3c, r, c, z, fog(1.0, a, g), 1.0));
+                }
+            }
+        }
+        if wanted(Figure::Fig4) {
+            for k in [1.0, 2.0, 3.0] {
+                let c = if k == 1.0 {
+                    "λ = λ0".to_string()
+                } else {
+                    format!("λ = {k}λ0")
+                };
+                cells.push((Figure::Fig4, String::new(), c, z, fog(1.0, 0.83, 0.0), k));
+            }
+        }
+        if wanted(Figure::Fig5) {
+            for mu_t in [0.0, 1.0, 1.5] {
+                let c = if mu_t == 0.0 {
+                    "no medium".to_string()
+                } else {
+                    format!("μt = {mu_t}")
+                };
+                let m = MediumParams { mu_t, ..none };
+                cells.push((Figure::Fig5, String::new(), c, SceneKind::Shelf, m, 1.0));
+            }
+        }
+        for (figure, row, col, scene, medium, lambda_factor) in cells {
+            let captures = (0..opt.seeds)
+                .map(|s| plan.capture(opt, scene, medium, s))
+                .collect::<Result<_>>()?;
+            let reference = (0..opt.seeds)
+                .map(|s| plan.capture(opt, scene, none, s))
+                .collect::<Result<_>>()?;
+            plan.cells.push(Cell {
+                figure,
+                row,
+                col,
+                scene,
+                medium,
+                lambda_factor,
+                captures,
+                reference,
+            });
+        }
+        Ok(plan)
+    }
+
+    /// The overrides that make a scene file into one capture of the study.
+    fn overrides(opt: &StudyOptions, scene: SceneKind, m: MediumParams) -> Vec<String> {
+        let f = Format::of(scene, opt.scale);
+        vec![
+            format!("capture.grid=[{0}, {0}]", f.grid),
+            format!("capture.bins={}", f.bins),
+            format!("capture.bin_width={}", fmt_num(f.bin_width_m)),
+            format!("capture.start={}", fmt_num(f.start_m)),
+            format!("medium.mu_t={}", fmt_num(m.mu_t)),
+            format!("medium.albedo={}", fmt_num(m.albedo)),
+            format!("medium.g={}", fmt_num(m.g)),
+        ]
+    }
+
+    /// The capture job for (scene, medium, seed), added once; returns its id.
+    fn capture(
+        &mut self,
+        opt: &StudyOptions,
+        scene: SceneKind,
+        medium: MediumParams,
+        seed: u64,
+    ) -> Result<String> {
+        let set = Plan::overrides(opt, scene, medium);
+        let resolved = load_scene(&opt.scenes_dir, scene, &set)?;
+        let spp = opt.spp.unwrap_or(Format::of(scene, opt.scale).spp);
+        let id = format!(
+            "{:016x}",
+            fingerprint(&render_key(&resolved, spp, seed, None))
+        );
+        if self.captures.iter().any(|c| c.id == id) {
+            return Ok(id);
+        }
+        let n = opt.shards;
+        let tasks = (0..n)
+            .map(|i| {
+                let shard = (n > 1).then_some((i, n));
+                let tid = format!(
+                    "{:016x}",
+                    fingerprint(&render_key(&resolved, spp, seed, shard))
+                );
+                let out = match shard {
+                    None => PathBuf::from(format!("renders/{id}.h5")),
+                    Some(_) => PathBuf::from(format!("renders/{id}.part{i}of{n}.h5")),
+                };
+                RenderTask {
+                    id: tid,
+                    shard,
+                    out,
+                }
+            })
+            .collect();
+        self.captures.push(CaptureJob {
+            id: id.clone(),
+            scene,
+            medium,
+            seed,
+            set,
+            spp,
+            tasks,
+        });
+        Ok(id)
+    }
+
+    /// Keeps the cells `keep` accepts and the captures they use (a reduced study).
+    pub fn retain_cells(&mut self, keep: impl Fn(&Cell) -> bool) {
+        self.cells.retain(keep);
+        let used: Vec<&String> = self
+            .cells
+            .iter()
+            .flat_map(|c| c.captures.iter().chain(&c.reference))
+            .collect();
+        let used: Vec<String> = used.into_iter().cloned().collect();
+        self.captures.retain(|j| used.contains(&j.id));
+    }
+
+    pub fn job(&self, id: &str) -> &CaptureJob {
+        self.captures
+            .iter()
+            .find(|c| c.id == id)
+            .expect("cells name captures of the same plan")
+    }
+
+    pub fn n_tasks(&self) -> usize {
+        self.captures.iter().map(|c| c.tasks.len()).sum()
+    }
+
+    /// One `murk render` command per task, for any executor; a later `murk experiment` picks their
+    /// outputs up.
+    pub fn task_commands(&self, dir: &Path) -> Vec<String> {
+        let mut out = Vec::new();
+        for c in &self.captures {
+            for t in &c.tasks {
+                let mut cmd = format!(
+                    "murk render {} --out {} --spp {} --seed {}",
+                    shell(&self.scenes_dir.join(c.scene.file())),
+                    shell(&dir.join(&t.out)),
+                    c.spp,
+                    c.seed
+                );
+                if let Some((i, n)) = t.shard {
+                    cmd.push_str(&format!(" --shard {i}/{n}"));
+                }
+                for s in &c.set {
+                    cmd.push_str(&format!(" --set '{s}'"));
+                }
+                cmd.push_str(" --resume --quiet");
+                out.push(cmd);
+            }
+        }
+        out
+    }
+}
+
+fn shell(p: &Path) -> String {
+    let s = p.display().to_string();
+    if s.chars()
+        .all(|c| c.is_ascii_alphanumeric() || "/._-+".contains(c))
+    {
+        s
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
+}
+
+/// The scene file of `scene` with the study's overrides.
+pub fn load_scene(dir: &Path, scene: SceneKind, set: &[String]) -> Result<Scene> {
+    Scene::load(
+        &dir.join(scene.file()),
+        &Overrides {
+            set: set.to_vec(),
+            ..Overrides::default()
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn options(only: &[Figure], seeds: u64, shards: usize) -> StudyOptions {
+        StudyOptions {
+            scale: Scale::Quick,
+            only: only.to_vec(),
+            seeds,
+            shards,
+            spp: Some(8),
+            scenes_dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
+        }
+    }
+
+    /// Cells as the paper lays them out; a capture serves every cell that needs it (Fig. 4 and the
+    /// g = 0 row of Fig. 3c reuse Fig. 3b's μt = 1 renders, every cell's reference is Fig. 3a's).
+    #[test]
+    fn cells_share_captures() {
+        let plan = Plan::new(&options(&[], 1, 1)).unwrap();
+        let count = |f: Figure| plan.cells.iter().filter(|c| c.figure == f).count();
+        assert_eq!(
+            Figure::ALL.map(count),
+            [1, 15, 15, 3, 3],
+            "cells per figure"
+        );
+        assert_eq!(plan.captures.len(), 1 + 15 + 10 + 3);
+        let cell = |f: Figure, row: &str, col: &str| {
+            plan.cells
+                .iter()
+                .find(|c| c.figure == f && c.row == row && c.col == col)
+                .unwrap()
+                .captures[0]
+                .clone()
+        };
+        assert_eq!(
+            cell(Figure::Fig4, "", "λ = 2λ0"),
+            cell(Figure::Fig3b, "μt = 1", "α = 0.83")
+        );
+        assert_eq!(
+            cell(Figure::Fig3c, "g = 0", "α = 0.5"),
+            cell(Figure::Fig3b, "μt = 1", "α = 0.5")
+        );
+        assert_ne!(
+            cell(Figure::Fig3c, "g = 0.7", "α = 0.5"),
+            cell(Figure::Fig3b, "μt = 1", "α = 0.5")
+        );
+        let z_ref = cell(Figure::Fig3a, "no medium", "");
+        assert!(plan
+            .cells
+            .iter()
+            .filter(|c| c.scene == SceneKind::ZLetter)
+            .all(|c| c.reference == [z_ref.clone()]));
+    }
+
+    /// Seeds and shards multiply the tasks; each task has its own key and output, and the listed commands
+    /// carry the overrides, seed and shard.
+    #[test]
+    fn tasks_and_commands() {
+        let mut plan = Plan::new(&options(&[Figure::Fig3a], 2, 3)).unwrap();
+        assert_eq!(plan.captures.len(), 2);
+        assert_eq!(plan.n_tasks(), 6);
+        let mut ids: Vec<&String> = plan
+            .captures
+            .iter()
+            .flat_map(|c| c.tasks.iter().map(|t| &t.id))
+            .collect();
+        ids.sort();
+        ids.dedup();
+        assert_eq!(ids.len(), 6);
+        let cmds = plan.task_commands(Path::new("out"));
+        assert_eq!(cmds.len(), 6);
+        assert!(
+            cmds[4].contains("--seed 1") && cmds[4].contains("--shard 1/3"),
+            "{}",
+            cmds[4]
+        );
+        assert!(
+            cmds[0].contains("--set 'medium.mu_t=0.0'")
+                && cmds[0].contains("--set 'capture.grid=[64, 64]'")
+        );
+        assert!(cmds[0].contains(&format!(
+            "--out out/renders/{}.part0of3.h5",
+            plan.captures[0].id
+        )));
+        plan.retain_cells(|_| false);
+        assert!(plan.captures.is_empty());
+        assert!(Plan::new(&options(&[], 0, 1)).is_err());
+        assert!(Figure::parse("fig9")
+            .unwrap_err()
+            .to_string()
+            .contains("fig9"));
+    }
+}

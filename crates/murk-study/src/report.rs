@@ -1,0 +1,403 @@
+//! The study's outputs: `metrics.csv`, `objects.csv`, a figure grid per figure and compensation, metric
+//! plots, and `index.html` tying them together with the parameters and the choices made.
+
+use crate::metrics;
+use crate::plan::{Figure, Format, Plan, SceneKind};
+use crate::run::{CellResult, Scores};
+use murk_core::{Error, Result};
+use murk_view::{write_grid_png, write_plot_svg, FigureGrid, LinePlot, Plane, Series};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A metric of [`Scores`]: its column name, a readable label and how to read it.
+struct Metric {
+    column: &'static str,
+    label: &'static str,
+    get: fn(&Scores) -> f64,
+}
+
+const METRICS: [Metric; 7] = [
+    Metric {
+        column: "iou_best",
+        label: "IoU (best threshold)",
+        get: |s| s.iou.best,
+    },
+    Metric {
+        column: "iou_otsu",
+        label: "IoU (Otsu threshold)",
+        get: |s| s.iou.otsu,
+    },
+    Metric {
+        column: "depth_err_m",
+        label: "depth error (m, median over the object)",
+        get: |s| s.depth_err_m,
+    },
+    Metric {
+        column: "psnr_db",
+        label: "PSNR vs no medium (dB)",
+        get: |s| s.psnr_db,
+    },
+    Metric {
+        column: "ssim",
+        label: "SSIM vs no medium",
+        get: |s| s.ssim,
+    },
+    Metric {
+        column: "cnr",
+        label: "contrast-to-noise ratio",
+        get: |s| s.cnr,
+    },
+    Metric {
+        column: "hf_share",
+        label: "high-frequency energy share",
+        get: |s| s.hf_share,
+    },
+];
+
+/// Mean and spread over seeds.
+fn stat(scores: &[Scores], get: fn(&Scores) -> f64) -> (f64, f64) {
+    metrics::mean_std(&scores.iter().map(get).collect::<Vec<_>>())
+}
+
+fn num(v: f64) -> String {
+    if v.is_nan() {
+        "nan".into()
+    } else if v.is_infinite() {
+        if v > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        format!("{v:.5}")
+    }
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |e| Error::io(path, e)
+}
+
+/// Writes every output into `dir`; returns the path of `index.html`.
+pub fn write(plan: &Plan, results: &[CellResult], dir: &Path) -> Result<PathBuf> {
+    write_csv(results, &dir.join("metrics.csv"))?;
+    write_objects_csv(results, &dir.join("objects.csv"))?;
+    let figures = write_figures(results, dir)?;
+    let plots = write_plots(results, dir)?;
+    write_html(plan, results, &figures, &plots, dir)
+}
+
+fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
+    let mut s = String::from(
+        "figure,row,col,scene,mu_t,albedo,g,lambda_factor,compensation,seeds,tail_share,cpu_s",
+    );
+    for m in &METRICS {
+        let _ = write!(s, ",{0},{0}_sd", m.column);
+    }
+    s.push('\n');
+    for r in results {
+        let c = &r.cell;
+        let tail = metrics::mean_std(&r.tail_share).0;
+        for (comp, scores, _) in &r.by_compensation {
+            let _ = write!(
+                s,
+                "{},{},{},{:?},{},{},{},{},{comp},{},{},{}",
+                c.figure.name(),
+                c.row,
+                c.col,
+                c.scene,
+                c.medium.mu_t,
+                c.medium.albedo,
+                c.medium.g,
+                c.lambda_factor,
+                scores.len(),
+                num(tail),
+                r.cpu_s.map_or("".into(), num)
+            );
+            for m in &METRICS {
+                let (mean, sd) = stat(scores, m.get);
+                let _ = write!(s, ",{},{}", num(mean), num(sd));
+            }
+            s.push('\n');
+        }
+    }
+    murk_io::write_atomic(path, |w| w.write_all(s.as_bytes()).map_err(io(path)))
+}
+
+fn write_objects_csv(results: &[CellResult], path: &Path) -> Result<()> {
+    let mut s = String::from("figure,col,compensation,seed,object,detected,depth_err_m\n");
+    for r in results {
+        for (comp, scores, _) in &r.by_compensation {
+            for (seed, sc) in scores.iter().enumerate() {
+                for o in &sc.objects {
+                    let _ = writeln!(
+                        s,
+                        "{},{},{comp},{seed},{},{},{}",
+                        r.cell.figure.name(),
+                        r.cell.col,
+                        o.name,
+                        o.detected,
+                        num(o.depth_err_m)
+                    );
+                }
+            }
+        }
+    }
+    murk_io::write_atomic(path, |w| w.write_all(s.as_bytes()).map_err(io(path)))
+}
+
+/// One grid per figure and compensation, laid out as the paper's (rows and columns from the cells).
+fn write_figures(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBuf)>> {
+    let mut out = Vec::new();
+    for fig in Figure::ALL {
+        let cells: Vec<&CellResult> = results.iter().filter(|r| r.cell.figure == fig).collect();
+        if cells.is_empty() {
+            continue;
+        }
+        let mut rows: Vec<&str> = Vec::new();
+        let mut cols: Vec<&str> = Vec::new();
+        for r in &cells {
+            if !rows.contains(&r.cell.row.as_str()) {
+                rows.push(&r.cell.row);
+            }
+            if !cols.contains(&r.cell.col.as_str()) {
+                cols.push(&r.cell.col);
+            }
+        }
+        for (k, comp) in crate::run::COMPENSATIONS.iter().enumerate() {
+            let planes: Vec<Vec<Option<&Plane>>> = rows
+                .iter()
+                .map(|row| {
+                    cols.iter()
+                        .map(|col| {
+                            cells
+                                .iter()
+                                .find(|r| r.cell.row == *row && r.cell.col == *col)
+                                .map(|r| &r.by_compensation[k].2)
+                        })
+                        .collect()
+                })
+                .collect();
+            let grid = FigureGrid {
+                title: format!("{} — compensation: {comp}", fig.caption()),
+                row_labels: rows.iter().map(|s| s.to_string()).collect(),
+                col_labels: cols.iter().map(|s| s.to_string()).collect(),
+                cells: planes,
+            };
+            let name = format!("{}-{comp}.png", fig.name());
+            write_grid_png(&dir.join(&name), &grid, 160)?;
+            out.push((
+                format!("{} (compensation: {comp})", fig.caption()),
+                PathBuf::from(name),
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// Plots of every metric against the study's axes (paper compensation, mean ± spread over seeds).
+fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBuf)>> {
+    std::fs::create_dir_all(dir.join("plots")).map_err(io(dir))?;
+    // (figure, file stem, x label, x value, series key)
+    type Axis = (
+        Figure,
+        &'static str,
+        &'static str,
+        fn(&CellResult) -> f64,
+        fn(&CellResult) -> String,
+    );
+    let axes: [Axis; 5] = [
+        (
+            Figure::Fig3b,
+            "vs-albedo-by-mu_t",
+            "albedo α",
+            |r| r.cell.medium.albedo,
+            |r| r.cell.row.clone(),
+        ),
+        (
+            Figure::Fig3b,
+            "vs-mu_t-by-albedo",
+            "μt (1/m)",
+            |r| r.cell.medium.mu_t,
+            |r| r.cell.col.clone(),
+        ),
+        (
+            Figure::Fig3c,
+            "vs-albedo-by-g",
+            "albedo α",
+            |r| r.cell.medium.albedo,
+            |r| r.cell.row.clone(),
+        ),
+        (
+            Figure::Fig4,
+            "vs-lambda",
+            "λ / λ0",
+            |r| r.cell.lambda_factor,
+            |_| "μt = 1, α = 0.83".into(),
+        ),
+        (
+            Figure::Fig5,
+            "vs-mu_t",
+            "μt (1/m)",
+            |r| r.cell.medium.mu_t,
+            |_| "shelf, α = 0.5".into(),
+        ),
+    ];
+    let mut out = Vec::new();
+    for (fig, stem, x_label, x, key) in axes {
+        let cells: Vec<&CellResult> = results.iter().filter(|r| r.cell.figure == fig).collect();
+        if cells.is_empty() {
+            continue;
+        }
+        for m in &METRICS {
+            let mut series: Vec<Series> = Vec::new();
+            for r in &cells {
+                let (mean, sd) = stat(&r.by_compensation[1].1, m.get);
+                let k = key(r);
+                match series.iter_mut().find(|s| s.label == k) {
+                    Some(s) => s.points.push((x(r), mean, sd)),
+                    None => series.push(Series {
+                        label: k,
+                        points: vec![(x(r), mean, sd)],
+                    }),
+                }
+            }
+            series
+                .iter_mut()
+                .for_each(|s| s.points.sort_by(|a, b| a.0.total_cmp(&b.0)));
+            let plot = LinePlot {
+                title: format!("{}: {} {x_label}", fig.name(), m.label),
+                x_label: x_label.into(),
+                y_label: m.label.into(),
+                series,
+            };
+            let name = PathBuf::from(format!("plots/{}-{}-{stem}.svg", fig.name(), m.column));
+            write_plot_svg(&dir.join(&name), &plot)?;
+            out.push((plot.title, name));
+        }
+    }
+    Ok(out)
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// The choices the study makes where the paper is silent or inconsistent.
+const CHOICES: &[&str] = &[
+    "Wall spacing: the paper gives Δc = 0.11 m with 128² points, which implies a 14 m diffuser; we keep the 2 m diffuser of its Fig. 2 (Δc = 2/128 m at paper scale, 2/32 m at quick scale) and λ0 = 4Δc.",
+    "Time window: the paper's 4096 bins of 3 ps cover 3.69 m of path, less than the path to a target at 2 m and back in fog; we keep 4096 bins but of 1 mm (3.3 ps) from 3.0 m, so that the fog's tail has decayed before the window ends (the tail_share column measures it: the largest signal in the last 5 % of bins over the peak, target < 1 %).",
+    "Fig. 3b: the paper shows one cell twice; we render every μt × α cell.",
+    "Fig. 4: the paper's file names suggest 4λ0 for its third column; its caption says 3λ0, which we use.",
+    "Compensation: every cell is scored without compensation, with the paper's K(x_v) as printed (α·d mixes units) and with the physical ballistic gain e^{2μt(d_ill + d_cam)}; figures and plots use the paper's K unless the file name says otherwise.",
+    "Metrics: IoU of the front maximum projection thresholded at the best and at Otsu's threshold against the renderer's ground-truth mask (the Z; in the room, everything but the room's walls); depth error = median over that mask of the brightest voxel's depth minus the true depth; PSNR and SSIM of the normalised front projection against the same scene without medium at the same λ; CNR of the mask against the rest; high-frequency share = spectral energy above half Nyquist.",
+    "Shelf objects: an object is detected when the median normalised front intensity over its pixels reaches Otsu's threshold of the whole projection.",
+];
+
+fn write_html(
+    plan: &Plan,
+    results: &[CellResult],
+    figures: &[(String, PathBuf)],
+    plots: &[(String, PathBuf)],
+    dir: &Path,
+) -> Result<PathBuf> {
+    let mut h = String::from(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>murk: the paper's study</title>\n\
+         <style>body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;font-size:12px}\
+         td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}img{max-width:100%}</style></head><body>\n\
+         <h1>Phasor Fields in scattering media: the study of Luesia et al., rerun by murk</h1>\n",
+    );
+    let _ = writeln!(
+        h,
+        "<h2>Parameters</h2>\n<table id=\"parameters\"><tr><th>scale</th><td>{:?}</td></tr><tr><th>seeds</th><td>{}</td></tr><tr><th>shards per capture</th><td>{}</td></tr><tr><th>captures</th><td>{}</td></tr><tr><th>render tasks</th><td>{}</td></tr>",
+        plan.scale,
+        plan.seeds,
+        plan.shards,
+        plan.captures.len(),
+        plan.n_tasks()
+    );
+    for scene in [SceneKind::ZLetter, SceneKind::Shelf] {
+        let f = Format::of(scene, plan.scale);
+        let spp = plan
+            .captures
+            .iter()
+            .find(|c| c.scene == scene)
+            .map_or(f.spp, |c| c.spp);
+        let _ = writeln!(
+            h,
+            "<tr><th>{}</th><td>{}² laser points, {} bins of {} m from {} m, {spp} spp, volume {}</td></tr>",
+            scene.file(),
+            f.grid,
+            f.bins,
+            f.bin_width_m,
+            f.start_m,
+            f.volume
+        );
+    }
+    h.push_str("</table>\n<h2>Choices</h2>\n<ul>\n");
+    for c in CHOICES {
+        let _ = writeln!(h, "<li>{}</li>", esc(c));
+    }
+    h.push_str("</ul>\n<h2>Figures</h2>\n");
+    for (caption, path) in figures {
+        let _ = writeln!(
+            h,
+            "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
+            path.display(),
+            esc(caption),
+            esc(caption)
+        );
+    }
+    h.push_str("<h2>Numbers per cell (compensation: paper; mean ± spread over seeds)</h2>\n<table id=\"metrics\"><tr><th>figure</th><th>row</th><th>column</th><th>tail share</th><th>CPU s</th>");
+    for m in &METRICS {
+        let _ = write!(h, "<th>{}</th>", esc(m.label));
+    }
+    h.push_str("</tr>\n");
+    for r in results {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+            r.cell.figure.name(),
+            esc(&r.cell.row),
+            esc(&r.cell.col),
+            num(metrics::mean_std(&r.tail_share).0),
+            r.cpu_s.map_or("external".into(), |c| format!("{c:.1}"))
+        );
+        for m in &METRICS {
+            let (mean, sd) = stat(&r.by_compensation[1].1, m.get);
+            let _ = write!(h, "<td>{} ± {}</td>", num(mean), num(sd));
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</table>\n");
+    let shelf: Vec<&CellResult> = results
+        .iter()
+        .filter(|r| r.cell.scene == SceneKind::Shelf)
+        .collect();
+    if !shelf.is_empty() {
+        h.push_str("<h2>Shelf objects (compensation: paper, first seed)</h2>\n<table id=\"objects\"><tr><th>cell</th><th>object</th><th>detected</th><th>depth error (m)</th></tr>\n");
+        for r in shelf {
+            for o in &r.by_compensation[1].1[0].objects {
+                let _ = writeln!(
+                    h,
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                    esc(&r.cell.col),
+                    esc(&o.name),
+                    if o.detected { "yes" } else { "no" },
+                    num(o.depth_err_m)
+                );
+            }
+        }
+        h.push_str("</table>\n");
+    }
+    h.push_str("<h2>Plots</h2>\n");
+    for (title, path) in plots {
+        let _ = writeln!(
+            h,
+            "<figure><img src=\"{}\" alt=\"{}\"></figure>",
+            path.display(),
+            esc(title)
+        );
+    }
+    h.push_str("<p>Raw numbers: <a href=\"metrics.csv\">metrics.csv</a>, <a href=\"objects.csv\">objects.csv</a>; the task list: <a href=\"plan.json\">plan.json</a>.</p>\n</body></html>\n");
+    let path = dir.join("index.html");
+    murk_io::write_atomic(&path, |w| w.write_all(h.as_bytes()).map_err(io(&path)))?;
+    Ok(path)
+}

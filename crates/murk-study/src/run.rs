@@ -1,0 +1,375 @@
+//! Running the plan: the local executor renders the capture jobs whose files are missing (resuming any
+//! checkpoint), then every cell is reconstructed and scored against the renderer's ground truth.
+
+use crate::metrics::{self, IouScores};
+use crate::plan::{CaptureJob, Cell, Format, Plan, SceneKind};
+use murk_core::{Capture, Error, GroundTruth, Result, Volume};
+use murk_recon::{Compensation, Method, NoProgress, PfParams, Wavelength};
+use murk_render::{merge, RenderOptions};
+use murk_view::{views, Plane};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// What the executor reports as it goes.
+pub enum Event<'a> {
+    /// Task `index` of `total` (1-based) starts: the cell it serves and the estimated seconds left.
+    Task {
+        index: usize,
+        total: usize,
+        label: &'a str,
+        eta_s: Option<f64>,
+    },
+    /// Work units of the running task.
+    Units { done: usize, total: usize },
+    /// A step after rendering (reconstructing a cell, writing the report).
+    Step(&'a str),
+}
+
+/// Receives [`Event`]s (a progress bar, a log, nothing).
+pub trait Observer: Sync {
+    fn event(&self, e: Event);
+}
+
+pub struct Silent;
+impl Observer for Silent {
+    fn event(&self, _: Event) {}
+}
+
+/// The capture file of a job, relative to the study folder.
+pub fn capture_path(job: &CaptureJob) -> PathBuf {
+    PathBuf::from(format!("renders/{}.h5", job.id))
+}
+
+fn cpu_path(dir: &Path, job: &CaptureJob) -> PathBuf {
+    dir.join(format!("renders/{}.cpu_s", job.id))
+}
+
+/// Renders every capture job whose file is missing, with all cores; returns how many tasks ran.
+pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
+    std::fs::create_dir_all(dir.join("renders")).map_err(|e| Error::io(dir, e))?;
+    let missing: Vec<&CaptureJob> = plan
+        .captures
+        .iter()
+        .filter(|j| !dir.join(capture_path(j)).exists())
+        .collect();
+    // Parts that another executor finished are merged before anything renders.
+    for job in &missing {
+        if job.tasks.len() > 1 && job.tasks.iter().all(|t| dir.join(&t.out).exists()) {
+            merge_parts(dir, job)?;
+        }
+    }
+    let todo: Vec<(&CaptureJob, usize)> = missing
+        .iter()
+        .filter(|j| !dir.join(capture_path(j)).exists())
+        .flat_map(|j| (0..j.tasks.len()).map(move |t| (*j, t)))
+        .filter(|(j, t)| !dir.join(&j.tasks[*t].out).exists())
+        .collect();
+    let labels: HashMap<&str, String> = plan
+        .cells
+        .iter()
+        .flat_map(|c| c.captures.iter().map(move |id| (id.as_str(), c.label())))
+        .collect();
+    let started = Instant::now();
+    for (k, (job, t)) in todo.iter().enumerate() {
+        let eta_s =
+            (k > 0).then(|| started.elapsed().as_secs_f64() / k as f64 * (todo.len() - k) as f64);
+        let label = labels
+            .get(job.id.as_str())
+            .cloned()
+            .unwrap_or_else(|| format!("reference {}", job.scene.file()));
+        obs.event(Event::Task {
+            index: k + 1,
+            total: todo.len(),
+            label: &label,
+            eta_s,
+        });
+        let cpu0 = murk_render::bench::cpu_seconds();
+        run_task(plan, dir, job, *t, obs)?;
+        if let (Some(a), Some(b)) = (cpu0, murk_render::bench::cpu_seconds()) {
+            add_cpu(&cpu_path(dir, job), b - a)?;
+        }
+        if job.tasks.len() > 1 && job.tasks.iter().all(|t| dir.join(&t.out).exists()) {
+            merge_parts(dir, job)?;
+        }
+    }
+    Ok(todo.len())
+}
+
+/// Adds CPU seconds to a job's tally (a job's shards may run in different calls).
+fn add_cpu(path: &Path, secs: f64) -> Result<()> {
+    let before: f64 = std::fs::read_to_string(path)
+        .ok()
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or(0.0);
+    murk_io::write_atomic(path, |w| {
+        writeln!(w, "{:.3}", before + secs).map_err(|e| Error::io(path, e))
+    })
+}
+
+fn run_task(plan: &Plan, dir: &Path, job: &CaptureJob, t: usize, obs: &dyn Observer) -> Result<()> {
+    let task = &job.tasks[t];
+    let scene = crate::plan::load_scene(&plan.scenes_dir, job.scene, &job.set)?;
+    let out = dir.join(&task.out);
+    let mut ckpt = out.as_os_str().to_owned();
+    ckpt.push(".ckpt");
+    let opt = RenderOptions {
+        spp: job.spp,
+        seed: job.seed,
+        shard: task.shard,
+        checkpoint: Some(PathBuf::from(&ckpt)),
+        checkpoint_every: Duration::from_secs(30),
+    };
+    let cap = murk_render::Plan::new(&scene)
+        .render(&opt, &|done, total| obs.event(Event::Units { done, total }))?;
+    murk_io::write_capture(&out, &cap)?;
+    let _ = std::fs::remove_file(&ckpt);
+    Ok(())
+}
+
+fn merge_parts(dir: &Path, job: &CaptureJob) -> Result<()> {
+    let parts = job
+        .tasks
+        .iter()
+        .map(|t| {
+            let p = dir.join(&t.out);
+            Ok((p.clone(), murk_io::read_capture(&p)?))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    murk_io::write_capture(&dir.join(capture_path(job)), &merge(&parts)?)?;
+    for (p, _) in parts {
+        let _ = std::fs::remove_file(p);
+    }
+    Ok(())
+}
+
+/// The compensations every cell is scored with.
+pub const COMPENSATIONS: [&str; 3] = ["none", "paper", "ballistic"];
+
+fn compensation(name: &str, cell: &Cell) -> Compensation {
+    let m = cell.medium;
+    match name {
+        "paper" => Compensation::Paper {
+            mu_t_per_m: m.mu_t,
+            albedo: m.albedo,
+        },
+        "ballistic" => Compensation::Ballistic { mu_t_per_m: m.mu_t },
+        _ => Compensation::None,
+    }
+}
+
+/// A detected-or-not verdict and depth error for one named object of the scene.
+#[derive(Clone, Debug)]
+pub struct ObjectScore {
+    pub name: String,
+    pub detected: bool,
+    pub depth_err_m: f64,
+}
+
+/// The numbers of one reconstruction (one seed, one compensation).
+#[derive(Clone, Debug)]
+pub struct Scores {
+    pub iou: IouScores,
+    /// Median over the object mask of (reconstructed − true) depth.
+    pub depth_err_m: f64,
+    pub psnr_db: f64,
+    pub ssim: f64,
+    pub cnr: f64,
+    pub hf_share: f64,
+    pub objects: Vec<ObjectScore>,
+}
+
+/// A cell's result per compensation: scores per seed, and the first seed's front view for figures.
+pub struct CellResult {
+    pub cell: Cell,
+    pub voxel_dz_m: f64,
+    /// Share of the peak that the last 5 % of bins carry (summed over histograms), per seed.
+    pub tail_share: Vec<f64>,
+    /// CPU seconds of the cell's renders (None where an external executor rendered them).
+    pub cpu_s: Option<f64>,
+    pub by_compensation: Vec<(&'static str, Vec<Scores>, Plane)>,
+}
+
+/// Reconstructs and scores every cell; the captures must exist.
+pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellResult>> {
+    let mut captures: HashMap<String, Capture> = HashMap::new();
+    let mut load = |id: &str| -> Result<Capture> {
+        if let Some(c) = captures.get(id) {
+            return Ok(c.clone());
+        }
+        let c = murk_io::read_capture(&dir.join(capture_path(plan.job(id))))?;
+        captures.insert(id.to_string(), c.clone());
+        Ok(c)
+    };
+    // No-medium fields per (capture, λ): every cell of that scene compares against them.
+    let mut fields: HashMap<(String, u64), Vec<rustfft::num_complex::Complex32>> = HashMap::new();
+    let mut results = Vec::new();
+    for (k, cell) in plan.cells.iter().enumerate() {
+        let label = format!(
+            "reconstructing {} ({}/{})",
+            cell.label(),
+            k + 1,
+            plan.cells.len()
+        );
+        obs.event(Event::Step(&label));
+        let fmt = Format::of(cell.scene, plan.scale);
+        let volume = Volume::parse(&fmt.volume)?;
+        let scene = crate::plan::load_scene(
+            &plan.scenes_dir,
+            cell.scene,
+            &plan.job(&cell.captures[0]).set,
+        )?;
+        let truth = scene.ground_truth_on(&volume.x.values(), &volume.y.values());
+        let mut by_comp: Vec<(&'static str, Vec<Scores>, Option<Plane>)> = COMPENSATIONS
+            .iter()
+            .map(|c| (*c, Vec::new(), None))
+            .collect();
+        let mut tails = Vec::new();
+        for (seed, (id, ref_id)) in cell.captures.iter().zip(&cell.reference).enumerate() {
+            let cap = load(id)?;
+            tails.push(tail_share(&cap));
+            let field = pf_field(&cap, &volume, cell.lambda_factor)?;
+            let key = (ref_id.clone(), cell.lambda_factor.to_bits());
+            if !fields.contains_key(&key) {
+                let r = pf_field(&load(ref_id)?, &volume, cell.lambda_factor)?;
+                fields.insert(key.clone(), r);
+            }
+            let reference = {
+                let rcap = load(ref_id)?;
+                let i = murk_recon::intensity(&rcap, &volume, &fields[&key], Compensation::None);
+                views(&volume, &i).front
+            };
+            for (name, scores, first) in by_comp.iter_mut() {
+                let i = murk_recon::intensity(&cap, &volume, &field, compensation(name, cell));
+                let v = views(&volume, &i);
+                scores.push(score(&v.front, &v.depth, &reference, &truth, cell.scene));
+                if seed == 0 {
+                    *first = Some(v.front);
+                }
+            }
+        }
+        let cpu_s = cell
+            .captures
+            .iter()
+            .map(|id| {
+                std::fs::read_to_string(cpu_path(dir, plan.job(id)))
+                    .ok()
+                    .and_then(|s| s.trim().parse::<f64>().ok())
+            })
+            .sum::<Option<f64>>();
+        results.push(CellResult {
+            cell: cell.clone(),
+            voxel_dz_m: volume.z.step(),
+            tail_share: tails,
+            cpu_s,
+            by_compensation: by_comp
+                .into_iter()
+                .map(|(n, s, p)| (n, s, p.expect("at least one seed")))
+                .collect(),
+        });
+    }
+    Ok(results)
+}
+
+/// The PF field (λ = factor × 4Δc, 4 cycles: the paper's synthetic settings).
+fn pf_field(
+    cap: &Capture,
+    volume: &Volume,
+    lambda_factor: f64,
+) -> Result<Vec<rustfft::num_complex::Complex32>> {
+    let params = PfParams {
+        wavelength: Wavelength::WallFactor(4.0 * lambda_factor),
+        ..PfParams::default()
+    };
+    Ok(murk_recon::reconstruct(cap, volume, &params, Method::Fast, &NoProgress)?.field)
+}
+
+/// The largest signal in the last 5 % of bins over the peak, both of the histograms' sum.
+pub fn tail_share(cap: &Capture) -> f64 {
+    let nt = cap.time.bins;
+    let mut sum = vec![0f64; nt];
+    for h in cap.h.chunks_exact(nt) {
+        sum.iter_mut().zip(h).for_each(|(s, v)| *s += *v as f64);
+    }
+    let peak = sum.iter().cloned().fold(0.0, f64::max);
+    let tail = sum[nt - nt.div_ceil(20)..]
+        .iter()
+        .cloned()
+        .fold(0.0, f64::max);
+    if peak > 0.0 {
+        tail / peak
+    } else {
+        f64::NAN
+    }
+}
+
+/// A truth lattice in the front view's layout (+x on the left, +y up).
+fn front_layout<T: Copy>(truth: &GroundTruth, values: &[T]) -> Vec<T> {
+    let [nx, ny] = truth.shape();
+    (0..ny)
+        .flat_map(|r| (0..nx).map(move |c| values[(nx - 1 - c) * ny + (ny - 1 - r)]))
+        .collect()
+}
+
+fn score(
+    front: &Plane,
+    depth: &Plane,
+    reference: &Plane,
+    truth: &GroundTruth,
+    scene: SceneKind,
+) -> Scores {
+    let ids = front_layout(truth, &truth.object);
+    let true_depth = front_layout(truth, &truth.depth_m);
+    // The Z is object 0; in the room, everything but the room's walls.
+    let room = truth.object_names.iter().position(|n| n == "room");
+    let target = |id: i32| id >= 0 && Some(id as usize) != room;
+    let mask: Vec<bool> = ids.iter().map(|&id| target(id)).collect();
+    let depth_err = |m: &[bool]| {
+        let d: Vec<f64> = (0..m.len())
+            .filter(|&i| m[i] && depth.values[i].is_finite())
+            .map(|i| (depth.values[i] - true_depth[i]) as f64)
+            .collect();
+        metrics::median(&d)
+    };
+    let (w, h) = (front.width, front.height);
+    let norm = metrics::normalised(&front.values);
+    let objects = match scene {
+        SceneKind::ZLetter => Vec::new(),
+        SceneKind::Shelf => {
+            let otsu = metrics::otsu_threshold(&norm);
+            let mut names: Vec<&String> = truth
+                .object_names
+                .iter()
+                .filter(|n| n.as_str() != "room")
+                .collect();
+            names.dedup();
+            names
+                .into_iter()
+                .map(|name| {
+                    let m: Vec<bool> = ids
+                        .iter()
+                        .map(|&id| id >= 0 && truth.object_names[id as usize] == *name)
+                        .collect();
+                    let inside: Vec<f64> = (0..m.len())
+                        .filter(|&i| m[i])
+                        .map(|i| norm[i] as f64)
+                        .collect();
+                    ObjectScore {
+                        name: name.clone(),
+                        detected: metrics::median(&inside) >= otsu as f64,
+                        depth_err_m: depth_err(&m),
+                    }
+                })
+                .collect()
+        }
+    };
+    Scores {
+        iou: metrics::iou_scores(&front.values, &mask),
+        depth_err_m: depth_err(&mask),
+        psnr_db: metrics::psnr(&front.values, &reference.values),
+        ssim: metrics::ssim(&front.values, &reference.values, w, h),
+        cnr: metrics::cnr(&front.values, &mask),
+        hf_share: metrics::high_frequency_share(&front.values, w, h),
+        objects,
+    }
+}

@@ -1,0 +1,149 @@
+//! `murk experiment paper`: the paper's study in one command (murk-study does the work).
+
+use anyhow::{bail, Context};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use murk_study::plan::{Figure, Scale, StudyOptions};
+use murk_study::run::{Event, Observer};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum StudyArg {
+    /// Luesia et al.: Fig. 3a–c, 4 and 5.
+    Paper,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ScaleArg {
+    /// 32² laser points, ~1 000 bins (minutes on a laptop).
+    Quick,
+    /// The paper's 128² laser points × 4096 bins (CPU-hours).
+    Paper,
+}
+
+#[derive(Args)]
+#[command(after_help = "Examples:\n  \
+murk experiment paper --out study/                       # every figure, quick scale\n  \
+murk experiment paper --out study/ --only fig3a,fig4 --seeds 3\n  \
+murk experiment paper --out study/ --list-tasks > tasks.sh   # run them anywhere, then:\n  \
+murk experiment paper --out study/                       # picks the finished renders up\n\n\
+Writes DIR/plan.json (the render tasks), DIR/renders/ (captures, keyed by their resolved scene), a PNG grid\n\
+per figure and compensation, DIR/metrics.csv, DIR/objects.csv, DIR/plots/*.svg and DIR/index.html.\n\
+A finished capture is reused; an interrupted one resumes from its checkpoint.")]
+pub struct ExperimentArgs {
+    /// Which study.
+    #[arg(value_enum)]
+    pub study: StudyArg,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    #[arg(long, value_enum, default_value = "quick")]
+    pub scale: ScaleArg,
+    /// Only these figures (comma-separated: fig3a, fig3b, fig3c, fig4, fig5).
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
+    /// Independent renders per cell (metrics get mean ± spread).
+    #[arg(long, default_value_t = 1)]
+    pub seeds: u64,
+    /// Render tasks per capture (for spreading one capture over several machines).
+    #[arg(long, default_value_t = 1)]
+    pub shards: usize,
+    /// Paths per laser point (default: the scale's: quick 512 for the Z, 256 for the shelf).
+    #[arg(long)]
+    pub spp: Option<u64>,
+    /// Folder with z-letter.toml and shelf.toml.
+    #[arg(long, default_value = "scenes")]
+    pub scenes: PathBuf,
+    /// Print one `murk render` command per task (for any executor) and exit.
+    #[arg(long)]
+    pub list_tasks: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// A bar per task: the cell, task i/N and the ETA of the whole list.
+struct Bars {
+    bar: ProgressBar,
+    quiet: bool,
+}
+
+impl Observer for Bars {
+    fn event(&self, e: Event) {
+        match e {
+            Event::Task {
+                index,
+                total,
+                label,
+                eta_s,
+            } => {
+                let eta = eta_s.map_or("…".to_string(), |s| format!("{:.0} s", s));
+                let msg = format!("task {index}/{total} {label}, ETA {eta}");
+                if self.bar.is_hidden() && !self.quiet {
+                    eprintln!("murk: {msg}");
+                }
+                self.bar.set_message(msg);
+            }
+            Event::Units { done, total } => {
+                self.bar.set_length(total as u64);
+                self.bar.set_position(done as u64);
+            }
+            Event::Step(s) => {
+                self.bar.set_message(s.to_string());
+                self.bar.set_length(0);
+            }
+        }
+    }
+}
+
+pub fn run(a: ExperimentArgs, quiet: bool) -> anyhow::Result<()> {
+    let only = a
+        .only
+        .iter()
+        .map(|s| Figure::parse(s))
+        .collect::<Result<Vec<_>, _>>()?;
+    if !a.scenes.join("z-letter.toml").exists() {
+        bail!(
+            "{}: no z-letter.toml here; give the scenes folder with --scenes",
+            a.scenes.display()
+        );
+    }
+    let opt = StudyOptions {
+        scale: match a.scale {
+            ScaleArg::Quick => Scale::Quick,
+            ScaleArg::Paper => Scale::Paper,
+        },
+        only,
+        seeds: a.seeds,
+        shards: a.shards,
+        spp: a.spp,
+        scenes_dir: a.scenes.clone(),
+    };
+    if a.list_tasks {
+        let plan = murk_study::prepare(&a.out, &opt)?;
+        for c in plan.task_commands(&a.out) {
+            println!("{c}");
+        }
+        return Ok(());
+    }
+    let bar = ProgressBar::new(0);
+    if quiet || !std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar.set_style(
+        ProgressStyle::with_template("{msg}\n{bar:40} {pos}/{len} units, {elapsed} elapsed")
+            .expect("static template"),
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    let obs = Bars { bar, quiet };
+    let index = pool.install(|| murk_study::run_study(&a.out, &opt, &obs))?;
+    obs.bar.finish_and_clear();
+    if !quiet {
+        eprintln!("murk: study written → {}", index.display());
+    }
+    Ok(())
+}
