@@ -24,10 +24,11 @@ use plan::{Plan, StudyOptions};
 use run::{Event, Observer};
 use std::path::{Path, PathBuf};
 
-/// Plans the study and writes `DIR/plan.json` (kept when it already describes the same plan).
+/// Plans the study, writes `DIR/plan.json` and makes `DIR/renders/` for the tasks' outputs.
 pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
     let plan = Plan::new(opt)?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let renders = dir.join("renders");
+    std::fs::create_dir_all(&renders).map_err(|e| Error::io(&renders, e))?;
     let path = dir.join("plan.json");
     let json = serde_json::to_string_pretty(&plan)
         .map_err(|e| Error::param(format!("cannot serialise the plan: {e}")))?;

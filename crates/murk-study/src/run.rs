@@ -47,7 +47,6 @@ fn cpu_path(dir: &Path, job: &CaptureJob) -> PathBuf {
 
 /// Renders every capture job whose file is missing, with all cores; returns how many tasks ran.
 pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
-    std::fs::create_dir_all(dir.join("renders")).map_err(|e| Error::io(dir, e))?;
     let missing: Vec<&CaptureJob> = plan
         .captures
         .iter()
