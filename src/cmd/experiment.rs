@@ -26,6 +26,7 @@ pub enum ScaleArg {
 #[command(after_help = "Examples:\n  \
 murk experiment paper --out study/                       # every figure, quick scale\n  \
 murk experiment paper --out study/ --only fig3a,fig4 --seeds 3\n  \
+murk experiment paper --out g/ --cell \"α = 0.83\" --only fig3c --seeds 2 --spp 2048\n  \
 murk experiment paper --out study/ --list-tasks > tasks.sh   # run them anywhere, then:\n  \
 murk experiment paper --out study/                       # picks the finished renders up\n\n\
 Writes DIR/plan.json (the render tasks), DIR/renders/ (captures, keyed by their resolved scene), a PNG grid\n\
@@ -43,6 +44,9 @@ pub struct ExperimentArgs {
     /// Only these figures (comma-separated: fig3a, fig3b, fig3c, fig4, fig5).
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<String>,
+    /// Only cells whose label contains this text (repeatable), e.g. "fig3c g = 0.7 α = 0.83".
+    #[arg(long = "cell", value_name = "TEXT")]
+    pub cells: Vec<String>,
     /// Independent renders per cell (metrics get mean ± spread).
     #[arg(long, default_value_t = 1)]
     pub seeds: u64,
@@ -115,6 +119,7 @@ pub fn run(a: ExperimentArgs, quiet: bool) -> anyhow::Result<()> {
             ScaleArg::Paper => Scale::Paper,
         },
         only,
+        cells: a.cells.clone(),
         seeds: a.seeds,
         shards: a.shards,
         spp: a.spp,

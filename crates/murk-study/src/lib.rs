@@ -6,6 +6,7 @@
 //! let opt = StudyOptions {
 //!     scale: Scale::Quick,
 //!     only: vec![],
+//!     cells: vec![],
 //!     seeds: 1,
 //!     shards: 1,
 //!     spp: None,

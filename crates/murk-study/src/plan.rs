@@ -108,7 +108,14 @@ pub struct Format {
     pub spp: u64,
     /// Reconstruction volume `x0:x1:nx,y0:y1:ny,z0:z1:nz`.
     pub volume: String,
+    /// The paths (m) of the hidden objects' direct returns, where a render's error is measured.
+    pub object_window_m: (f64, f64),
 }
+
+/// The Z's direct returns: 2 m + 2 m at the centre to 2.81 m + 2.08 m from a grid corner.
+const Z_WINDOW: (f64, f64) = (4.0, 4.9);
+/// The shelf's and its objects' direct returns: 1.8 m + 1.8 m to a far corner of the back panel and back.
+const SHELF_WINDOW: (f64, f64) = (3.6, 5.4);
 
 impl Format {
     /// The study's choice per scene and scale (see `docs/study.md` for why each window is where it is).
@@ -124,6 +131,7 @@ impl Format {
                 start_m: 2.0,
                 spp: 256,
                 volume: "-0.984375:0.984375:64,-0.984375:0.984375:64,1.5:2.5:41".into(),
+                object_window_m: Z_WINDOW,
             },
             (SceneKind::ZLetter, Scale::Paper) => Format {
                 grid: 128,
@@ -132,6 +140,7 @@ impl Format {
                 start_m: 2.0,
                 spp: 1024,
                 volume: "-0.99:0.99:73,-0.99:0.99:59,1.5:2.5:73".into(),
+                object_window_m: Z_WINDOW,
             },
             (SceneKind::Shelf, Scale::Quick) => Format {
                 grid: 64,
@@ -140,6 +149,7 @@ impl Format {
                 start_m: 2.0,
                 spp: 128,
                 volume: "-0.984375:0.984375:64,-0.984375:0.984375:64,1.5:2.5:41".into(),
+                object_window_m: SHELF_WINDOW,
             },
             (SceneKind::Shelf, Scale::Paper) => Format {
                 grid: 128,
@@ -148,6 +158,7 @@ impl Format {
                 start_m: 2.0,
                 spp: 256,
                 volume: "-0.99:0.99:142,-0.99:0.99:142,1.5:2.5:142".into(),
+                object_window_m: SHELF_WINDOW,
             },
         }
     }
@@ -215,6 +226,8 @@ pub struct Plan {
 pub struct StudyOptions {
     pub scale: Scale,
     pub only: Vec<Figure>,
+    /// Only cells whose label (`fig3b μt = 1 α = 0.5`) contains one of these; empty: all.
+    pub cells: Vec<String>,
     pub seeds: u64,
     pub shards: usize,
     /// Paths per laser point; default: the scale's.
@@ -311,6 +324,20 @@ impl Plan {
                 let m = MediumParams { mu_t, ..none };
                 cells.push((Figure::Fig5, String::new(), c, SceneKind::Shelf, m, 1.0));
             }
+        }
+        let label = |f: Figure, r: &str, c: &str| format!("{} {r} {c}", f.name());
+        cells.retain(|(f, r, c, ..)| {
+            opt.cells.is_empty()
+                || opt
+                    .cells
+                    .iter()
+                    .any(|k| label(*f, r, c).contains(k.as_str()))
+        });
+        if cells.is_empty() {
+            return Err(Error::param(format!(
+                "no cell of the study matches {:?} (labels look like 'fig3b μt = 1 α = 0.5')",
+                opt.cells
+            )));
         }
         for (figure, row, col, scene, medium, lambda_factor) in cells {
             let captures = (0..opt.seeds)
@@ -476,6 +503,7 @@ mod tests {
         StudyOptions {
             scale: Scale::Quick,
             only: only.to_vec(),
+            cells: Vec::new(),
             seeds,
             shards,
             spp: Some(8),

@@ -84,7 +84,7 @@ pub fn write(plan: &Plan, results: &[CellResult], dir: &Path) -> Result<PathBuf>
 
 fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
     let mut s = String::from(
-        "figure,row,col,scene,mu_t,albedo,g,lambda_factor,compensation,seeds,tail_share,cpu_s",
+        "figure,row,col,scene,mu_t,albedo,g,lambda_factor,compensation,seeds,tail_share,cpu_s,render_rel_err",
     );
     for m in &METRICS {
         let _ = write!(s, ",{0},{0}_sd", m.column);
@@ -96,7 +96,7 @@ fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
         for (comp, scores, _) in &r.by_compensation {
             let _ = write!(
                 s,
-                "{},{},{},{:?},{},{},{},{},{comp},{},{},{}",
+                "{},{},{},{:?},{},{},{},{},{comp},{},{},{},{}",
                 c.figure.name(),
                 c.row,
                 c.col,
@@ -107,7 +107,8 @@ fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
                 c.lambda_factor,
                 scores.len(),
                 num(tail),
-                r.cpu_s.map_or("".into(), num)
+                r.cpu_s.map_or("".into(), num),
+                r.render_rel_err.map_or("".into(), num)
             );
             for m in &METRICS {
                 let (mean, sd) = stat(scores, m.get);
@@ -345,7 +346,7 @@ fn write_html(
             esc(caption)
         );
     }
-    h.push_str("<h2>Numbers per cell (compensation: paper; mean ± spread over seeds)</h2>\n<table id=\"metrics\"><tr><th>figure</th><th>row</th><th>column</th><th>tail share</th><th>CPU s</th>");
+    h.push_str("<h2>Numbers per cell (compensation: paper; mean ± spread over seeds)</h2>\n<table id=\"metrics\"><tr><th>figure</th><th>row</th><th>column</th><th>tail share</th><th>CPU s</th><th>render error</th>");
     for m in &METRICS {
         let _ = write!(h, "<th>{}</th>", esc(m.label));
     }
@@ -353,12 +354,14 @@ fn write_html(
     for r in results {
         let _ = write!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
             r.cell.figure.name(),
             esc(&r.cell.row),
             esc(&r.cell.col),
             num(metrics::mean_std(&r.tail_share).0),
-            r.cpu_s.map_or("external".into(), |c| format!("{c:.1}"))
+            r.cpu_s.map_or("external".into(), |c| format!("{c:.1}")),
+            r.render_rel_err
+                .map_or("—".into(), |e| format!("{:.1} %", 100.0 * e))
         );
         for m in &METRICS {
             let (mean, sd) = stat(&r.by_compensation[1].1, m.get);

@@ -64,9 +64,11 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
         .flat_map(|j| (0..j.tasks.len()).map(move |t| (*j, t)))
         .filter(|(j, t)| !dir.join(&j.tasks[*t].out).exists())
         .collect();
+    // The first cell that uses a capture names it (later inserts win, hence the reversal).
     let labels: HashMap<&str, String> = plan
         .cells
         .iter()
+        .rev()
         .flat_map(|c| c.captures.iter().map(move |id| (id.as_str(), c.label())))
         .collect();
     let started = Instant::now();
@@ -186,6 +188,9 @@ pub struct CellResult {
     pub tail_share: Vec<f64>,
     /// CPU seconds of the cell's renders (None where an external executor rendered them).
     pub cpu_s: Option<f64>,
+    /// Relative L2 error of one seed's capture over the object window, estimated from pairs of seeds
+    /// (median over pairs; None with one seed).
+    pub render_rel_err: Option<f64>,
     pub by_compensation: Vec<(&'static str, Vec<Scores>, Plane)>,
 }
 
@@ -224,6 +229,12 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
             .map(|c| (*c, Vec::new(), None))
             .collect();
         let mut tails = Vec::new();
+        let mut pair_errors = Vec::new();
+        for pair in cell.captures.chunks_exact(2) {
+            let (a, b) = (load(&pair[0])?, load(&pair[1])?);
+            let mask = murk_render::bench::window_mask(&a.time, a.h.len(), fmt.object_window_m);
+            pair_errors.push(murk_render::bench::split_rel_l2(&a.h, &b.h, &mask));
+        }
         for (seed, (id, ref_id)) in cell.captures.iter().zip(&cell.reference).enumerate() {
             let cap = load(id)?;
             tails.push(tail_share(&cap));
@@ -261,6 +272,7 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
             voxel_dz_m: volume.z.step(),
             tail_share: tails,
             cpu_s,
+            render_rel_err: (!pair_errors.is_empty()).then(|| metrics::median(&pair_errors)),
             by_compensation: by_comp
                 .into_iter()
                 .map(|(n, s, p)| (n, s, p.expect("at least one seed")))

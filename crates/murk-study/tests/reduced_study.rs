@@ -14,6 +14,7 @@ fn results(dir: &Path) -> Vec<CellResult> {
     let opt = StudyOptions {
         scale: Scale::Quick,
         only: vec![Figure::Fig3a, Figure::Fig3b, Figure::Fig4],
+        cells: Vec::new(),
         seeds: 1,
         shards: 1,
         spp: Some(64),
