@@ -1,52 +1,12 @@
 //! Physics checks of the renderer against analytic results and numerical quadrature, each with its
 //! tolerance. Sample counts are chosen so each test runs in a few seconds at opt-level 1.
 
-use murk_core::{Capture, DVec3};
-use murk_render::{Overrides, Plan, RenderOptions, Scene};
+mod common;
+
+use common::{gauss_legendre, render, scene};
+use murk_core::DVec3;
+use murk_render::Scene;
 use std::f64::consts::PI;
-use std::path::Path;
-use std::time::Duration;
-
-fn scene(toml: &str) -> Scene {
-    Scene::from_str(toml, Path::new("test.toml"), &Overrides::default()).expect("valid scene")
-}
-
-fn render(s: &Scene, spp: u64, seed: u64) -> Capture {
-    let opt = RenderOptions {
-        spp,
-        seed,
-        shard: None,
-        checkpoint: None,
-        checkpoint_every: Duration::ZERO,
-    };
-    Plan::new(s).render(&opt, &|_, _| {}).expect("render")
-}
-
-/// Gauss–Legendre nodes and weights on [a, b] (Newton on the Legendre recurrence).
-fn gauss_legendre(n: usize, a: f64, b: f64) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-15 {
-                    break;
-                }
-            }
-            let w = 2.0 / ((1.0 - x * x) * dp * dp);
-            (0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w)
-        })
-        .collect()
-}
 
 /// A 5 cm Lambertian patch 1 m in front of a confocal point: H = ∫ ρ z⁴ / (π³ r⁸) dA, all of it arriving
 /// at path 2r ∈ [2.0, 2.0013] m, i.e. in the one bin [1.999, 2.002).

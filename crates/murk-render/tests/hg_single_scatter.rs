@@ -10,11 +10,11 @@
 //! whole time windows: with x_l = x_s every path scatters straight back, where g = −0.7 is 180× brighter
 //! than g = 0.7; with x_l and x_s apart the scattering angle sweeps with the path length.
 
+mod common;
+
+use common::{gauss_legendre, render as render_scene, scene};
 use murk_core::DVec3;
-use murk_render::{Overrides, Plan, RenderOptions, Scene};
 use std::f64::consts::PI;
-use std::path::Path;
-use std::time::Duration;
 
 const MU_T: f64 = 0.5;
 const ALBEDO: f64 = 0.5;
@@ -65,49 +65,17 @@ fn render(xl: [f64; 2], xs: [f64; 2], g: f64, techniques: &str, spp: u64, seed: 
         "#,
         xl[0], xl[1], xs[0], xs[1]
     );
-    let scene =
-        Scene::from_str(&toml, Path::new("hg.toml"), &Overrides::default()).expect("valid scene");
-    let opt = RenderOptions {
-        spp,
-        seed,
-        shard: None,
-        checkpoint: None,
-        checkpoint_every: Duration::ZERO,
-    };
-    let cap = Plan::new(&scene).render(&opt, &|_, _| {}).expect("render");
-    cap.h.iter().map(|v| *v as f64).collect()
+    render_scene(&scene(&toml), spp, seed)
+        .h
+        .iter()
+        .map(|v| *v as f64)
+        .collect()
 }
 
 /// Henyey–Greenstein density per steradian for the cosine between the propagation directions before and
 /// after scattering (g > 0 forward).
 fn hg(g: f64, cos: f64) -> f64 {
     (1.0 - g * g) / (4.0 * PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5))
-}
-
-/// Gauss–Legendre nodes and weights on [a, b] (Newton on the Legendre recurrence).
-fn gauss_legendre(n: usize, a: f64, b: f64) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-15 {
-                    break;
-                }
-            }
-            let w = 2.0 / ((1.0 - x * x) * dp * dp);
-            (0.5 * (b - a) * x + 0.5 * (a + b), 0.5 * (b - a) * w)
-        })
-        .collect()
 }
 
 /// ∫ H(L) dL over the path lengths [l0, l1]: Gauss–Legendre in prolate spheroidal coordinates L, τ, φ.
