@@ -196,17 +196,10 @@ pub struct CellResult {
 
 /// Reconstructs and scores every cell; the captures must exist.
 pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellResult>> {
-    let mut captures: HashMap<String, Capture> = HashMap::new();
-    let mut load = |id: &str| -> Result<Capture> {
-        if let Some(c) = captures.get(id) {
-            return Ok(c.clone());
-        }
-        let c = murk_io::read_capture(&dir.join(capture_path(plan.job(id))))?;
-        captures.insert(id.to_string(), c.clone());
-        Ok(c)
-    };
-    // No-medium fields per (capture, λ): every cell of that scene compares against them.
-    let mut fields: HashMap<(String, u64), Vec<rustfft::num_complex::Complex32>> = HashMap::new();
+    // Captures are read when used, one at a time (a paper-scale capture is 268 MB).
+    let load = |id: &str| murk_io::read_capture(&dir.join(capture_path(plan.job(id))));
+    // Front views of the no-medium captures per (capture, λ): every cell of that scene compares with them.
+    let mut references: HashMap<(String, u64), Plane> = HashMap::new();
     let mut results = Vec::new();
     for (k, cell) in plan.cells.iter().enumerate() {
         let label = format!(
@@ -240,19 +233,17 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
             tails.push(tail_share(&cap));
             let field = pf_field(&cap, &volume, cell.lambda_factor)?;
             let key = (ref_id.clone(), cell.lambda_factor.to_bits());
-            if !fields.contains_key(&key) {
-                let r = pf_field(&load(ref_id)?, &volume, cell.lambda_factor)?;
-                fields.insert(key.clone(), r);
-            }
-            let reference = {
+            if !references.contains_key(&key) {
                 let rcap = load(ref_id)?;
-                let i = murk_recon::intensity(&rcap, &volume, &fields[&key], Compensation::None);
-                views(&volume, &i).front
-            };
+                let r = pf_field(&rcap, &volume, cell.lambda_factor)?;
+                let i = murk_recon::intensity(&rcap, &volume, &r, Compensation::None);
+                references.insert(key.clone(), views(&volume, &i).front);
+            }
+            let reference = &references[&key];
             for (name, scores, first) in by_comp.iter_mut() {
                 let i = murk_recon::intensity(&cap, &volume, &field, compensation(name, cell));
                 let v = views(&volume, &i);
-                scores.push(score(&v.front, &v.depth, &reference, &truth, cell.scene));
+                scores.push(score(&v.front, &v.depth, reference, &truth, cell.scene));
                 if seed == 0 {
                     *first = Some(v.front);
                 }
