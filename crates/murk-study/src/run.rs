@@ -47,6 +47,8 @@ fn cpu_path(dir: &Path, job: &CaptureJob) -> PathBuf {
 
 /// Renders every capture job whose file is missing, with all cores; returns how many tasks ran.
 pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
+    let renders = dir.join("renders");
+    std::fs::create_dir_all(&renders).map_err(|e| Error::io(&renders, e))?;
     let missing: Vec<&CaptureJob> = plan
         .captures
         .iter()
