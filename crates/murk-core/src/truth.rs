@@ -23,9 +23,4 @@ impl GroundTruth {
     pub fn shape(&self) -> [usize; 2] {
         [self.x_m.len(), self.y_m.len()]
     }
-
-    /// Whether lattice point (ix, iy) sees object `id`.
-    pub fn sees(&self, ix: usize, iy: usize, id: i32) -> bool {
-        self.object[ix * self.y_m.len() + iy] == id
-    }
 }

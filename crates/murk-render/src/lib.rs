@@ -23,7 +23,7 @@ mod truth;
 pub use geometry::{Aabb, Geometry, Object, Shape};
 pub use integrator::{Endpoint, Sampler, Tracer};
 pub use medium::{Medium, Phase};
-pub use overrides::{canonical, differences, Overrides};
+pub use overrides::Overrides;
 pub use render::{fingerprint, merge, render_key, scene_info, Plan, RenderOptions};
 pub use scene::{
     CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, ObjectDef, Relay, RelayDef, RelayKind,

@@ -17,10 +17,6 @@ pub struct Overrides {
 }
 
 impl Overrides {
-    pub fn is_empty(&self) -> bool {
-        self.grid.is_none() && self.bins.is_none() && self.set.is_empty()
-    }
-
     /// Every override as (dotted key, value, how the user wrote it), `--grid` and `--bins` included.
     pub(crate) fn assignments(&self) -> Result<Vec<(String, Value, String)>, String> {
         let mut out = Vec::new();
@@ -118,7 +114,7 @@ pub(crate) fn apply(table: &mut Table, key: &str, value: Value) -> Result<(), St
 
 /// The resolved scene as sorted `key = value` lines (comments and layout dropped), so that two renders
 /// compare by what they compute, and a difference names its key.
-pub fn canonical(table: &Table) -> String {
+pub(crate) fn canonical(table: &Table) -> String {
     let mut lines = Vec::new();
     flatten("", &Value::Table(table.clone()), &mut lines);
     lines.join("\n")
@@ -144,7 +140,7 @@ fn flatten(prefix: &str, v: &Value, out: &mut Vec<String>) {
 
 /// The keys whose values differ between two canonical listings, as "key: A there, B here" (at most
 /// `max` of them).
-pub fn differences(there: &str, here: &str, max: usize) -> Vec<String> {
+pub(crate) fn differences(there: &str, here: &str, max: usize) -> Vec<String> {
     let split = |s: &str| -> std::collections::BTreeMap<String, String> {
         s.lines()
             .filter_map(|l| l.split_once(" = "))

@@ -7,8 +7,8 @@
 //! `integrator.rs`; a bin holds the integral of H over its path lengths, as in `correctness.rs`). The
 //! reference integrates that over the ellipsoids r_l + r_s = L with its own HG formula, so a wrong phase
 //! sign, angle convention or normalisation in any of the renderer's medium techniques moves the sums of
-//! whole time windows: with x_l = x_s every path scatters straight back, where g = −0.7 is 180× brighter
-//! than g = 0.7; with x_l and x_s apart the scattering angle sweeps with the path length.
+//! whole time windows: with x_l = x_s every path scatters straight back, where the sign of g matters
+//! most; with x_l and x_s apart the scattering angle sweeps with the path length.
 
 mod common;
 
@@ -25,12 +25,10 @@ const BIN: f64 = 0.05;
 const BINS: usize = 42;
 /// g = 0 is the isotropic baseline the anisotropic cases are also compared with.
 const GS: [f64; 3] = [0.7, 0.0, -0.7];
-/// Seed spread of one window's sum at the 400 000 spp used: σ ≈ 0.6 % (10 seeds at 200 000 spp: all 330
-/// window sums within 2.3 % of the quadrature).
+/// Several times the seed spread of one window's sum at the spp used (measured spread: docs/study.md).
 const TOL_WINDOW: f64 = 0.03;
 /// The ratio of g ≠ 0 to g = 0 in one window: the same seed draws the same vertices for every g (at
-/// `max_depth = 1` no direction comes from the phase function), so most of the noise cancels
-/// (10 seeds at 200 000 spp: within 0.7 %).
+/// `max_depth = 1` no direction comes from the phase function), so most of the noise cancels.
 const TOL_RATIO: f64 = 0.01;
 
 /// The histogram of laser point `xl` and SPAD point `xs` (wall coordinates) in fog of anisotropy `g`,
@@ -183,9 +181,8 @@ fn check(xl: [f64; 2], xs: [f64; 2], windows: &[(usize, usize)], spp: u64, seed:
     }
 }
 
-/// Laser and SPAD 0.3 m apart: the scattering angle at the top of the ellipsoid goes from 62° (paths of
-/// 0.35 m) to 163° (2 m), so g = 0.7 gives 26 % of the isotropic signal early and 11 % late, g = −0.7
-/// 47 % early and 790 % late. Five windows over 0.35–2 m of path.
+/// Laser and SPAD 0.3 m apart: the scattering angle sweeps from sideways to nearly backwards as the path
+/// grows, so each g weighs the windows differently. Five windows over 0.35–2 m of path.
 #[test]
 fn hg_single_scattering_matches_quadrature_laser_and_spad_apart() {
     check(
@@ -197,8 +194,8 @@ fn hg_single_scattering_matches_quadrature_laser_and_spad_apart() {
     );
 }
 
-/// Laser and SPAD at one point: pure backscatter (cos θ = −1), where g = −0.7 is 18.9× and g = 0.7 0.10×
-/// the isotropic signal. Six windows over 0.1–2 m of path.
+/// Laser and SPAD at one point: pure backscatter (cos θ = −1), where g = ±0.7 differ most from isotropic
+/// fog. Six windows over 0.1–2 m of path.
 #[test]
 fn hg_single_scattering_matches_quadrature_colocated() {
     check(

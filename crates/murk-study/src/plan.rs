@@ -426,12 +426,11 @@ impl Plan {
     /// Keeps the cells `keep` accepts and the captures they use (a reduced study).
     pub fn retain_cells(&mut self, keep: impl Fn(&Cell) -> bool) {
         self.cells.retain(keep);
-        let used: Vec<&String> = self
+        let used: std::collections::HashSet<&String> = self
             .cells
             .iter()
             .flat_map(|c| c.captures.iter().chain(&c.reference))
             .collect();
-        let used: Vec<String> = used.into_iter().cloned().collect();
         self.captures.retain(|j| used.contains(&j.id));
     }
 

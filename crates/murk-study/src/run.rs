@@ -7,6 +7,7 @@ use murk_core::{Capture, Error, GroundTruth, Result, Volume};
 use murk_recon::{Compensation, Method, NoProgress, PfParams, Wavelength};
 use murk_render::{merge, RenderOptions};
 use murk_view::{views, Plane};
+use rustfft::num_complex::Complex32;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -202,6 +203,17 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
     let load = |id: &str| murk_io::read_capture(&dir.join(capture_path(plan.job(id))));
     // Front views of the no-medium captures per (capture, λ): every cell of that scene compares with them.
     let mut references: HashMap<(String, u64), Plane> = HashMap::new();
+    // Fields of captures that several cells reconstruct at the same λ (Fig. 3c's g = 0 row is Fig. 3b's
+    // μt = 1 row), kept only for those.
+    let mut uses: HashMap<(String, u64), usize> = HashMap::new();
+    for c in &plan.cells {
+        for id in &c.captures {
+            *uses
+                .entry((id.clone(), c.lambda_factor.to_bits()))
+                .or_default() += 1;
+        }
+    }
+    let mut shared_fields: HashMap<(String, u64), Vec<Complex32>> = HashMap::new();
     let mut results = Vec::new();
     for (k, cell) in plan.cells.iter().enumerate() {
         let label = format!(
@@ -233,7 +245,17 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
         for (seed, (id, ref_id)) in cell.captures.iter().zip(&cell.reference).enumerate() {
             let cap = load(id)?;
             tails.push(tail_share(&cap));
-            let field = pf_field(&cap, &volume, cell.lambda_factor)?;
+            let field_key = (id.clone(), cell.lambda_factor.to_bits());
+            let field = match shared_fields.get(&field_key) {
+                Some(f) => f.clone(),
+                None => {
+                    let f = pf_field(&cap, &volume, cell.lambda_factor)?;
+                    if uses[&field_key] > 1 {
+                        shared_fields.insert(field_key, f.clone());
+                    }
+                    f
+                }
+            };
             let key = (ref_id.clone(), cell.lambda_factor.to_bits());
             if !references.contains_key(&key) {
                 let rcap = load(ref_id)?;
@@ -276,11 +298,7 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
 }
 
 /// The PF field (λ = factor × 4Δc, 4 cycles: the paper's synthetic settings).
-fn pf_field(
-    cap: &Capture,
-    volume: &Volume,
-    lambda_factor: f64,
-) -> Result<Vec<rustfft::num_complex::Complex32>> {
+fn pf_field(cap: &Capture, volume: &Volume, lambda_factor: f64) -> Result<Vec<Complex32>> {
     let params = PfParams {
         wavelength: Wavelength::WallFactor(4.0 * lambda_factor),
         ..PfParams::default()
