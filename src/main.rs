@@ -49,18 +49,21 @@ enum Command {
 }
 
 fn main() {
+    restore_default_sigpipe();
+    // Ctrl-C and SIGTERM: remove the temporaries of writes in progress (finished outputs and render
+    // checkpoints stay), then end as a shell expects of an interrupted command.
+    let _ = ctrlc::set_handler(|| {
+        let _held = murk_io::remove_temporaries();
+        std::process::exit(130);
+    });
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => e.exit(), // --help and --version
         Err(e) => {
-            // clap's usage errors span several lines; keep murk's one-line contract.
-            let text = e.to_string();
-            let first = text
-                .lines()
-                .next()
-                .unwrap_or("invalid arguments")
-                .trim_start_matches("error: ");
-            eprintln!("murk: error: {first} (see murk --help)");
+            eprintln!(
+                "murk: error: {} (see murk --help)",
+                clap_one_line(&e.to_string())
+            );
             std::process::exit(2);
         }
     };
@@ -77,13 +80,44 @@ fn main() {
         Command::Merge(a) => cmd::render::run_merge(a, cli.quiet),
     };
     if let Err(e) = result {
-        // One line, no backtrace: the chain of causes joined, outermost first.
-        let msg = e
-            .chain()
-            .map(|c| c.to_string())
-            .collect::<Vec<_>>()
-            .join(": ");
-        eprintln!("murk: error: {msg}");
+        eprintln!("murk: error: {}", error_line(&e));
         std::process::exit(1);
+    }
+}
+
+/// The chain of causes joined, outermost first, skipping a cause that its parent's text already
+/// ends with (murk's I/O errors print their source themselves).
+fn error_line(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for cause in e.chain().map(|c| c.to_string()) {
+        if msg.ends_with(&cause) {
+            continue;
+        }
+        if !msg.is_empty() {
+            msg.push_str(": ");
+        }
+        msg.push_str(&cause);
+    }
+    msg
+}
+
+/// clap's message on one line: its lines up to the usage, joined ("the following required arguments
+/// were not provided: --out <OUT>", "invalid value 'x' for '--method <METHOD>' [possible values: …]").
+fn clap_one_line(text: &str) -> String {
+    text.lines()
+        .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .map(|l| l.trim().trim_start_matches("error: "))
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Rust ignores SIGPIPE, so writing to a closed pipe (`murk info x.h5 | head -1`) would fail and
+/// `println!` panic; with the default action the process ends quietly, like other command-line tools.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread exists; SIG_DFL is always valid.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

@@ -265,3 +265,255 @@ fn help_teaches_and_demo_runs() {
     assert!((i % nz).abs_diff(25) <= 1, "peak at plane {}", i % nz);
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// Magnitudes no capture can have (a time offset of 1e20 m, a wall 1e18 m wide, a SPAD 2e15 m behind
+/// the wall, bins of 1e-30 m) used to panic in the spectrum, hang in the FFT-length search or overflow
+/// a size: now every method refuses them with one line naming the file and the value.
+#[test]
+fn absurd_magnitudes_in_a_capture() {
+    let d = dir("absurd");
+    let src = d.join("src.h5");
+    let (code, _, err) = murk(&[
+        "synth",
+        "--out",
+        src.to_str().unwrap(),
+        "--grid",
+        "8",
+        "--bins",
+        "256",
+        "--bin-width",
+        "0.0123",
+        "--start",
+        "0.0456",
+        "--point",
+        "0.0789,0",
+        "--target",
+        "point:0.1,0.1,0.8",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let out = d.join("v.npy");
+    let cases: [(&str, f32, f32, &str); 5] = [
+        ("start20.h5", 0.0456, 1e20, "1e20 m"),
+        ("start12.h5", 0.0456, 1e12, "1e12 m"),
+        ("bin.h5", 0.0123, 1e-30, "1e-30 m"),
+        ("binwide.h5", 0.0123, 1e30, "window's end"),
+        ("spad.h5", 0.0789, -2e15, "2e15 m"),
+    ];
+    let mut keep = vec!["src.h5".to_string()];
+    for (name, from, to, needle) in cases {
+        let p = d.join(name);
+        patch(&src, &p, &from.to_le_bytes(), &to.to_le_bytes());
+        for method in ["pf", "pf-exact", "bp", "fbp"] {
+            let args = [
+                "reconstruct",
+                p.to_str().unwrap(),
+                "--method",
+                method,
+                "--out",
+                out.to_str().unwrap(),
+            ];
+            fails(&args, &[name, needle]);
+        }
+        keep.push(name.to_string());
+    }
+    let keep: Vec<&str> = keep.iter().map(|s| s.as_str()).collect();
+    no_leftovers(&d, &keep);
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// Sizes beyond memory are refused before allocating (they aborted with SIGABRT), and absurd volume
+/// bounds fail with one line.
+#[test]
+fn sizes_beyond_memory() {
+    let d = dir("sizes");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml");
+    let out = d.join("r.h5");
+    let out = out.to_str().unwrap();
+    fails(
+        &[
+            "render", scene, "--out", out, "--grid", "100000", "--spp", "1",
+        ],
+        &["z-letter.toml", "capture.grid", "would take"],
+    );
+    fails(
+        &[
+            "render",
+            scene,
+            "--out",
+            out,
+            "--bins",
+            "1000000000",
+            "--spp",
+            "1",
+        ],
+        &["z-letter.toml", "capture.bins", "would take"],
+    );
+    let good = good_capture(&d);
+    let g = good.to_str().unwrap();
+    let v = d.join("v.npy");
+    let v = v.to_str().unwrap();
+    fails(
+        &[
+            "reconstruct",
+            g,
+            "--out",
+            v,
+            "--volume",
+            "0:1:100000,0:1:100000,0.5:1:100000",
+        ],
+        &["volume", "would take"],
+    );
+    fails(
+        &[
+            "reconstruct",
+            g,
+            "--out",
+            v,
+            "--volume",
+            "0:1:4,0:1:4,0.5:1e30:4",
+        ],
+        &["z end", "1e30 m"],
+    );
+    no_leftovers(&d, &["good.h5"]);
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// An output that names an input is refused and the input keeps its bytes.
+#[test]
+fn outputs_never_replace_inputs() {
+    let d = dir("same");
+    let good = good_capture(&d);
+    let g = good.to_str().unwrap();
+    let before = std::fs::read(&good).unwrap();
+    fails(
+        &["reconstruct", g, "--out", g],
+        &["good.h5", "replace the input"],
+    );
+    // The same file through another spelling of its path.
+    let other = format!(
+        "{}/../{}/good.h5",
+        d.display(),
+        d.file_name().unwrap().to_str().unwrap()
+    );
+    fails(&["reconstruct", g, "--out", &other], &["replace the input"]);
+    fails(&["merge", g, "--out", g], &["replace the input"]);
+    assert_eq!(std::fs::read(&good).unwrap(), before);
+    no_leftovers(&d, &["good.h5"]);
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// clap's whole message, on one line: which argument is missing, which values are valid.
+#[test]
+fn usage_errors_say_what_is_wrong() {
+    fails(
+        &["reconstruct"],
+        &[
+            "required arguments were not provided",
+            "--out <OUT>",
+            "<FILE>",
+        ],
+    );
+    fails(
+        &["reconstruct", "x.h5", "--out", "v.npy", "--method", "foo"],
+        &["'foo'", "possible values", "pf-exact", "cdt"],
+    );
+}
+
+/// `murk info x.h5 | head -1`: the closed pipe ends murk quietly, without a panic message.
+#[test]
+fn closed_stdout_ends_quietly() {
+    use std::io::Read;
+    use std::process::Stdio;
+    let d = dir("pipe");
+    let good = good_capture(&d);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_murk"))
+        .args(["info", good.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close the read end before murk writes.
+    drop(child.stdout.take());
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    child.wait().unwrap();
+    assert!(err.is_empty(), "stderr: {err}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// SIGTERM in the middle of writing leaves no temporary behind; the checkpoint stays and the resumed
+/// render equals an uninterrupted one byte for byte.
+#[test]
+fn terminated_render_leaves_no_temporaries_and_resumes() {
+    let d = dir("sigterm");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml");
+    let out = d.join("r.h5");
+    let args = |extra: &[&str]| {
+        // One unit per laser point, so the checkpoint fills as the render goes.
+        let mut v: Vec<String> = [
+            "render",
+            scene,
+            "--grid",
+            "8",
+            "--spp",
+            "10000",
+            "--set",
+            "render.share_tile=1",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_murk"))
+        .args(args(&[
+            "--out",
+            out.to_str().unwrap(),
+            "--checkpoint-every",
+            "0.01",
+        ]))
+        .arg("--quiet")
+        .spawn()
+        .unwrap();
+    let ckpt = d.join("r.h5.ckpt");
+    let t0 = std::time::Instant::now();
+    while std::fs::metadata(&ckpt).map_or(0, |m| m.len()) < 4096 && t0.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    // SAFETY: kill(2) on our own child's pid.
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGTERM);
+    }
+    let status = child.wait().unwrap();
+    for e in std::fs::read_dir(&d).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.ends_with(".tmp"), "left behind: {name}");
+    }
+    assert_eq!(status.code(), Some(130), "the render ended before SIGTERM");
+    {
+        assert!(ckpt.exists());
+        let (code, _, err) = murk(
+            &args(&["--out", out.to_str().unwrap(), "--resume"])
+                .iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>(),
+        );
+        assert_eq!(code, 0, "{err}");
+    }
+    let whole = d.join("whole.h5");
+    let (code, _, err) = murk(
+        &args(&["--out", whole.to_str().unwrap()])
+            .iter()
+            .map(|s| s.as_str())
+            .collect::<Vec<_>>(),
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&whole).unwrap());
+    std::fs::remove_dir_all(&d).ok();
+}

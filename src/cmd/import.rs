@@ -229,6 +229,7 @@ pub fn import(path: &Path, o: &ImportOptions) -> anyhow::Result<Capture> {
 }
 
 pub fn run(a: ImportArgs, quiet: bool) -> anyhow::Result<()> {
+    murk_io::refuse_overwrite(&a.out, &[&a.file])?;
     let cap = import(
         &a.file,
         &ImportOptions {

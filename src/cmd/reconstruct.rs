@@ -222,11 +222,13 @@ pub fn default_volume(cap: &Capture) -> anyhow::Result<Volume> {
         bail!("the capture's time window ends at {:.3} m of path, before any depth beyond {z_min} m; give --volume", cap.time.end_m());
     }
     let nz = (((z_max - z_min) / spacing).round() as usize + 1).clamp(2, 256);
-    Ok(Volume {
+    let v = Volume {
         x: Axis::new(lo.x, hi.x, count(lo.x, hi.x)),
         y: Axis::new(lo.y, hi.y, count(lo.y, hi.y)),
         z: Axis::new(z_min, z_max, nz),
-    })
+    };
+    v.validate()?;
+    Ok(v)
 }
 
 /// Writes the intensity volume by extension.
@@ -438,6 +440,10 @@ pub fn reconstruct_any(
 
 pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     VolumeFormat::of(&a.out)?;
+    murk_io::refuse_overwrite(&a.out, &[&a.file])?;
+    if let Some(png) = &a.png {
+        murk_io::refuse_overwrite(png, &[&a.file])?;
+    }
     let mut cap = murk_io::read_capture(&a.file)?;
     let params = a.params(&cap)?;
     let offset = t_offset_m(a.t_offset.as_deref(), &a.slab.slab())?;

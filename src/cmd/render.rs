@@ -97,6 +97,15 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         bins: a.bins,
         set: a.set.clone(),
     };
+    murk_io::refuse_overwrite(&a.out, &[&a.scene])?;
+    if let Some(t) = &a.truth {
+        murk_io::refuse_overwrite(t, &[&a.scene, &a.out])?;
+        anyhow::ensure!(
+            t != &a.out,
+            "{}: --truth and --out name the same file",
+            t.display()
+        );
+    }
     let scene = Scene::load(&a.scene, &ov)?;
     if let Some(t) = &a.truth {
         murk_io::write_truth_h5(t, &scene.ground_truth())?;
@@ -187,6 +196,8 @@ fn spp_for_budget(plan: &Plan, budget_s: f64, n_units: usize) -> anyhow::Result<
 }
 
 pub fn run_merge(a: MergeArgs, quiet: bool) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = a.parts.iter().map(|p| p.as_path()).collect();
+    murk_io::refuse_overwrite(&a.out, &inputs)?;
     let parts = a
         .parts
         .iter()

@@ -158,7 +158,7 @@ impl Capture {
         if !(t.bin_width_m.is_finite() && t.bin_width_m > 0.0) {
             return Err(Error::param(format!(
                 "bin width must be a positive number of metres, got {}",
-                t.bin_width_m
+                crate::short(t.bin_width_m)
             )));
         }
         if !t.start_m.is_finite() {
@@ -170,6 +170,27 @@ impl Capture {
         if t.bins == 0 {
             return Err(Error::param("the time axis has no bins"));
         }
+        let limits = crate::Limits::get();
+        limits.length("the time start", t.start_m)?;
+        limits.length("the time window's end", t.end_m())?;
+        if t.bin_width_m < limits.min_bin_width_m {
+            return Err(Error::Limits(format!(
+                "the bin width is {} m; murk accepts bins of at least {} m",
+                crate::short(t.bin_width_m),
+                crate::short(limits.min_bin_width_m)
+            )));
+        }
+        for (name, p) in [
+            ("laser position", self.laser_xyz),
+            ("SPAD position", self.sensor_xyz),
+        ] {
+            if let Some(p) = p {
+                limits.length(
+                    &format!("the {name}'s largest |coordinate|"),
+                    p.abs().max_element(),
+                )?;
+            }
+        }
         if self.pairing == Pairing::Paired && self.illum.len() != self.sensor.len() {
             return Err(Error::param(format!(
                 "paired capture with {} illumination points but {} sensor points",
@@ -177,7 +198,7 @@ impl Capture {
                 self.sensor.len()
             )));
         }
-        let want = self.n_hist() * t.bins;
+        let want = self.n_hist().saturating_mul(t.bins);
         if self.h.len() != want {
             return Err(Error::param(format!(
                 "H has {} samples, expected {} histograms × {} bins = {want}",

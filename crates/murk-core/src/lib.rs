@@ -12,6 +12,7 @@
 pub mod buffer;
 mod capture;
 mod error;
+mod limits;
 mod points;
 pub mod simd;
 mod truth;
@@ -20,6 +21,7 @@ mod volume;
 pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
 pub use error::{Error, Result};
 pub use glam::DVec3;
+pub use limits::{short, Limits};
 pub use points::{PointLayout, PointSet, RegularGrid};
 pub use truth::GroundTruth;
 pub use volume::{Axis, Volume};

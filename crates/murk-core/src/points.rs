@@ -120,6 +120,19 @@ impl PointSet {
                 "{what}: non-finite coordinate at entry {i}"
             )));
         }
+        let limits = crate::Limits::get();
+        let far = self
+            .points
+            .iter()
+            .copied()
+            .enumerate()
+            .max_by(|a, b| a.1.abs().max_element().total_cmp(&b.1.abs().max_element()));
+        if let Some((i, p)) = far {
+            limits.length(
+                &format!("{what}: entry {i}'s largest |coordinate|"),
+                p.abs().max_element(),
+            )?;
+        }
         Ok(())
     }
 

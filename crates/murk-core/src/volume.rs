@@ -106,19 +106,23 @@ impl Volume {
 
     /// Rejects volumes murk cannot reconstruct into: voxels on or behind the wall, absurd sizes.
     pub fn validate(&self) -> Result<()> {
+        let limits = crate::Limits::get();
+        for (name, a) in [("x", &self.x), ("y", &self.y), ("z", &self.z)] {
+            limits.length(&format!("the volume's {name} start"), a.start)?;
+            limits.length(&format!("the volume's {name} end"), a.end)?;
+        }
         let zmin = self.z.start.min(self.z.end);
         if zmin <= 0.0 {
             return Err(Error::param(format!(
                 "the volume reaches z = {zmin} m, on or behind the relay wall (z = 0); depths must be > 0"
             )));
         }
-        const MAX_VOXELS: usize = 1 << 30;
-        if self.x.n.saturating_mul(self.y.n).saturating_mul(self.z.n) > MAX_VOXELS {
-            return Err(Error::Limits(format!(
-                "volume of {}×{}×{} voxels is over 2^30",
-                self.x.n, self.y.n, self.z.n
-            )));
-        }
+        // A reconstruction holds the field as complex f64 per voxel.
+        limits.elements(
+            "the volume",
+            &[self.x.n, self.y.n, self.z.n],
+            std::mem::size_of::<[f64; 2]>(),
+        )?;
         Ok(())
     }
 }

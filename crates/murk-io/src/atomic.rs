@@ -4,11 +4,13 @@ use murk_core::{Error, Result};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 
 /// Writes `path` through `fill` (buffered), so that readers see either the old file or the complete new one,
 /// and a failed write leaves nothing behind.
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
     let tmp = temp_sibling(path)?;
+    let _live = Live::register(&tmp);
     let result = (|| {
         let file = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
         let mut w = BufWriter::new(file);
@@ -26,6 +28,40 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
     result
 }
 
+/// Temporaries being written now, so that an interrupted process can remove them.
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Registration of one temporary in [`LIVE`] for the duration of its write.
+struct Live(PathBuf);
+
+impl Live {
+    fn register(tmp: &Path) -> Live {
+        lock_live().push(tmp.to_path_buf());
+        Live(tmp.to_path_buf())
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        lock_live().retain(|p| p != &self.0);
+    }
+}
+
+fn lock_live() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    LIVE.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Removes every temporary that a write in progress has made, for a signal handler about to end the
+/// process: the targets keep their previous content (or stay absent). Returns the guard so that the
+/// caller can exit while holding it, before a write could start another temporary.
+pub fn remove_temporaries() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    let live = lock_live();
+    for p in live.iter() {
+        let _ = std::fs::remove_file(p);
+    }
+    live
+}
+
 /// A unique name in the target's directory (same file system, so the rename is atomic).
 fn temp_sibling(path: &Path) -> Result<PathBuf> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -38,4 +74,38 @@ fn temp_sibling(path: &Path) -> Result<PathBuf> {
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
     let tmp_name = format!(".{}.{}-{n}.tmp", name.to_string_lossy(), std::process::id());
     Ok(path.with_file_name(tmp_name))
+}
+
+/// Refuses an output that is one of the inputs (the same file, whatever path names it): the
+/// atomic rename would replace the input with the result.
+pub fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
+    let Ok(out_id) = file_id(out) else {
+        return Ok(()); // no file there yet, so it is no input
+    };
+    for input in inputs {
+        if file_id(input).is_ok_and(|id| id == out_id) {
+            return Err(Error::param(format!(
+                "{}: the output would replace the input {}; choose another output path",
+                out.display(),
+                input.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn file_id(p: &Path) -> std::io::Result<(u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        let m = std::fs::metadata(p)?;
+        Ok((m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let c = std::fs::canonicalize(p)?;
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        std::hash::Hash::hash(&c, &mut h);
+        Ok((0, std::hash::Hasher::finish(&h)))
+    }
 }

@@ -4,20 +4,21 @@
 //! * reconstructed volumes as HDF5 ([`write_volume_h5`]) and `.npy` ([`write_npy_f32`], [`read_npy_f32`]);
 //! * MATLAB imports of real captures ([`read_mat_v73_array`], [`read_mat_v5_array`]).
 //!
-//! Everything is pure Rust (hdf5-pure, matfile): no system HDF5 library. Every error is a
+//! Everything is pure Rust (hdf5-pure, and murk's own MATLAB v5 reader): no system HDF5 library. Every error is a
 //! [`murk_core::Error`] whose message is one line naming the file and the problem; declared sizes
 //! are checked before allocating, and writes are atomic (temporary file + rename).
 
 mod atomic;
 mod h5;
 mod mat;
+pub mod mat5;
 mod npy;
 mod scene_info;
 mod tal;
 mod truth;
 mod volume;
 
-pub use atomic::write_atomic;
+pub use atomic::{refuse_overwrite, remove_temporaries, write_atomic};
 pub use mat::{read_mat_v5_array, read_mat_v73_array};
 pub use npy::{read_npy_f32, read_npy_f32_with_limit, write_npy_f32};
 pub use scene_info::scene_info_summary;

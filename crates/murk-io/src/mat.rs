@@ -5,6 +5,7 @@
 //! [512, 32, 32] = (t, a, b), the same array as the CDT code's `np.array(f['meas']).transpose(2, 1, 0)`.
 
 use crate::h5;
+use crate::mat5::MatValue;
 use crate::npy::fortran_to_c;
 use crate::tal::DEFAULT_READ_LIMIT_BYTES;
 use murk_core::{Error, Result};
@@ -79,7 +80,8 @@ pub fn read_mat_v73_array(path: &Path, var: &str) -> Result<(Vec<usize>, Vec<f32
 }
 
 /// Reads numeric variable `var` of a MATLAB v5 (v6/v7, non-HDF5) `.mat` file as f32, e.g. the
-/// LCT data's `rect_data` (N × N × T uint16) or the scalar `width` (shape [1, 1]).
+/// LCT data's `rect_data` (N × N × T uint16) or the scalar `width` (shape [1, 1]); `a.b` reads
+/// field `b` of a 1×1 struct `a` (Ahn 2019's `NLOSDATA.transient`).
 pub fn read_mat_v5_array(path: &Path, var: &str) -> Result<(Vec<usize>, Vec<f32>)> {
     match sniff(path)? {
         Kind::V73 => {
@@ -106,61 +108,27 @@ pub fn read_mat_v5_array(path: &Path, var: &str) -> Result<(Vec<usize>, Vec<f32>
             len >> 20
         )));
     }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let mat = h5::guarded(path, || {
-        matfile::MatFile::parse(bytes.as_slice())
-            .map_err(|e| Error::format(path, format!("truncated or corrupt MATLAB v5 file ({e})")))
-    })?;
-    let Some(arr) = mat.find_by_name(var) else {
-        let names: Vec<String> = mat.arrays().iter().map(|a| a.name().to_string()).collect();
-        // matfile drops an array cut short instead of failing: data past the header but no
-        // complete variable means a truncated file.
-        if names.is_empty() && bytes.len() > 128 {
-            return Err(Error::format(
-                path,
-                "truncated or corrupt MATLAB v5 file (no complete variable)",
-            ));
+    let vars = crate::mat5::read_mat_v5(path)?;
+    match crate::mat5::lookup(&vars, var) {
+        Some(MatValue::Numeric { dims, values }) => {
+            let col_major: Vec<f32> = values.iter().map(|&v| v as f32).collect();
+            Ok((dims.clone(), fortran_to_c(dims, &col_major)))
         }
-        return Err(missing_var(path, var, &names));
-    };
-    use matfile::NumericData as D;
-    let complex = || {
-        Error::Unsupported(format!(
-            "{}: variable '{var}' is complex; murk reads real arrays",
-            path.display()
-        ))
-    };
-    macro_rules! real {
-        ($real:expr, $imag:expr) => {{
-            if $imag.is_some() {
-                return Err(complex());
-            }
-            $real.iter().map(|&v| v as f32).collect::<Vec<f32>>()
-        }};
-    }
-    let col_major = match arr.data() {
-        D::Int8 { real, imag } => real!(real, imag),
-        D::UInt8 { real, imag } => real!(real, imag),
-        D::Int16 { real, imag } => real!(real, imag),
-        D::UInt16 { real, imag } => real!(real, imag),
-        D::Int32 { real, imag } => real!(real, imag),
-        D::UInt32 { real, imag } => real!(real, imag),
-        D::Int64 { real, imag } => real!(real, imag),
-        D::UInt64 { real, imag } => real!(real, imag),
-        D::Single { real, imag } => real!(real, imag),
-        D::Double { real, imag } => real!(real, imag),
-    };
-    let shape = arr.size().clone();
-    if shape.iter().product::<usize>() != col_major.len() {
-        return Err(Error::format(
+        Some(other) => Err(Error::format(
             path,
             format!(
-                "variable '{var}' declares size {shape:?} but holds {} values",
-                col_major.len()
+                "variable '{var}' is a {}, not a numeric array",
+                other.describe()
             ),
-        ));
+        )),
+        None => {
+            let present: Vec<String> = vars
+                .iter()
+                .map(|(n, v)| format!("{n} ({})", v.describe()))
+                .collect();
+            Err(missing_var(path, var, &present))
+        }
     }
-    Ok((shape.clone(), fortran_to_c(&shape, &col_major)))
 }
 
 #[cfg(test)]

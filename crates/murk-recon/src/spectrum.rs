@@ -219,13 +219,15 @@ impl Window {
         // away: it weighs no more than the data the crop already drops. Even lengths keep realfft on
         // its fast path.
         let pad = 1;
-        let span_bins = (want_hi - want_lo).max(1) as usize;
-        let nf = 2 * next_fast_len((span_bins + 2 * pad).div_ceil(2));
-        if nf > 1 << 24 {
+        // Checked before rounding up to a fast length, whose search is linear in the length.
+        let span_bins = want_hi.saturating_sub(want_lo).max(1);
+        if span_bins > 1 << 24 {
             return Err(Error::Limits(format!(
-                "the volume needs {nf} time samples of {dt} m; use a smaller volume or coarser bins"
+                "the volume needs {span_bins} time samples of {} m; use a smaller volume or coarser bins",
+                murk_core::short(dt)
             )));
         }
+        let nf = 2 * next_fast_len((span_bins as usize + 2 * pad).div_ceil(2));
         let band = Band::new(nf, dt, wavelength_m, sigma_m);
         if band.is_empty() {
             return Err(Error::param(format!(

@@ -11,6 +11,7 @@ use murk_core::{Capture, DVec3, Error, Pairing, PointLayout, Result};
 use rayon::prelude::*;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// How a render runs.
@@ -219,7 +220,7 @@ impl<'a> Plan<'a> {
         let mut cap = self.empty_capture(scene_info(self.scene, opt.spp, opt.seed, opt.shard));
         let units = self.shard_units(opt.shard);
         let total = units.len();
-        let mut ckpt = match &opt.checkpoint {
+        let ckpt = match &opt.checkpoint {
             Some(p) => Some(Checkpoint::open(
                 p,
                 &render_key(self.scene, opt.spp, opt.seed, opt.shard),
@@ -237,33 +238,43 @@ impl<'a> Plan<'a> {
             }
         }
         let todo: Vec<usize> = units.clone().filter(|u| !done[*u]).collect();
-        let mut n_done = total - todo.len();
-        progress(n_done, total);
-        // Batches small enough to checkpoint regularly, large enough to keep every thread busy.
-        let batch = (rayon::current_num_threads() * 4).max(1);
-        let mut pending: Vec<(usize, Vec<f32>)> = Vec::new();
-        let mut last = Instant::now();
-        for chunk in todo.chunks(batch) {
-            let out: Vec<(usize, Vec<f32>)> = chunk
-                .par_iter()
-                .map(|&u| (u, self.render_unit(u, opt.spp, opt.seed)))
-                .collect();
-            for (u, buf) in &out {
-                self.store(&mut cap.h, *u, buf);
-            }
-            n_done += out.len();
-            progress(n_done, total);
-            if let Some(c) = ckpt.as_mut() {
-                pending.extend(out);
-                if last.elapsed() >= opt.checkpoint_every {
-                    c.append(&pending)?;
-                    pending.clear();
-                    last = Instant::now();
+        progress(total - todo.len(), total);
+        // Each finished unit is stored at once, and the first to finish after the interval appends
+        // everything pending to the checkpoint: the interval is honoured to within one unit.
+        struct Shared<'c> {
+            h: &'c mut [f32],
+            done: usize,
+            pending: Vec<(usize, Vec<f32>)>,
+            last: Instant,
+            ckpt: Option<Checkpoint>,
+        }
+        let shared = Mutex::new(Shared {
+            h: &mut cap.h,
+            done: total - todo.len(),
+            pending: Vec::new(),
+            last: Instant::now(),
+            ckpt,
+        });
+        todo.par_iter().try_for_each(|&u| -> Result<()> {
+            let buf = self.render_unit(u, opt.spp, opt.seed);
+            let mut guard = shared.lock().unwrap_or_else(|e| e.into_inner());
+            let s = &mut *guard;
+            self.store(s.h, u, &buf);
+            s.done += 1;
+            progress(s.done, total);
+            if let Some(c) = s.ckpt.as_mut() {
+                s.pending.push((u, buf));
+                if s.last.elapsed() >= opt.checkpoint_every {
+                    c.append(&s.pending)?;
+                    s.pending.clear();
+                    s.last = Instant::now();
                 }
             }
-        }
-        if let Some(c) = ckpt.as_mut() {
-            c.append(&pending)?;
+            Ok(())
+        })?;
+        let s = shared.into_inner().unwrap_or_else(|e| e.into_inner());
+        if let Some(mut c) = s.ckpt {
+            c.append(&s.pending)?;
         }
         Ok(cap)
     }

@@ -337,6 +337,7 @@ impl Scene {
         };
         let bad = |field: &str, msg: String| Error::format(path, format!("{field}: {msg}"));
         let dir = path.parent().unwrap_or(Path::new("."));
+        let limits = murk_core::Limits::get();
 
         // Relay.
         let r = &f.relay;
@@ -345,6 +346,11 @@ impl Scene {
                 "relay.size",
                 format!("must be two positive lengths in metres, got {:?}", r.size),
             ));
+        }
+        for s in r.size {
+            limits
+                .length("a side", s)
+                .map_err(|e| bad("relay.size", e.to_string()))?;
         }
         let relay_albedo = r.albedo.unwrap_or(match r.kind {
             RelayKind::Wall => 1.0,
@@ -378,6 +384,15 @@ impl Scene {
                 format!("needs at least one point per axis, got {:?}", c.grid),
             ));
         }
+        // H (f32 per bin) is the largest buffer a render allocates; checked before the grid's points.
+        let points = c.grid[0].saturating_mul(c.grid[1]);
+        let hists = match c.kind {
+            CaptureKindDef::Exhaustive => points.saturating_mul(points),
+            _ => points,
+        };
+        limits
+            .elements("H", &[hists, c.bins], std::mem::size_of::<f32>())
+            .map_err(|e| bad("capture.grid/capture.bins", e.to_string()))?;
         let extent = c.extent.unwrap_or(r.size);
         if !extent.iter().all(|e| e.is_finite() && *e > 0.0) {
             return Err(bad(
@@ -443,6 +458,20 @@ impl Scene {
             bin_width_m: c.bin_width,
             bins: c.bins,
         };
+        limits
+            .length("the start", time.start_m)
+            .and_then(|_| limits.length("the window's end", time.end_m()))
+            .map_err(|e| bad("capture.start/bins/bin_width", e.to_string()))?;
+        if time.bin_width_m < limits.min_bin_width_m {
+            return Err(bad(
+                "capture.bin_width",
+                format!(
+                    "{} m is below the {} m murk accepts",
+                    murk_core::short(time.bin_width_m),
+                    murk_core::short(limits.min_bin_width_m)
+                ),
+            ));
+        }
         let device = |p: Option<[f64; 3]>, field: &str| -> Result<Option<DVec3>> {
             match p {
                 None if c.account_first_and_last_bounces => Err(bad(

@@ -1,0 +1,161 @@
+//! What murk accepts, checked before anything is allocated or iterated: lengths far beyond any NLOS
+//! set-up (so no derived size can overflow or loop for ever) and a memory budget per buffer.
+
+use crate::{Error, Result};
+
+/// Bounds on declared magnitudes and sizes. [`Limits::get`] gives the ones in force.
+#[derive(Clone, Copy, Debug)]
+pub struct Limits {
+    /// Largest |coordinate|, time offset or path end (m). Long-range NLOS reaches about 1.5 km.
+    pub max_length_m: f64,
+    /// Smallest time bin (m of path); 1e-7 m is 0.3 fs, finer than any streak camera.
+    pub min_bin_width_m: f64,
+    /// Largest single buffer (bytes): the machine's physical memory, or `MURK_MAX_BYTES` when set.
+    pub max_bytes: u64,
+}
+
+impl Limits {
+    pub fn get() -> Limits {
+        let max_bytes = std::env::var("MURK_MAX_BYTES")
+            .ok()
+            .and_then(|v| v.trim().parse().ok())
+            .unwrap_or_else(physical_memory_bytes);
+        Limits {
+            max_length_m: 1e5,
+            min_bin_width_m: 1e-7,
+            max_bytes,
+        }
+    }
+
+    /// `v` (a length in metres, named `what`) is finite and within ±`max_length_m`.
+    pub fn length(&self, what: &str, v: f64) -> Result<()> {
+        if !v.is_finite() {
+            return Err(Error::param(format!("{what} is {v}; it must be finite")));
+        }
+        if v.abs() > self.max_length_m {
+            return Err(Error::Limits(format!(
+                "{what} is {} m; murk accepts magnitudes up to {} m",
+                short(v),
+                short(self.max_length_m)
+            )));
+        }
+        Ok(())
+    }
+
+    /// The element count of `dims` if a buffer of that many `elem_bytes`-sized values fits the
+    /// budget (overflow-safe); `what` names the buffer in the error.
+    pub fn elements(&self, what: &str, dims: &[usize], elem_bytes: usize) -> Result<usize> {
+        let n = dims
+            .iter()
+            .try_fold(1u128, |acc, &d| acc.checked_mul(d as u128))
+            .unwrap_or(u128::MAX);
+        let bytes = n.saturating_mul(elem_bytes as u128);
+        if bytes > self.max_bytes as u128 || n > usize::MAX as u128 {
+            let shape: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
+            return Err(Error::Limits(format!(
+                "{what} of {} values would take {}, more than this machine's {}",
+                shape.join(" × "),
+                human_bytes(bytes),
+                human_bytes(self.max_bytes as u128)
+            )));
+        }
+        Ok(n as usize)
+    }
+}
+
+/// Physical memory from the OS; 16 GiB where it cannot be read.
+fn physical_memory_bytes() -> u64 {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: sysconf has no preconditions; it returns -1 for an unknown name.
+        let (pages, size) = unsafe {
+            (
+                libc::sysconf(libc::_SC_PHYS_PAGES),
+                libc::sysconf(libc::_SC_PAGESIZE),
+            )
+        };
+        if pages > 0 && size > 0 {
+            return pages as u64 * size as u64;
+        }
+    }
+    16 << 30
+}
+
+fn human_bytes(b: u128) -> String {
+    const UNITS: [&str; 6] = ["B", "KiB", "MiB", "GiB", "TiB", "PiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{b} B")
+    } else {
+        format!("{v:.1} {}", UNITS[u])
+    }
+}
+
+/// A number for a message: at most 6 significant digits, no trailing zeros, and no digits that an
+/// f32 round trip added (0.003 read from an f32 dataset prints as "0.003", not
+/// "0.003000000026077032"); scientific notation outside 1e-4..1e6.
+pub fn short(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if !(1e-4..1e6).contains(&a) {
+        let s = format!("{v:.5e}");
+        let (m, e) = s.split_once('e').expect("{:e} has an exponent");
+        return format!("{}e{e}", trim_zeros(m));
+    }
+    let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+    trim_zeros(&format!("{v:.decimals$}")).to_string()
+}
+
+fn trim_zeros(s: &str) -> &str {
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn short_numbers_read_as_typed() {
+        assert_eq!(short(0.003f32 as f64), "0.003");
+        assert_eq!(short(1.5), "1.5");
+        assert_eq!(short(-2.0), "-2");
+        assert_eq!(short(123456.7), "123457");
+        assert_eq!(short(1e30f32 as f64), "1e30");
+        assert_eq!(short(1.25e-7), "1.25e-7");
+        assert_eq!(short(0.0), "0");
+    }
+
+    #[test]
+    fn lengths_and_sizes_are_bounded_before_use() {
+        let l = Limits {
+            max_length_m: 1e5,
+            min_bin_width_m: 1e-7,
+            max_bytes: 1 << 20,
+        };
+        assert!(l.length("t_start", 3.5).is_ok());
+        let e = l.length("t_start", 1e20).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "t_start is 1e20 m; murk accepts magnitudes up to 100000 m"
+        );
+        assert!(l.length("x", f64::NAN).is_err());
+        assert_eq!(l.elements("H", &[256, 256], 4).unwrap(), 65536);
+        let e = l.elements("H", &[257, 256], 16).unwrap_err().to_string();
+        assert!(e.contains("257 × 256") && e.contains("1.0 MiB"), "{e}");
+        // A product that overflows u128 is refused, not wrapped.
+        assert!(l
+            .elements("H", &[usize::MAX, usize::MAX, usize::MAX], 4)
+            .is_err());
+    }
+}
