@@ -81,6 +81,16 @@ pub fn describe(cap: &Capture) -> Vec<String> {
         cap.n_hist(),
         t.start_m + (bin as f64 + 0.5) * t.bin_width_m
     ));
+    let level = cap.end_level();
+    out.push(format!(
+        "window end: the last 5 % of bins carry {:.1} % of the summed histogram's peak{}",
+        100.0 * level,
+        if level >= murk_core::window_end::AUTO_LEVEL {
+            " (cut while strong: reconstructions taper it and clear the far voxels; see reconstruct --window-end)"
+        } else {
+            ""
+        }
+    ));
     for (k, v) in murk_io::scene_info_summary(&cap.scene_info) {
         out.push(format!("scene_info.{k}: {v}"));
     }

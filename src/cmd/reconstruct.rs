@@ -4,6 +4,7 @@ use crate::cmd::progress::{say, Bar};
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, SlabParams};
+use murk_core::window_end::{handle_end, WindowEnd};
 use murk_core::{Axis, Capture, Volume, SPEED_OF_LIGHT_M_PER_S};
 use murk_recon::{Compensation, Falloff, Lateral, Method, PfParams, Wavelength};
 use murk_view::pictures;
@@ -31,6 +32,10 @@ impl MethodArg {
     /// Methods that reconstruct on the confocal scan grid and ignore --volume.
     pub fn own_grid(self) -> bool {
         matches!(self, MethodArg::Lct | MethodArg::Fk | MethodArg::Cdt)
+    }
+
+    pub fn is_pf(self) -> bool {
+        matches!(self, MethodArg::Pf | MethodArg::PfExact)
     }
 }
 
@@ -121,8 +126,34 @@ pub struct ReconstructArgs {
     /// so that depth is measured from the back of the slab.
     #[arg(long, allow_hyphen_values = true)]
     pub t_offset: Option<String>,
+    /// The end of the time window: `auto` tapers it and clears the voxels only its last paths reach
+    /// when the last 5 % of bins carry ≥ 5 % of the peak (a cut signal, which otherwise shows as a
+    /// false far surface); `taper` always does; `keep` never does.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub window_end: WindowEndArg,
     #[command(flatten)]
     pub slab: SlabArgs,
+}
+
+/// Ramp length (bins) at a window's end for the methods without a pulse: measured on the CDT letter S
+/// cut at 1.44 m of path (docs/window-ends.md).
+const BASELINE_TAPER_BINS: usize = 20;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum WindowEndArg {
+    Auto,
+    Taper,
+    Keep,
+}
+
+impl From<WindowEndArg> for WindowEnd {
+    fn from(a: WindowEndArg) -> WindowEnd {
+        match a {
+            WindowEndArg::Auto => WindowEnd::Auto,
+            WindowEndArg::Taper => WindowEnd::Taper,
+            WindowEndArg::Keep => WindowEnd::Keep,
+        }
+    }
 }
 
 /// The scattering slab in front of the scene (CDT; `--t-offset slab`). Defaults: the 2.54 cm foam
@@ -448,6 +479,12 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     let params = a.params(&cap)?;
     let offset = t_offset_m(a.t_offset.as_deref(), &a.slab.slab())?;
     cap.time.start_m -= offset;
+    let taper_m = if a.method.is_pf() {
+        params.sigma_m(params.wavelength_m(&cap)?)
+    } else {
+        BASELINE_TAPER_BINS as f64 * cap.time.bin_width_m
+    };
+    let mut end = handle_end(&mut cap, a.window_end.into(), taper_m);
     let volume = match &a.volume {
         Some(_) if a.method.own_grid() => {
             if !quiet {
@@ -477,12 +514,15 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     )
     .with_context(|| a.file.display().to_string())?;
     bar.finish();
+    let mut out = out;
+    end.trim(&cap, &out.volume, &mut out.intensity);
     let secs = t0.elapsed().as_secs_f64();
-    for w in out.warnings.iter().filter(|_| !quiet) {
+    for w in out.warnings.iter().chain(&end.warning()).filter(|_| !quiet) {
         eprintln!("murk: warning: {w}");
     }
     let mut rows = out.method_rows.clone();
     rows.push(("t_offset_m".into(), format!("{offset:.6}")));
+    rows.push(("window_end".into(), end.describe()));
     let table = table(&a.file, &cap, rows, &out.volume, &out.intensity, secs);
     let v = &out.volume;
     write_volume(&a.out, v, &out.intensity, &table)?;

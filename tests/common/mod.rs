@@ -1,10 +1,11 @@
-//! Helpers shared by the integration tests that talk to the real y-tal package.
+//! Helpers shared by the integration tests: the real y-tal package, the murk binary.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Python is `$MURK_PYTHON` or `<repo>/.venv/bin/python` (`.ci/run` creates it); it must import tal
 /// and h5py, else the caller prints "skipped: <why>".
+#[allow(dead_code)] // not every test crate that shares this module needs y-tal
 pub fn python() -> Result<PathBuf, String> {
     let py = std::env::var_os("MURK_PYTHON")
         .map(PathBuf::from)
@@ -21,4 +22,18 @@ pub fn python() -> Result<PathBuf, String> {
         ));
     }
     Ok(py)
+}
+
+/// Runs the `murk` binary; returns (exit code, stdout, stderr).
+#[allow(dead_code)] // not every test crate that shares this module runs murk
+pub fn murk(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_murk"))
+        .args(args)
+        .output()
+        .expect("run murk");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
 }

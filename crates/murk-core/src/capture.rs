@@ -92,6 +92,71 @@ impl Capture {
         &self.h[i * nt..(i + 1) * nt]
     }
 
+    /// This capture with its time window cut after `bins` bins (all of them when there are fewer).
+    pub fn first_bins(&self, bins: usize) -> Capture {
+        let nt = self.time.bins;
+        let n = bins.min(nt);
+        let h = self
+            .h
+            .chunks_exact(nt)
+            .flat_map(|hist| &hist[..n])
+            .copied()
+            .collect();
+        Capture {
+            h,
+            time: TimeAxis {
+                bins: n,
+                ..self.time
+            },
+            ..self.clone()
+        }
+    }
+
+    /// How strong the signal still is where the time window ends: the largest value of the summed
+    /// histogram over its last 5 % of bins (at least one), relative to its peak (0 for an all-zero
+    /// capture). A window cut while a return or a medium's tail is strong reads near 1.
+    pub fn end_level(&self) -> f64 {
+        let nt = self.time.bins;
+        let mut sum = vec![0f64; nt];
+        for h in self.h.chunks_exact(nt) {
+            for (s, &v) in sum.iter_mut().zip(h) {
+                *s += v as f64;
+            }
+        }
+        let peak = sum.iter().fold(0f64, |m, v| m.max(v.abs()));
+        if peak == 0.0 {
+            return 0.0;
+        }
+        let tail = (nt / 20).max(1);
+        sum[nt - tail..].iter().fold(0f64, |m, v| m.max(v.abs())) / peak
+    }
+
+    /// Multiplies the last `length_m` of path of every histogram by a half-Hann ramp that falls from
+    /// 1 to 0 at the window's end, so that a window cut while the signal is strong ends smoothly
+    /// instead of in a step (which band-pass filters turn into a bright false surface at the far
+    /// end). Returns the number of bins the ramp covers.
+    pub fn taper_end(&mut self, length_m: f64) -> usize {
+        let nt = self.time.bins;
+        let n = ((length_m / self.time.bin_width_m).round().max(0.0) as usize).min(nt);
+        if n == 0 {
+            return 0;
+        }
+        // Bin nt − n + j (j = 0..n) gets cos²(π/2 · (j + 1)/(n + 1)): the ramp reaches 0 just past the
+        // last bin, and is 1 just before the first.
+        let ramp: Vec<f32> = (0..n)
+            .map(|j| {
+                let u = (j + 1) as f64 / (n + 1) as f64;
+                (std::f64::consts::FRAC_PI_2 * u).cos().powi(2) as f32
+            })
+            .collect();
+        for h in self.h.chunks_exact_mut(nt) {
+            for (v, r) in h[nt - n..].iter_mut().zip(&ramp) {
+                *v *= r;
+            }
+        }
+        n
+    }
+
     pub fn kind(&self) -> CaptureKind {
         match self.pairing {
             Pairing::Paired => {
@@ -260,6 +325,65 @@ mod tests {
             h: (0..nl * ns * nt).map(|v| v as f32).collect(),
             scene_info: String::new(),
         }
+    }
+
+    /// Two histograms of 40 bins: H = 1 everywhere but a peak of 4 at bin 10 of the first.
+    fn flat(nt: usize) -> Capture {
+        let mut c = product(2, 1, nt);
+        c.h.iter_mut().for_each(|v| *v = 1.0);
+        c.h[10] = 4.0;
+        c
+    }
+
+    #[test]
+    fn end_level_reads_the_summed_tail_against_the_peak() {
+        let mut c = flat(40);
+        // Summed: peak 5 at bin 10, 2 elsewhere; the last 5 % (2 bins) carry 2.
+        assert!((c.end_level() - 0.4).abs() < 1e-12);
+        c.h.iter_mut().for_each(|v| *v = 0.0);
+        assert_eq!(c.end_level(), 0.0);
+    }
+
+    #[test]
+    fn taper_is_a_half_hann_ramp_over_the_last_bins() {
+        let mut c = flat(40);
+        // 0.05 m of 0.01 m bins: 5 bins, cos²(π/2·j/6) for j = 1..5.
+        assert_eq!(c.taper_end(0.05), 5);
+        for (j, &v) in c.histogram(1)[35..].iter().enumerate() {
+            let want = (std::f64::consts::FRAC_PI_2 * (j + 1) as f64 / 6.0).cos().powi(2);
+            assert!((v as f64 - want).abs() < 1e-6, "bin {j}: {v} vs {want}");
+        }
+        assert!(c.histogram(1)[..35].iter().all(|&v| v == 1.0));
+        // The last two bins keep cos²(π/2·4/6) = 1/4 and less: 2·(1/4)/5 of the peak.
+        assert!((c.end_level() - 0.1).abs() < 1e-6);
+        let cut = c.first_bins(12);
+        assert_eq!((cut.time.bins, cut.h.len()), (12, 24));
+        assert_eq!(cut.histogram(0)[10], 4.0);
+        assert_eq!(cut.histogram(1), &c.histogram(1)[..12]);
+    }
+
+    #[test]
+    fn handling_follows_the_mode_and_trims_the_far_voxels() {
+        use crate::window_end::{handle_end, WindowEnd};
+        use crate::{Axis, Volume};
+        let mut c = flat(40);
+        let untouched = c.clone();
+        let r = handle_end(&mut c, WindowEnd::Keep, 0.05);
+        assert_eq!((r.taper_m, c.h == untouched.h), (0.0, true));
+        assert!(r.warning().is_some());
+        let mut r = handle_end(&mut c, WindowEnd::Auto, 0.05);
+        assert!((r.taper_m - 0.05).abs() < 1e-12 && r.warning().is_none());
+        // The window ends at 0.40 m: voxels whose shortest path exceeds 0.30 m are cleared. Points lie
+        // on x ∈ [−0.25, 0.25] (illumination) and at x = 0 (sensor), both at z = 0, so the shortest
+        // path to (0, 0, z) is 2z: 0.20, 0.32, 0.44 m.
+        let vol = Volume {
+            x: Axis::new(0.0, 0.0, 1),
+            y: Axis::new(0.0, 0.0, 1),
+            z: Axis::new(0.1, 0.22, 3),
+        };
+        let mut v = vec![1.0f32; 3];
+        r.trim(&c, &vol, &mut v);
+        assert_eq!((v, r.trimmed_voxels), (vec![1.0, 0.0, 0.0], 2));
     }
 
     #[test]

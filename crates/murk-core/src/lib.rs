@@ -17,6 +17,7 @@ mod points;
 pub mod simd;
 mod truth;
 mod volume;
+pub mod window_end;
 
 pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
 pub use error::{Error, Result};

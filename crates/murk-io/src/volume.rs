@@ -58,6 +58,39 @@ pub fn write_volume_h5(
     })
 }
 
+/// A volume written by [`write_volume_h5`]: intensity (C order over x, y, z) and the three axes.
+pub struct VolumeData {
+    pub intensity: Vec<f32>,
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+    pub z: Vec<f64>,
+}
+
+/// Reads a volume file written by murk (`murk reconstruct --out v.h5`).
+pub fn read_volume_h5(path: &Path) -> Result<VolumeData> {
+    let limit = crate::tal::DEFAULT_READ_LIMIT_BYTES;
+    let file = crate::h5::open(path)?;
+    let read = |name: &str| -> Result<(Vec<usize>, Vec<f64>)> {
+        let ds = crate::h5::dataset(path, &file, name)?;
+        crate::h5::read_real::<f64>(path, &ds, name, limit)
+    };
+    let ds = crate::h5::dataset(path, &file, "intensity")?;
+    let (shape, intensity) = crate::h5::read_real::<f32>(path, &ds, "intensity", limit)?;
+    let (x, y, z) = (read("x")?.1, read("y")?.1, read("z")?.1);
+    if shape != [x.len(), y.len(), z.len()] {
+        return Err(Error::format(
+            path,
+            format!(
+                "intensity has shape {shape:?} but the axes have {}, {}, {} values",
+                x.len(),
+                y.len(),
+                z.len()
+            ),
+        ));
+    }
+    Ok(VolumeData { intensity, x, y, z })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

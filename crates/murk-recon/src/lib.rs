@@ -89,6 +89,25 @@ impl PfParams {
     pub fn sigma_m(&self, wavelength_m: f64) -> f64 {
         self.cycles * wavelength_m / 6.0
     }
+
+    /// λ in metres for this capture (a wall factor times its grid spacing).
+    pub fn wavelength_m(&self, cap: &Capture) -> Result<f64> {
+        let l = match self.wavelength {
+            Wavelength::Metres(l) => l,
+            Wavelength::WallFactor(f) => {
+                let d = wall_spacing_m(cap).ok_or_else(|| {
+                    Error::param(
+                        "a wavelength factor needs a wall grid; give the wavelength in metres",
+                    )
+                })?;
+                f * d
+            }
+        };
+        if !(l.is_finite() && l > 0.0) {
+            return Err(Error::param(format!("wavelength must be > 0 m, got {l}")));
+        }
+        Ok(l)
+    }
 }
 
 /// Reports work done, for progress bars. Called from worker threads.
@@ -191,20 +210,7 @@ pub fn reconstruct(
     }
     params.compensation.validate()?;
     let spacing = wall_spacing_m(cap);
-    let wavelength_m = match params.wavelength {
-        Wavelength::Metres(l) => l,
-        Wavelength::WallFactor(f) => {
-            let d = spacing.ok_or_else(|| {
-                Error::param("a wavelength factor needs a wall grid; give the wavelength in metres")
-            })?;
-            f * d
-        }
-    };
-    if !(wavelength_m.is_finite() && wavelength_m > 0.0) {
-        return Err(Error::param(format!(
-            "wavelength must be > 0 m, got {wavelength_m}"
-        )));
-    }
+    let wavelength_m = params.wavelength_m(cap)?;
     let confocal = cap.kind() == CaptureKind::Confocal;
     let mut warnings = Vec::new();
     // The round-trip kernel e^{2ikr} of confocal data halves the effective wavelength.
