@@ -220,3 +220,47 @@ fn cut_real_cdt_letter_s() {
     }
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// The T behind 1 m of fog (`scenes/t-wall-medium.toml`, 256 spp): the medium's backscatter near the
+/// relay is the brightest signal, so without a gate the peak sits on the default volume's nearest
+/// plane (a warning says so); fading out the paths below 1.5 m puts it on the T at 1.0 m.
+#[test]
+fn gate_removes_the_fog_near_the_relay() {
+    let d = dir("gate");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/t-wall-medium.toml");
+    let cap = d.join("fog.h5");
+    ok(&["render", "-q", scene, "--out", s(&cap)]);
+    let out = d.join("v.h5");
+    let peak_z = |summary: &str| -> f64 {
+        let line = summary.lines().find(|l| l.contains("peak:")).unwrap();
+        line.split("z ")
+            .nth(1)
+            .unwrap()
+            .trim_end_matches(" m")
+            .trim()
+            .parse()
+            .unwrap()
+    };
+    let (code, summary, err) = murk(&["reconstruct", s(&cap), "--out", s(&out)]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("nearest plane") && err.contains("--gate"),
+        "{err}"
+    );
+    assert!((peak_z(&summary) - 0.1).abs() < 1e-6, "{summary}");
+
+    let (code, summary, err) = murk(&["reconstruct", s(&cap), "--out", s(&out), "--gate", "1.5"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("nearest plane"), "{err}");
+    assert!((peak_z(&summary) - 1.0).abs() < 0.02, "{summary}");
+    assert!(
+        summary.contains("paths shorter than 1.5 m faded out"),
+        "{summary}"
+    );
+
+    // auto opens 3σ before the shortest path to the volume: 2 × 0.5 m − 3 × 0.0833 m = 0.75 m.
+    let vol = "--volume=-0.5:0.5:32,-0.5:0.5:32,0.5:1.5:51";
+    let summary = ok(&["reconstruct", s(&cap), "--out", s(&out), vol]);
+    assert!(summary.contains("paths shorter than 0.75"), "{summary}");
+    std::fs::remove_dir_all(&d).ok();
+}

@@ -85,7 +85,7 @@ pub fn describe(cap: &Capture) -> Vec<String> {
     out.push(format!(
         "window end: the last 5 % of bins carry {:.1} % of the summed histogram's peak{}",
         100.0 * level,
-        if level >= murk_core::window_end::AUTO_LEVEL {
+        if level >= murk_core::window::AUTO_LEVEL {
             " (cut while strong: reconstructions taper it and clear the far voxels; see reconstruct --window-end)"
         } else {
             ""

@@ -4,7 +4,7 @@ use crate::cmd::progress::{say, Bar};
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, SlabParams};
-use murk_core::window_end::{handle_end, WindowEnd};
+use murk_core::window::{apply_gate, handle_end, shortest_path_m, WindowEnd};
 use murk_core::{Axis, Capture, Volume, SPEED_OF_LIGHT_M_PER_S};
 use murk_recon::{Compensation, Falloff, Lateral, Method, PfParams, Wavelength};
 use murk_view::pictures;
@@ -131,8 +131,34 @@ pub struct ReconstructArgs {
     /// false far surface); `taper` always does; `keep` never does.
     #[arg(long, value_enum, default_value = "auto")]
     pub window_end: WindowEndArg,
+    /// Fade out the paths shorter than PATH_M (m), with a smooth edge before it: a medium's
+    /// backscatter near the relay is the strongest early signal and lights the nearest voxels.
+    /// `auto` opens three edge widths (PF: its pulse σ) before the shortest path that reaches the
+    /// volume; `off` keeps every path.
+    #[arg(long, default_value = "auto", value_name = "PATH_M|auto|off")]
+    pub gate: String,
     #[command(flatten)]
     pub slab: SlabArgs,
+}
+
+/// How many edge widths before the volume's shortest path `--gate auto` opens.
+const GATE_MARGIN_EDGES: f64 = 3.0;
+
+enum Gate {
+    Off,
+    At(f64),
+    Auto,
+}
+
+fn parse_gate(text: &str) -> anyhow::Result<Gate> {
+    Ok(match text {
+        "off" => Gate::Off,
+        "auto" => Gate::Auto,
+        t => match t.parse::<f64>() {
+            Ok(p) if p.is_finite() => Gate::At(p),
+            _ => bail!("--gate {t}: expected a path in metres, auto or off"),
+        },
+    })
 }
 
 /// Ramp length (bins) at a window's end for the methods without a pulse: measured on the CDT letter S
@@ -332,6 +358,19 @@ pub fn peak(vol: &Volume, intensity: &[f32]) -> ([f64; 3], f32) {
     (vol.centre(ix, iy, iz).to_array(), v)
 }
 
+/// In a medium the backscatter near the relay is the strongest early signal: a peak on the volume's
+/// nearest plane, with no gate, usually images it rather than the scene.
+fn near_face_warning(vol: &Volume, intensity: &[f32], gated: bool) -> Option<String> {
+    let (p, _) = peak(vol, intensity);
+    let near = vol.z.start.min(vol.z.end);
+    (!gated && vol.z.n > 2 && (p[2] - near).abs() < 1e-9).then(|| {
+        format!(
+            "the brightest voxel lies on the volume's nearest plane (z = {} m): if the capture is in a medium, that is its backscatter near the relay; start the volume further away or fade out the early paths with --gate PATH_M",
+            murk_core::short(near)
+        )
+    })
+}
+
 /// Peak delay (m of path) of the slab's round trip K ⊛ K, integrated over the lateral plane: where a
 /// point behind the slab shows up late in a capture without deconvolution.
 pub fn slab_delay_m(slab: &SlabParams) -> f64 {
@@ -479,12 +518,12 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     let params = a.params(&cap)?;
     let offset = t_offset_m(a.t_offset.as_deref(), &a.slab.slab())?;
     cap.time.start_m -= offset;
-    let taper_m = if a.method.is_pf() {
+    // The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.
+    let edge_m = if a.method.is_pf() {
         params.sigma_m(params.wavelength_m(&cap)?)
     } else {
         BASELINE_TAPER_BINS as f64 * cap.time.bin_width_m
     };
-    let mut end = handle_end(&mut cap, a.window_end.into(), taper_m);
     let volume = match &a.volume {
         Some(_) if a.method.own_grid() => {
             if !quiet {
@@ -496,6 +535,14 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         None if a.method.own_grid() => None,
         None => Some(default_volume(&cap)?),
     };
+    let open_m = match (parse_gate(&a.gate)?, &volume) {
+        (Gate::Auto, Some(v)) => Some(shortest_path_m(&cap, v) - GATE_MARGIN_EDGES * edge_m),
+        // Own-grid methods have no volume to derive it from.
+        (Gate::Auto, None) | (Gate::Off, _) => None,
+        (Gate::At(p), _) => Some(p),
+    };
+    let gated = apply_gate(&mut cap, open_m, edge_m);
+    let mut end = handle_end(&mut cap, a.window_end.into(), edge_m);
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
     // Own-grid methods never read the volume; an empty one stands in.
@@ -517,11 +564,19 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     let mut out = out;
     end.trim(&cap, &out.volume, &mut out.intensity);
     let secs = t0.elapsed().as_secs_f64();
-    for w in out.warnings.iter().chain(&end.warning()).filter(|_| !quiet) {
+    let near_face = near_face_warning(&out.volume, &out.intensity, gated.open_m.is_some());
+    for w in out
+        .warnings
+        .iter()
+        .chain(&end.warning())
+        .chain(&near_face)
+        .filter(|_| !quiet)
+    {
         eprintln!("murk: warning: {w}");
     }
     let mut rows = out.method_rows.clone();
     rows.push(("t_offset_m".into(), format!("{offset:.6}")));
+    rows.push(("gate".into(), gated.describe()));
     rows.push(("window_end".into(), end.describe()));
     let table = table(&a.file, &cap, rows, &out.volume, &out.intensity, secs);
     let v = &out.volume;

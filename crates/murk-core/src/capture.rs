@@ -350,7 +350,9 @@ mod tests {
         // 0.05 m of 0.01 m bins: 5 bins, cos²(π/2·j/6) for j = 1..5.
         assert_eq!(c.taper_end(0.05), 5);
         for (j, &v) in c.histogram(1)[35..].iter().enumerate() {
-            let want = (std::f64::consts::FRAC_PI_2 * (j + 1) as f64 / 6.0).cos().powi(2);
+            let want = (std::f64::consts::FRAC_PI_2 * (j + 1) as f64 / 6.0)
+                .cos()
+                .powi(2);
             assert!((v as f64 - want).abs() < 1e-6, "bin {j}: {v} vs {want}");
         }
         assert!(c.histogram(1)[..35].iter().all(|&v| v == 1.0));
@@ -364,7 +366,7 @@ mod tests {
 
     #[test]
     fn handling_follows_the_mode_and_trims_the_far_voxels() {
-        use crate::window_end::{handle_end, WindowEnd};
+        use crate::window::{handle_end, WindowEnd};
         use crate::{Axis, Volume};
         let mut c = flat(40);
         let untouched = c.clone();

@@ -17,7 +17,7 @@ mod points;
 pub mod simd;
 mod truth;
 mod volume;
-pub mod window_end;
+pub mod window;
 
 pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
 pub use error::{Error, Result};
