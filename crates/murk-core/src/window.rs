@@ -290,11 +290,7 @@ mod tests {
                     .cos()
                     .powi(2)
             };
-            assert!(
-                (h[n] as f64 - want).abs() < 1e-6,
-                "bin {n}: {} vs {want}",
-                h[n]
-            );
+            assert!((v as f64 - want).abs() < 1e-6, "bin {n}: {v} vs {want}");
         }
         let kept: f64 = h.iter().map(|&v| v as f64).sum();
         assert!((r.removed_share - (20.0 - kept) / 20.0).abs() < 1e-6);
