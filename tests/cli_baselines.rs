@@ -540,3 +540,53 @@ fn figure_real_writes_the_grid_and_page() {
     let png = std::fs::read(out.join("grid.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
 }
+
+/// LCT's weighting: t⁴ (diffuse, the default) or t² (retroreflective). A point seen by both keeps its
+/// place; the weights differ by t², so the volumes differ, and the summary names the choice.
+#[test]
+fn lct_weighting_is_a_choice() {
+    let dir = tmpdir("weighting");
+    let cap = dir.join("p.h5");
+    ok(&[
+        "synth",
+        "-q",
+        "--out",
+        s(&cap),
+        "--kind",
+        "confocal",
+        "--grid",
+        "16",
+        "--bins",
+        "512",
+        "--bin-width",
+        "0.005",
+        "--target",
+        "point:0.05,-0.1,0.6",
+    ]);
+    let run = |w: &str| {
+        let out = dir.join(format!("{w}.npy"));
+        let summary = ok(&[
+            "reconstruct",
+            s(&cap),
+            "--method",
+            "lct",
+            "--weighting",
+            w,
+            "--out",
+            s(&out),
+        ]);
+        let (shape, v) = npy(&out);
+        (summary, argmax(shape, &v), v)
+    };
+    let (sd, pd, vd) = run("diffuse");
+    let (sr, pr, vr) = run("retroreflective");
+    assert!(sd.contains("reflectance: Diffuse") && sr.contains("reflectance: Retroreflective"));
+    assert_eq!(pd, pr);
+    let top = |v: &[f32]| v.iter().cloned().fold(f32::MIN, f32::max);
+    let (nd, nr) = (top(&vd), top(&vr));
+    assert!(vd
+        .iter()
+        .zip(&vr)
+        .any(|(a, b)| (a / nd - b / nr).abs() > 1e-3));
+    std::fs::remove_dir_all(&dir).ok();
+}

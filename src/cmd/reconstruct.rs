@@ -3,9 +3,9 @@
 use crate::cmd::progress::{say, Bar};
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
-use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, SlabParams};
+use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, Pulse, Reflectance, SlabParams};
 use murk_core::window::{apply_gate, handle_end, shortest_path_m, WindowEnd};
-use murk_core::{Axis, Capture, Volume, SPEED_OF_LIGHT_M_PER_S};
+use murk_core::{Axis, Capture, Volume};
 use murk_recon::{Compensation, Falloff, Lateral, Method, PfParams, Wavelength};
 use murk_view::pictures;
 use std::path::{Path, PathBuf};
@@ -122,8 +122,9 @@ pub struct ReconstructArgs {
     #[arg(long, value_enum, default_value = "propagating")]
     pub lateral: LateralArg,
     /// Subtract this much optical path (m) from every time stamp before reconstructing (shifts the
-    /// capture's time start), or `slab`: the peak delay of the slab's round trip (--slab-* flags),
-    /// so that depth is measured from the back of the slab.
+    /// capture's time start), or `slab`: the delay of the slab's round trip (--slab-* flags) so that
+    /// depth is measured from the back of the slab: for pf and pf-exact the delay of the response
+    /// as their pulse sees it, for the others its peak.
     #[arg(long, allow_hyphen_values = true)]
     pub t_offset: Option<String>,
     /// The end of the time window: `auto` tapers it and clears the voxels only its last paths reach
@@ -201,6 +202,16 @@ pub struct SlabArgs {
     /// Wiener signal-to-noise ratio (cdt default 1e4; lct default 0.1).
     #[arg(long)]
     pub snr: Option<f64>,
+    /// LCT's radiometric weighting of the measurements: diffuse scenes fall off as t⁴, retroreflective
+    /// ones (road signs, retroreflective letters) as t².
+    #[arg(long, value_enum, default_value = "diffuse")]
+    pub weighting: WeightingArg,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum WeightingArg {
+    Diffuse,
+    Retroreflective,
 }
 
 impl SlabArgs {
@@ -371,27 +382,22 @@ fn near_face_warning(vol: &Volume, intensity: &[f32], gated: bool) -> Option<Str
     })
 }
 
-/// Peak delay (m of path) of the slab's round trip K ⊛ K, integrated over the lateral plane: where a
-/// point behind the slab shows up late in a capture without deconvolution.
+/// Peak delay (m of path) of the slab's round trip (see [`SlabParams::round_trip_delay_m`]).
 pub fn slab_delay_m(slab: &SlabParams) -> f64 {
-    // 1 ps steps over 4 ns cover the foam's response (its peak is near 0.3 ns).
-    let dt = 1e-12;
-    let n = 4000;
-    // ∫K(ρ, t) 2πρ dρ = a(t)·4πDvt ∝ K(0, t)·t.
-    let k: Vec<f64> = (0..n)
-        .map(|i| slab.transmittance(0.0, i as f64 * dt) * i as f64)
-        .collect();
-    let best = (0..n)
-        .map(|m| (m, (0..=m).map(|j| k[j] * k[m - j]).sum::<f64>()))
-        .fold((0, f64::MIN), |a, b| if b.1 > a.1 { b } else { a });
-    best.0 as f64 * dt * SPEED_OF_LIGHT_M_PER_S
+    slab.round_trip_delay_m(None)
 }
 
 /// The optical path `--t-offset` asks to remove (0 without it).
-pub fn t_offset_m(spec: Option<&str>, slab: &SlabParams) -> anyhow::Result<f64> {
+/// `pulse`: PF's, whose band-pass moves the slab's apparent delay (see
+/// [`SlabParams::round_trip_delay_m`]); `None` for the other methods.
+pub fn t_offset_m(
+    spec: Option<&str>,
+    slab: &SlabParams,
+    pulse: Option<Pulse>,
+) -> anyhow::Result<f64> {
     match spec {
         None => Ok(0.0),
-        Some("slab") => Ok(slab_delay_m(slab)),
+        Some("slab") => Ok(slab.round_trip_delay_m(pulse)),
         Some(s) => {
             let v: f64 = s
                 .parse()
@@ -464,6 +470,10 @@ pub fn reconstruct_any(
         MethodArg::Lct => {
             let p = LctParams {
                 snr: slab.snr.unwrap_or(LctParams::default().snr),
+                reflectance: match slab.weighting {
+                    WeightingArg::Diffuse => Reflectance::Diffuse,
+                    WeightingArg::Retroreflective => Reflectance::Retroreflective,
+                },
                 ..Default::default()
             };
             baseline(
@@ -516,7 +526,16 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     }
     let mut cap = murk_io::read_capture(&a.file)?;
     let params = a.params(&cap)?;
-    let offset = t_offset_m(a.t_offset.as_deref(), &a.slab.slab())?;
+    let pulse = if a.method.is_pf() {
+        let wavelength_m = params.wavelength_m(&cap)?;
+        Some(Pulse {
+            wavelength_m,
+            sigma_m: params.sigma_m(wavelength_m),
+        })
+    } else {
+        None
+    };
+    let offset = t_offset_m(a.t_offset.as_deref(), &a.slab.slab(), pulse)?;
     cap.time.start_m -= offset;
     // The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.
     let edge_m = if a.method.is_pf() {

@@ -21,7 +21,7 @@ pub mod lct;
 mod testutil;
 
 pub use bp::{backproject, BpOptions};
-pub use cdt::{cdt, through_slab, CdtParams, CdtPlan, SlabParams};
+pub use cdt::{cdt, through_slab, CdtParams, CdtPlan, Pulse, SlabParams};
 pub use confocal::TimeGrid;
 pub use fbp::{fbp, FbpFilter, FbpOptions};
 pub use fk::{fk, FkParams, FkPlan};
