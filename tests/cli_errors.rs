@@ -231,6 +231,25 @@ fn nonsense_parameters() {
 
 #[test]
 fn help_teaches_and_demo_runs() {
+    for command in [
+        "demo",
+        "info",
+        "synth",
+        "reconstruct",
+        "bench",
+        "render",
+        "import",
+        "figure",
+        "experiment",
+        "merge",
+    ] {
+        let (code, out, _) = murk(&[command, "--help"]);
+        assert_eq!(code, 0);
+        assert!(
+            out.contains("Examples:\n  murk ") || out.contains("Example:\n  murk "),
+            "{command} --help has no examples:\n{out}"
+        );
+    }
     let (code, out, _) = murk(&["reconstruct", "--help"]);
     assert_eq!(code, 0);
     assert!(

@@ -12,6 +12,11 @@ use std::process::Command;
 use std::time::Instant;
 
 #[derive(Args)]
+#[command(after_help = "Examples:\n  \
+murk bench                                   # PF on the paper's formats (and y-tal with .venv)\n  \
+murk bench --runs 9 --skip-z\n  \
+murk bench --render --only z-letter          # the renderer on the paper's format\n  \
+murk bench --real ../shared/data/real/cdt_lindell2020")]
 pub struct BenchArgs {
     /// Timed repetitions per case (the median is reported).
     #[arg(long, default_value_t = 5)]

@@ -11,6 +11,9 @@ use murk_view::pictures;
 use std::path::PathBuf;
 
 #[derive(Args)]
+#[command(after_help = "Examples:\n  \
+murk demo                      # writes murk-demo/ (capture, volume, pictures, index.html)\n  \
+murk demo --out /tmp/z-demo")]
 pub struct DemoArgs {
     /// Folder for the capture, the volume, the pictures and index.html.
     #[arg(long, default_value = "murk-demo")]

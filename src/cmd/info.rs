@@ -5,6 +5,9 @@ use murk_core::Capture;
 use std::path::PathBuf;
 
 #[derive(Args)]
+#[command(after_help = "Examples:\n  \
+murk info capture.h5\n  \
+murk info capture.h5 | grep 'window end'   # how much signal the window's last bins still carry")]
 pub struct InfoArgs {
     /// A y-tal HDF5 capture (.h5 / .hdf5).
     pub file: PathBuf,

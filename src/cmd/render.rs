@@ -60,6 +60,9 @@ pub struct RenderArgs {
 }
 
 #[derive(Args)]
+#[command(after_help = "Examples:\n  \
+murk merge part0.h5 part1.h5 part2.h5 part3.h5 --out z.h5\n  \
+murk merge renders/z.part*.h5 --out z.h5      # the parts of murk render --shard i/4, any order")]
 pub struct MergeArgs {
     /// The parts written by `murk render --shard i/N` (all N of them).
     #[arg(required = true)]

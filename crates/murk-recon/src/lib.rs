@@ -226,9 +226,9 @@ pub fn reconstruct(
     }
     if 2.0 * params.sigma_m(wavelength_m) < cap.time.bin_width_m {
         return Err(Error::param(format!(
-            "the virtual pulse (σ = {:.4} m) is shorter than one time bin ({} m); use more cycles or a longer wavelength",
-            params.sigma_m(wavelength_m),
-            cap.time.bin_width_m
+            "the virtual pulse (σ = {} m) is shorter than one time bin ({} m); use more cycles or a longer wavelength",
+            murk_core::short(params.sigma_m(wavelength_m)),
+            murk_core::short(cap.time.bin_width_m)
         )));
     }
     let sigma_m = params.sigma_m(wavelength_m);

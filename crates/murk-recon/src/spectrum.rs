@@ -231,7 +231,9 @@ impl Window {
         let band = Band::new(nf, dt, wavelength_m, sigma_m);
         if band.is_empty() {
             return Err(Error::param(format!(
-                "no frequency of the virtual pulse (λ = {wavelength_m} m) fits the {dt} m bins"
+                "no frequency of the virtual pulse (λ = {} m) fits the {} m bins",
+                murk_core::short(wavelength_m),
+                murk_core::short(dt)
             )));
         }
         let first_bin = want_lo - pad as i64;
