@@ -12,6 +12,7 @@ mod atomic;
 mod h5;
 mod mat;
 pub mod mat5;
+pub use mat5::{write_mat_v5, MatArray, MatClass};
 mod npy;
 mod scene_info;
 mod tal;

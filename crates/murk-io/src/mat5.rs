@@ -166,7 +166,10 @@ impl<'a> Reader<'a> {
             if n > 4 {
                 return Err(format!("a small element claims {n} bytes (at most 4)"));
             }
-            let data = &self.b[self.pos + 4..self.pos + 4 + n];
+            let data = self
+                .b
+                .get(self.pos + 4..self.pos + 4 + n)
+                .ok_or("cut short inside a small element")?;
             self.pos += 8;
             return Ok((ty, data));
         }
@@ -418,6 +421,103 @@ fn numbers(ty: u32, raw: &[u8], big: bool, count: usize, limits: &Limits) -> Par
     })
 }
 
+/// How a variable's values are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MatClass {
+    Double,
+    UInt16,
+}
+
+/// A numeric variable for [`write_mat_v5`]: MATLAB dimensions and the values in MATLAB's
+/// column-major order.
+pub struct MatArray<'a> {
+    pub name: &'a str,
+    pub dims: &'a [usize],
+    pub values: &'a [f64],
+    pub class: MatClass,
+}
+
+/// Writes numeric variables as a little-endian MATLAB v5 file, as MATLAB's `save -v6` does, or with
+/// each variable zlib-compressed as `save -v7` does.
+pub fn write_mat_v5(path: &Path, vars: &[MatArray], compress: bool) -> Result<()> {
+    let mut matrices = Vec::with_capacity(vars.len());
+    for v in vars {
+        if v.dims.iter().product::<usize>() != v.values.len() {
+            return Err(Error::param(format!(
+                "{}: variable '{}' has dimensions {:?} but {} values",
+                path.display(),
+                v.name,
+                v.dims,
+                v.values.len()
+            )));
+        }
+        let (class, data) = match v.class {
+            MatClass::Double => (
+                6,
+                encode_values(MI_DOUBLE, v.values, |x| x.to_le_bytes().to_vec()),
+            ),
+            MatClass::UInt16 => (
+                11,
+                encode_values(MI_UINT16, v.values, |x| (x as u16).to_le_bytes().to_vec()),
+            ),
+        };
+        let dims: Vec<i32> = v.dims.iter().map(|&d| d as i32).collect();
+        matrices.push(encode_matrix(class, &dims, v.name, &data));
+    }
+    let bytes = encode_file(&matrices, compress);
+    crate::write_atomic(path, |w| {
+        w.write_all(&bytes).map_err(|e| Error::io(path, e))
+    })
+}
+
+fn encode_values(ty: u32, values: &[f64], bytes: impl Fn(f64) -> Vec<u8>) -> Vec<u8> {
+    encode_element(
+        ty,
+        &values.iter().flat_map(|&x| bytes(x)).collect::<Vec<_>>(),
+    )
+}
+
+/// The 128-byte header and the variables (miMATRIX elements), each zlib-compressed if asked.
+fn encode_file(matrices: &[Vec<u8>], compress: bool) -> Vec<u8> {
+    let mut f = format!("{:<116}", "MATLAB 5.0 MAT-file, written by murk").into_bytes();
+    f.extend([0u8; 8]);
+    f.extend(0x0100u16.to_le_bytes());
+    f.extend(b"IM");
+    for m in matrices {
+        if compress {
+            use std::io::Write;
+            let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+            z.write_all(m).expect("writing to memory");
+            let c = z.finish().expect("writing to memory");
+            f.extend(MI_COMPRESSED.to_le_bytes());
+            f.extend((c.len() as u32).to_le_bytes());
+            f.extend(c);
+        } else {
+            f.extend(m);
+        }
+    }
+    f
+}
+
+/// A tagged data element, padded to 8 bytes.
+fn encode_element(ty: u32, data: &[u8]) -> Vec<u8> {
+    let mut v = ty.to_le_bytes().to_vec();
+    v.extend((data.len() as u32).to_le_bytes());
+    v.extend(data);
+    v.resize(v.len().next_multiple_of(8), 0);
+    v
+}
+
+/// A miMATRIX element: array flags of `class`, dimensions, name, then `body` (encoded elements).
+fn encode_matrix(class: u8, dims: &[i32], name: &str, body: &[u8]) -> Vec<u8> {
+    let mut m = encode_element(MI_UINT32, &[class, 0, 0, 0, 0, 0, 0, 0]);
+    let d: Vec<u8> = dims.iter().flat_map(|v| v.to_le_bytes()).collect();
+    m.extend(encode_element(MI_INT32, &d));
+    m.extend(encode_element(MI_INT8, name.as_bytes()));
+    m.extend(body);
+    encode_element(MI_MATRIX, &m)
+}
+
 /// Looks up `a.b.c` through 1×1 structs among `vars`.
 pub fn lookup<'v>(vars: &'v [(String, MatValue)], path: &str) -> Option<&'v MatValue> {
     let mut parts = path.split('.');
@@ -437,48 +537,9 @@ pub fn lookup<'v>(vars: &'v [(String, MatValue)], path: &str) -> Option<&'v MatV
 mod tests {
     use super::*;
 
-    /// Test-only v5 encoder (little-endian, uncompressed or zlib-compressed variables).
-    fn element(ty: u32, data: &[u8]) -> Vec<u8> {
-        let mut v = ty.to_le_bytes().to_vec();
-        v.extend((data.len() as u32).to_le_bytes());
-        v.extend(data);
-        v.resize(v.len().next_multiple_of(8), 0);
-        v
-    }
-
-    fn matrix_bytes(class: u8, dims: &[i32], name: &str, body: &[u8]) -> Vec<u8> {
-        let mut m = element(MI_UINT32, &[class, 0, 0, 0, 0, 0, 0, 0]);
-        let d: Vec<u8> = dims.iter().flat_map(|v| v.to_le_bytes()).collect();
-        m.extend(element(MI_INT32, &d));
-        m.extend(element(MI_INT8, name.as_bytes()));
-        m.extend(body);
-        element(MI_MATRIX, &m)
-    }
-
     fn doubles(name: &str, dims: &[i32], v: &[f64]) -> Vec<u8> {
         let raw: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
-        matrix_bytes(6, dims, name, &element(MI_DOUBLE, &raw))
-    }
-
-    fn file(vars: &[Vec<u8>], compress: bool) -> Vec<u8> {
-        let mut f = b"MATLAB 5.0 MAT-file, written by murk's tests".to_vec();
-        f.resize(124, b' ');
-        f.extend([0x00, 0x01, b'I', b'M']);
-        for v in vars {
-            if compress {
-                use std::io::Write;
-                let mut z =
-                    flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
-                z.write_all(v).unwrap();
-                let c = z.finish().unwrap();
-                f.extend(15u32.to_le_bytes());
-                f.extend((c.len() as u32).to_le_bytes());
-                f.extend(c);
-            } else {
-                f.extend(v);
-            }
-        }
-        f
+        encode_matrix(6, dims, name, &encode_element(MI_DOUBLE, &raw))
     }
 
     /// A 1×1 struct with a 2×3 numeric field and a char field (the shape of Ahn 2019's `NLOSDATA`),
@@ -493,14 +554,19 @@ mod tests {
         // The field-name length is a small element in MATLAB's files.
         let mut body = (MI_INT32 | (4 << 16)).to_le_bytes().to_vec();
         body.extend(16i32.to_le_bytes());
-        body.extend(element(MI_INT8, &names));
+        body.extend(encode_element(MI_INT8, &names));
         body.extend(doubles("", &[2, 3], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
         let chars: Vec<u8> = "hi".encode_utf16().flat_map(|u| u.to_le_bytes()).collect();
-        body.extend(matrix_bytes(4, &[1, 2], "", &element(MI_UINT16, &chars)));
-        let st = matrix_bytes(2, &[1, 1], "NLOSDATA", &body);
-        let cell = matrix_bytes(1, &[1, 1], "c", &doubles("", &[1, 1], &[7.5]));
+        body.extend(encode_matrix(
+            4,
+            &[1, 2],
+            "",
+            &encode_element(MI_UINT16, &chars),
+        ));
+        let st = encode_matrix(2, &[1, 1], "NLOSDATA", &body);
+        let cell = encode_matrix(1, &[1, 1], "c", &doubles("", &[1, 1], &[7.5]));
         for compress in [false, true] {
-            let bytes = file(&[st.clone(), cell.clone()], compress);
+            let bytes = encode_file(&[st.clone(), cell.clone()], compress);
             let vars = parse(&bytes).unwrap();
             let Some(MatValue::Numeric { dims, values }) = lookup(&vars, "NLOSDATA.transient")
             else {
@@ -519,6 +585,37 @@ mod tests {
         }
     }
 
+    #[test]
+    fn written_files_read_back() {
+        let dir = std::env::temp_dir().join(format!("murk-mat5-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("w.mat");
+        let counts: Vec<f64> = (0..24).map(|i| (i % 7) as f64).collect();
+        for compress in [false, true] {
+            let vars = [
+                MatArray {
+                    name: "rect_data",
+                    dims: &[2, 3, 4],
+                    values: &counts,
+                    class: MatClass::UInt16,
+                },
+                MatArray {
+                    name: "width",
+                    dims: &[1, 1],
+                    values: &[0.4],
+                    class: MatClass::Double,
+                },
+            ];
+            write_mat_v5(&p, &vars, compress).unwrap();
+            let back = read_mat_v5(&p).unwrap();
+            assert!(matches!(lookup(&back, "rect_data"),
+                Some(MatValue::Numeric { dims, values }) if dims == &[2, 3, 4] && values == &counts));
+            assert!(matches!(lookup(&back, "width"),
+                Some(MatValue::Numeric { values, .. }) if values == &[0.4]));
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     /// Declared sizes larger than the bytes present fail at once, without allocating them.
     #[test]
     fn corrupt_sizes_fail_fast() {
@@ -531,15 +628,15 @@ mod tests {
             .unwrap();
         huge[at..at + 8].copy_from_slice(&[0, 0, 0, 64, 0, 0, 0, 64]);
         let t = std::time::Instant::now();
-        let e = parse(&file(&[huge], true)).unwrap_err();
+        let e = parse(&encode_file(&[huge], true)).unwrap_err();
         assert!(e.contains("values but holds 4"), "{e}");
         // A tag claiming 4 GB in a short file.
         let mut long = v.clone();
         long[4..8].copy_from_slice(&u32::MAX.to_le_bytes());
-        let e = parse(&file(&[long], false)).unwrap_err();
+        let e = parse(&encode_file(&[long], false)).unwrap_err();
         assert!(e.contains("truncated or corrupt"), "{e}");
         // Cut inside the compressed stream.
-        let whole = file(&[v], true);
+        let whole = encode_file(&[v], true);
         let e = parse(&whole[..whole.len() - 6]).unwrap_err();
         assert!(e.contains("declares") || e.contains("decompress"), "{e}");
         assert!(t.elapsed().as_secs_f64() < 1.0);
