@@ -296,7 +296,9 @@ fn readers_survive_mutated_inputs() {
             })
             .unwrap_or_default();
         cases.sort();
-        let mut rng = Rng(0x6d75_726b ^ name.len() as u64 * 0x1000_0001);
+        let mut rng = Rng(name.bytes().fold(0x6d75_726b, |h, b| {
+            (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
+        }));
         cases.extend((0..mutants).map(|i| (format!("mutant {i}"), mutate(&seed, &mut rng))));
         for (i, (label, bytes)) in cases.iter().enumerate() {
             // The scene reads its mesh paths relative to its folder; the mutants live elsewhere.
