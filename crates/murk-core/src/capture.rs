@@ -112,6 +112,29 @@ impl Capture {
         }
     }
 
+    /// Multiplies each histogram by the visible side's radiometry, which H between wall points leaves
+    /// out: cos θ/d² from the laser device to the illumination point (a projector's irradiance) and
+    /// from the sensor point to the SPAD device (an aperture's collection), θ from the wall point's
+    /// normal. Renders then compare with renderers and hardware that include the devices.
+    pub fn apply_device_radiometry(&mut self, laser: DVec3, spad: DVec3) {
+        let leg = |dev: DVec3, p: DVec3, n: DVec3| {
+            let v = dev - p;
+            let d2 = v.length_squared();
+            if d2 == 0.0 {
+                0.0
+            } else {
+                (n.dot(v).abs() / d2.sqrt() / d2) as f32
+            }
+        };
+        let nt = self.time.bins;
+        for i in 0..self.n_hist() {
+            let (l, s) = self.hist_pair(i);
+            let f = leg(laser, self.illum.points[l], self.illum.normals[l])
+                * leg(spad, self.sensor.points[s], self.sensor.normals[s]);
+            self.h[i * nt..(i + 1) * nt].iter_mut().for_each(|v| *v *= f);
+        }
+    }
+
     /// How strong the signal still is where the time window ends: the largest value of the summed
     /// histogram over its last 5 % of bins (at least one), relative to its peak (0 for an all-zero
     /// capture). A window cut while a return or a medium's tail is strong reads near 1.
@@ -386,6 +409,22 @@ mod tests {
         let mut v = vec![1.0f32; 3];
         r.trim(&c, &vol, &mut v);
         assert_eq!((v, r.trimmed_voxels), (vec![1.0, 0.0, 0.0], 2));
+    }
+
+    #[test]
+    fn device_radiometry_is_cos_over_d_squared_on_each_leg() {
+        let mut c = product(2, 1, 3);
+        c.h.iter_mut().for_each(|v| *v = 1.0);
+        // Laser 1 m in front of illumination point 0 at x = −0.25; SPAD 2 m in front of the sensor
+        // point at x = 0, both along the wall normal +z (cos = 1).
+        let laser = c.illum.points[0] + DVec3::new(0.0, 0.0, 1.0);
+        let spad = c.sensor.points[0] + DVec3::new(0.0, 0.0, 2.0);
+        c.apply_device_radiometry(laser, spad);
+        let want0 = 1.0 * (1.0 / 4.0);
+        // Point 1 at x = +0.25 sees the laser 0.5 m off axis: cos = 1/√1.25, d² = 1.25.
+        let want1 = (1.0 / 1.25f64.sqrt() / 1.25) * (1.0 / 4.0);
+        assert!((c.histogram(0)[1] as f64 - want0).abs() < 1e-6);
+        assert!((c.histogram(1)[2] as f64 - want1).abs() < 1e-6);
     }
 
     #[test]

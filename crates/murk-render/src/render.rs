@@ -276,6 +276,12 @@ impl<'a> Plan<'a> {
         if let Some(mut c) = s.ckpt {
             c.append(&s.pending)?;
         }
+        let spec = &self.scene.capture;
+        if let (true, Some(laser), Some(spad)) =
+            (spec.device_radiometry, spec.laser_xyz, spec.sensor_xyz)
+        {
+            cap.apply_device_radiometry(laser, spad);
+        }
         Ok(cap)
     }
 

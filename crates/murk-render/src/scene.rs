@@ -78,6 +78,11 @@ pub struct CaptureDef {
     pub account_first_and_last_bounces: bool,
     pub laser_position: Option<[f64; 3]>,
     pub spad_position: Option<[f64; 3]>,
+    /// Apply the visible side's radiometry: the projector's cos/d² irradiance at each laser point
+    /// and the SPAD aperture's cos/d² collection from each sensor point (needs both positions).
+    /// Off: H between wall points, murk's and y-tal's convention.
+    #[serde(default)]
+    pub device_radiometry: bool,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
@@ -264,6 +269,7 @@ pub struct CaptureSpec {
     pub account_first_and_last_bounces: bool,
     pub laser_xyz: Option<DVec3>,
     pub sensor_xyz: Option<DVec3>,
+    pub device_radiometry: bool,
 }
 
 /// A validated scene, ready to render.
@@ -492,7 +498,14 @@ impl Scene {
             account_first_and_last_bounces: c.account_first_and_last_bounces,
             laser_xyz: device(c.laser_position, "capture.laser_position")?,
             sensor_xyz: device(c.spad_position, "capture.spad_position")?,
+            device_radiometry: c.device_radiometry,
         };
+        if c.device_radiometry && (c.laser_position.is_none() || c.spad_position.is_none()) {
+            return Err(bad(
+                "capture.device_radiometry",
+                "needs capture.laser_position and capture.spad_position".into(),
+            ));
+        }
 
         // Render settings.
         let s = &f.render;

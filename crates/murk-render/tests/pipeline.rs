@@ -279,3 +279,54 @@ fn overrides_are_named_recorded_and_guard_resume() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `capture.device_radiometry`: the same paths (same seed), each histogram scaled by the laser's
+/// cos/d² at its laser point times the SPAD's cos/d² at its sensor point; refused without devices.
+#[test]
+fn device_radiometry_scales_each_histogram_by_its_legs() {
+    let with_devices = |on: bool| {
+        let ov = Overrides {
+            set: vec![
+                "capture.laser_position=[0.3, 0.0, 0.5]".into(),
+                "capture.spad_position=[-0.2, 0.1, 0.4]".into(),
+                format!("capture.device_radiometry={on}"),
+            ],
+            ..Overrides::default()
+        };
+        Scene::from_str(SCENE, Path::new("dev.toml"), &ov).unwrap()
+    };
+    let (off, on) = (with_devices(false), with_devices(true));
+    let render = |s: &Scene| Plan::new(s).render(&opts(None, None), &|_, _| {}).unwrap();
+    let (a, b) = (render(&off), render(&on));
+    let (laser, spad) = (
+        murk_core::DVec3::new(0.3, 0.0, 0.5),
+        murk_core::DVec3::new(-0.2, 0.1, 0.4),
+    );
+    let leg = |dev: murk_core::DVec3, p: murk_core::DVec3| {
+        let v = dev - p;
+        v.z.abs() / v.length().powi(3)
+    };
+    let mut compared = 0;
+    for i in 0..a.n_hist() {
+        let (l, s) = a.hist_pair(i);
+        let f = leg(laser, a.illum.points[l]) * leg(spad, a.sensor.points[s]);
+        for (x, y) in a.histogram(i).iter().zip(b.histogram(i)) {
+            if *x != 0.0 {
+                assert!(((*y as f64) / (*x as f64) / f - 1.0).abs() < 1e-5);
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 100, "only {compared} non-zero bins");
+    let e = Scene::from_str(
+        SCENE,
+        Path::new("dev.toml"),
+        &Overrides {
+            set: vec!["capture.device_radiometry=true".into()],
+            ..Overrides::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("capture.device_radiometry") && e.contains("laser_position"), "{e}");
+}
