@@ -550,9 +550,9 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
             }
             None
         }
-        Some(spec) => Some(Volume::parse(spec)?),
+        Some(spec) => Some(Volume::parse(spec).context("--volume")?),
         None if a.method.own_grid() => None,
-        None => Some(default_volume(&cap)?),
+        None => Some(default_volume(&cap).with_context(|| a.file.display().to_string())?),
     };
     let open_m = match (parse_gate(&a.gate)?, &volume) {
         (Gate::Auto, Some(v)) => Some(shortest_path_m(&cap, v) - GATE_MARGIN_EDGES * edge_m),
