@@ -550,7 +550,7 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
             }
             None
         }
-        Some(spec) => Some(Volume::parse(spec).context("--volume")?),
+        Some(spec) => Some(Volume::parse(spec)?),
         None if a.method.own_grid() => None,
         None => Some(default_volume(&cap).with_context(|| a.file.display().to_string())?),
     };
