@@ -433,12 +433,12 @@ pub fn lookup<'v>(vars: &'v [(String, MatValue)], path: &str) -> Option<&'v MatV
     Some(v)
 }
 
+/// A test-only v5 encoder (little-endian; variables uncompressed or zlib-compressed).
 #[cfg(test)]
-mod tests {
+pub(crate) mod write {
     use super::*;
 
-    /// Test-only v5 encoder (little-endian, uncompressed or zlib-compressed variables).
-    fn element(ty: u32, data: &[u8]) -> Vec<u8> {
+    pub(crate) fn element(ty: u32, data: &[u8]) -> Vec<u8> {
         let mut v = ty.to_le_bytes().to_vec();
         v.extend((data.len() as u32).to_le_bytes());
         v.extend(data);
@@ -446,21 +446,55 @@ mod tests {
         v
     }
 
-    fn matrix_bytes(class: u8, dims: &[i32], name: &str, body: &[u8]) -> Vec<u8> {
+    pub(crate) fn matrix_bytes(class: u8, dims: &[usize], name: &str, body: &[u8]) -> Vec<u8> {
         let mut m = element(MI_UINT32, &[class, 0, 0, 0, 0, 0, 0, 0]);
-        let d: Vec<u8> = dims.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let d: Vec<u8> = dims
+            .iter()
+            .flat_map(|&v| (v as i32).to_le_bytes())
+            .collect();
         m.extend(element(MI_INT32, &d));
         m.extend(element(MI_INT8, name.as_bytes()));
         m.extend(body);
         element(MI_MATRIX, &m)
     }
 
-    fn doubles(name: &str, dims: &[i32], v: &[f64]) -> Vec<u8> {
+    /// A double array; `v` in MATLAB's column-major order.
+    pub(crate) fn doubles(name: &str, dims: &[usize], v: &[f64]) -> Vec<u8> {
         let raw: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
         matrix_bytes(6, dims, name, &element(MI_DOUBLE, &raw))
     }
 
-    fn file(vars: &[Vec<u8>], compress: bool) -> Vec<u8> {
+    /// A uint8 (`wide` false) or uint16 array, as MATLAB stores captures of counts.
+    pub(crate) fn counts(name: &str, dims: &[usize], v: &[f64], wide: bool) -> Vec<u8> {
+        if wide {
+            let raw: Vec<u8> = v.iter().flat_map(|&x| (x as u16).to_le_bytes()).collect();
+            matrix_bytes(11, dims, name, &element(MI_UINT16, &raw))
+        } else {
+            let raw: Vec<u8> = v.iter().map(|&x| x as u8).collect();
+            matrix_bytes(9, dims, name, &element(MI_UINT8, &raw))
+        }
+    }
+
+    /// A 1×1 struct of `fields` (each written with an empty name, as MATLAB does).
+    pub(crate) fn structure(name: &str, fields: &[(&str, Vec<u8>)]) -> Vec<u8> {
+        const LEN: usize = 32;
+        let mut names = Vec::new();
+        for (n, _) in fields {
+            let mut b = n.as_bytes().to_vec();
+            b.resize(LEN, 0);
+            names.extend(b);
+        }
+        // The field-name length is a small element in MATLAB's files.
+        let mut body = (MI_INT32 | (4 << 16)).to_le_bytes().to_vec();
+        body.extend((LEN as i32).to_le_bytes());
+        body.extend(element(MI_INT8, &names));
+        for (_, v) in fields {
+            body.extend(v);
+        }
+        matrix_bytes(2, &[1, 1], name, &body)
+    }
+
+    pub(crate) fn file(vars: &[Vec<u8>], compress: bool) -> Vec<u8> {
         let mut f = b"MATLAB 5.0 MAT-file, written by murk's tests".to_vec();
         f.resize(124, b' ');
         f.extend([0x00, 0x01, b'I', b'M']);
@@ -471,7 +505,7 @@ mod tests {
                     flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
                 z.write_all(v).unwrap();
                 let c = z.finish().unwrap();
-                f.extend(15u32.to_le_bytes());
+                f.extend(MI_COMPRESSED.to_le_bytes());
                 f.extend((c.len() as u32).to_le_bytes());
                 f.extend(c);
             } else {
@@ -480,24 +514,31 @@ mod tests {
         }
         f
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::write::*;
+    use super::*;
 
     /// A 1×1 struct with a 2×3 numeric field and a char field (the shape of Ahn 2019's `NLOSDATA`),
     /// next to a cell array, compressed and not.
     #[test]
     fn structs_cells_and_numbers() {
-        let mut names = b"transient".to_vec();
-        names.resize(16, 0);
-        let mut n2 = b"note".to_vec();
-        n2.resize(16, 0);
-        names.extend(n2);
-        // The field-name length is a small element in MATLAB's files.
-        let mut body = (MI_INT32 | (4 << 16)).to_le_bytes().to_vec();
-        body.extend(16i32.to_le_bytes());
-        body.extend(element(MI_INT8, &names));
-        body.extend(doubles("", &[2, 3], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
         let chars: Vec<u8> = "hi".encode_utf16().flat_map(|u| u.to_le_bytes()).collect();
-        body.extend(matrix_bytes(4, &[1, 2], "", &element(MI_UINT16, &chars)));
-        let st = matrix_bytes(2, &[1, 1], "NLOSDATA", &body);
+        let st = structure(
+            "NLOSDATA",
+            &[
+                (
+                    "transient",
+                    doubles("", &[2, 3], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]),
+                ),
+                (
+                    "note",
+                    matrix_bytes(4, &[1, 2], "", &element(MI_UINT16, &chars)),
+                ),
+            ],
+        );
         let cell = matrix_bytes(1, &[1, 1], "c", &doubles("", &[1, 1], &[7.5]));
         for compress in [false, true] {
             let bytes = file(&[st.clone(), cell.clone()], compress);

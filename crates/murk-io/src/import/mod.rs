@@ -17,6 +17,8 @@
 
 mod points;
 mod presets;
+#[cfg(test)]
+mod tests;
 
 use crate::mat::ArrayFile;
 use murk_core::{Capture, DVec3, Error, Limits, Pairing, PointLayout, PointSet, Result, TimeAxis};
