@@ -98,6 +98,7 @@ pub struct ImportArgs {
     pub out: PathBuf,
 }
 
+/// `t,x,y` in any order; the library checks that each axis appears once.
 fn parse_axes(s: &str) -> Result<[Dim; 3], String> {
     let dims = s
         .split(',')
@@ -108,12 +109,8 @@ fn parse_axes(s: &str) -> Result<[Dim; 3], String> {
             other => Err(format!("'{other}' is not an axis (t, x or y)")),
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let mut sorted = dims.clone();
-    sorted.sort_by_key(|d| *d as u8);
-    if sorted != [Dim::T, Dim::X, Dim::Y] {
-        return Err("name t, x and y once each, in the array's order (e.g. t,x,y)".into());
-    }
-    Ok([dims[0], dims[1], dims[2]])
+    dims.try_into()
+        .map_err(|d: Vec<Dim>| format!("name three axes (t, x and y), not {}", d.len()))
 }
 
 fn parse_flip(s: &str) -> Result<Flip, String> {

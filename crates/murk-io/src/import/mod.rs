@@ -173,11 +173,12 @@ fn generic(path: &Path, g: &Generic, o: &ImportOptions) -> Result<Capture> {
     }
     let (shape, data) = file.require(path, &g.var)?;
     let scan = Scan::new(path, &g.var, &shape, &data, g.axes, o.flip)?;
+    let axes = g.axes.map(|d| format!("{d:?}").to_lowercase()).join(", ");
     scan.confocal(
         path,
         &Framing {
             var: &g.var,
-            format: "generic",
+            format: &format!("generic ({} axes {axes}; x, y along +x, +y)", file.kind()),
             side_m,
             bin_width,
             gate_bins: o.gate_bins.unwrap_or(0),
@@ -193,7 +194,7 @@ fn flip_line(flip: Flip) -> String {
     match (flip.x, flip.y) {
         (false, false) => String::new(),
         (x, y) => format!(
-            "user_flip: '{}'\n",
+            "flip: '{}'\n",
             [(x, "x"), (y, "y")]
                 .iter()
                 .filter(|f| f.0)
