@@ -274,6 +274,7 @@ pub(super) fn check_container(path: &Path, p: Preset, file: &ArrayFile) -> Resul
     }
     let (needs, other) = match want {
         Container::V5 => ("v5", "v7.3"),
+        _ if p == Preset::Znlos => ("HDF5", "v5"),
         _ => ("v7.3 (HDF5)", "v5"),
     };
     Err(Error::format(
