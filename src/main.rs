@@ -38,7 +38,7 @@ enum Command {
     Bench(cmd::bench::BenchArgs),
     /// Render a scene file (scenes/*.toml) into a capture by time-resolved volumetric path tracing.
     Render(cmd::render::RenderArgs),
-    /// Import a real confocal capture (CDT v7.3 `meas`, LCT v5 `rect_data`) into a y-tal HDF5 file.
+    /// Import a real capture (a public NLOS dataset with --format, or any 3-D array) into y-tal HDF5.
     Import(cmd::import::ImportArgs),
     /// Reproduce a figure: `real` reconstructs the CDT captures with CDT and Phasor Fields.
     Figure(cmd::figure::FigureArgs),

@@ -214,43 +214,20 @@ fn own_grid_methods_reject_non_confocal_captures() {
 
 /// A MATLAB v5 file (uncompressed) with uint16 or double variables, as MATLAB's `save -v6` writes.
 fn write_mat_v5(path: &Path, vars: &[(&str, &[usize], &[f64], bool)]) {
-    fn element(out: &mut Vec<u8>, ty: u32, bytes: &[u8]) {
-        out.extend(ty.to_le_bytes());
-        out.extend((bytes.len() as u32).to_le_bytes());
-        out.extend(bytes);
-        out.resize(out.len().next_multiple_of(8), 0);
-    }
-    let mut f = format!("{:<116}", "MATLAB 5.0 MAT-file, murk test").into_bytes();
-    f.extend([0u8; 8]);
-    f.extend(0x0100u16.to_le_bytes());
-    f.extend(b"IM");
-    for &(name, dims, values, uint16) in vars {
-        let mut m = Vec::new();
-        // Array flags: class 11 (uint16) or 6 (double).
-        element(
-            &mut m,
-            6,
-            &[if uint16 { 11 } else { 6 }, 0, 0, 0, 0, 0, 0, 0],
-        );
-        let d: Vec<u8> = dims
-            .iter()
-            .flat_map(|&n| (n as i32).to_le_bytes())
-            .collect();
-        element(&mut m, 5, &d);
-        element(&mut m, 1, name.as_bytes());
-        // Values in MATLAB's column-major order.
-        let data: Vec<u8> = if uint16 {
-            values
-                .iter()
-                .flat_map(|&v| (v as u16).to_le_bytes())
-                .collect()
-        } else {
-            values.iter().flat_map(|&v| v.to_le_bytes()).collect()
-        };
-        element(&mut m, if uint16 { 4 } else { 9 }, &data);
-        element(&mut f, 14, &m);
-    }
-    std::fs::write(path, f).unwrap();
+    let arrays: Vec<murk_io::MatArray> = vars
+        .iter()
+        .map(|&(name, dims, values, uint16)| murk_io::MatArray {
+            name,
+            dims,
+            values,
+            class: if uint16 {
+                murk_io::MatClass::UInt16
+            } else {
+                murk_io::MatClass::Double
+            },
+        })
+        .collect();
+    murk_io::write_mat_v5(path, &arrays, false).unwrap();
 }
 
 /// `murk info`'s "max at illumination I, …, bin B".

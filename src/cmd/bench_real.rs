@@ -3,12 +3,12 @@
 //! default volume for the voxel methods, the median of several runs per scene.
 
 use crate::cmd::figure::ORDER;
-use crate::cmd::import::{import, Format, ImportOptions};
 use crate::cmd::progress::say;
 use crate::cmd::reconstruct::{default_volume, slab_delay_m};
 use anyhow::Context;
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams};
 use murk_core::{Axis, Capture, Volume};
+use murk_io::import::{import, ImportOptions, Preset};
 use murk_recon::{Method, NoProgress, PfParams, Wavelength};
 use std::path::Path;
 use std::time::Instant;
@@ -40,15 +40,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
     };
     for scene in ORDER {
         let path = dir.join(format!("{scene}.mat"));
-        let cap: Capture = import(
-            &path,
-            &ImportOptions {
-                format: Format::Cdt,
-                wall_size_m: None,
-                bin_width_ps: None,
-                gate_bins: None,
-            },
-        )?;
+        let cap: Capture = import(&path, &ImportOptions::preset(Preset::Cdt))?;
         let ctx = || path.display().to_string();
         let vol = default_volume(&cap)?;
         let mut shifted = cap.clone();

@@ -3,13 +3,13 @@
 //! 8 cycles, with λ read on the depth axis and, for comparison, on the path axis), as a PNG grid
 //! (rows CDT, PF, PF; a column per scene) and an index.html with parameters, depths and timings.
 
-use crate::cmd::import::{import, Format, ImportOptions, CDT_SCENES};
 use crate::cmd::progress::{say, Bar};
 use crate::cmd::reconstruct::slab_delay_m;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use murk_baselines::{CdtParams, CdtPlan};
 use murk_core::{Capture, Volume};
+use murk_io::import::{import, ImportOptions, Preset, CDT_SCENES};
 use murk_recon::{Falloff, Method, PfParams, Wavelength};
 use murk_view::pictures::{self, Plane};
 use std::path::{Path, PathBuf};
@@ -86,15 +86,7 @@ struct Cell {
 }
 
 fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> anyhow::Result<Vec<Cell>> {
-    let cap: Capture = import(
-        path,
-        &ImportOptions {
-            format: Format::Cdt,
-            wall_size_m: None,
-            bin_width_ps: None,
-            gate_bins: None,
-        },
-    )?;
+    let cap: Capture = import(path, &ImportOptions::preset(Preset::Cdt))?;
     let params = CdtParams {
         snr,
         ..Default::default()

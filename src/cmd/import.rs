@@ -1,244 +1,161 @@
-//! `murk import`: real confocal captures from MATLAB files into murk's capture model.
-//!
-//! Orientation. The CDT reference code shows `meas(t, a, b)` as an image with row = a (top → bottom)
-//! and column = b (left → right), and the letters then read upright. murk's front view looks from the
-//! wall into the scene with +y up and +x on the left, so scan row a becomes y (decreasing with a) and
-//! scan column b becomes x (decreasing with b): grid point (ix, iy) = (B − 1 − b, A − 1 − a), on a
-//! regular grid with its first axis along +x and its second along +y (what the fast paths need).
-//! LCT's `rect_data(i, j, t)`: O'Toole's reference code permutes it to (t, j, i), reverses i and
-//! shows the front view with row = j and column = reversed i, so a = j and b = N − 1 − i: grid point
-//! (ix, iy) = (i, N − 1 − j).
+//! `murk import`: real captures from the public NLOS datasets, or any 3-D array, into y-tal HDF5.
+//! The codec, its orientation convention and each dataset's layout live in `murk_io::import`.
 
 use crate::cmd::progress::say;
-use anyhow::{bail, Context};
+use anyhow::bail;
+use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
-use murk_core::{Capture, DVec3, Pairing, PointLayout, PointSet, TimeAxis};
-use std::path::{Path, PathBuf};
+use murk_io::import::{BinWidth, Dim, Flip, Generic, ImportOptions, Layout, Preset};
+use std::path::PathBuf;
 
-/// The speed of light both reference codes convert bins with (their depths assume it).
-const REFERENCE_C_M_PER_S: f64 = 3e8;
+/// A `--format` value: one of the library's presets.
+#[derive(Clone, Copy, Debug)]
+pub struct Format(Preset);
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Format {
-    /// Lindell & Wetzstein 2020: MATLAB v7.3 (HDF5) with `meas` (t × a × b), 16 ps bins, t = 0 at
-    /// the slab's front face.
-    Cdt,
-    /// O'Toole et al. 2018: MATLAB v5 with `rect_data` (N × N × T, 4 ps bins, t = 0 at the wall)
-    /// and `width` (half the scan side).
-    Lct,
+const FORMATS: [Format; 9] = {
+    let p = Preset::ALL;
+    [
+        Format(p[0]),
+        Format(p[1]),
+        Format(p[2]),
+        Format(p[3]),
+        Format(p[4]),
+        Format(p[5]),
+        Format(p[6]),
+        Format(p[7]),
+        Format(p[8]),
+    ]
+};
+
+impl ValueEnum for Format {
+    fn value_variants<'a>() -> &'a [Self] {
+        &FORMATS
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.0.name()).help(self.0.summary()))
+    }
 }
 
 #[derive(Args)]
 #[command(after_help = "Examples:\n  \
 murk import ../shared/data/real/cdt_lindell2020/letter_s.mat --format cdt --out letter_s.h5\n  \
 murk import my_scan.mat --format cdt --wall-size 0.5 --out my_scan.h5\n  \
-murk import s_u.mat --format lct --out s_u.h5\n\n\
+murk import s_u.mat --format lct --out s_u.h5\n  \
+murk import statue/meas_180min.mat --format fk --tof statue/tof.mat --out statue.h5\n  \
+murk import bunny_confocal.hdf5 --format znlos --out bunny.h5\n  \
+murk import scan.npy --axes x,y,t --bin-width-ps 16 --wall-size 1 --confocal --out scan.h5\n  \
+murk import data.mat --var capture.hist --axes t,y,x --flip x,y --bin-width-m 0.005 --wall-size 0.6 \
+--confocal --t0-bin 40 --out data.h5\n\n\
 Scan sides known by file name (cdt): letter_s 0.636 m, mannequin 0.609 m, letters_ut, letter_t and cones 0.7 m.\n\
-The scan is a confocal grid at z = 0 from −side/2 to +side/2; scan row a (top → bottom in the reference\n\
-display) maps to +y → −y, scan column b (left → right) to +x → −x, so murk's front view (from the wall, +y up,\n\
-+x left) shows the scene as the reference code does.")]
+Array scans become a confocal grid at z = 0 from −side/2 to +side/2. The presets' arrays are shown by\n\
+their reference code with row a top → bottom and column b left → right; row a maps to +y → −y and\n\
+column b to +x → −x, so murk's front view (from the wall, +y up, +x left) shows the scene as the\n\
+reference does. The generic form's x and y axes run along +x and +y (reverse them with --flip).\n\
+Ahn 2019 and Z-NLOS files keep their own wall points. docs/import.md has each dataset's details.")]
 pub struct ImportArgs {
-    /// A MATLAB .mat file.
+    /// A MATLAB .mat (v5 or v7.3), HDF5 or .npy file.
     pub file: PathBuf,
-    #[arg(long, value_enum)]
-    pub format: Format,
-    /// Full side of the square scan (m). Required for cdt files other than the five published scenes;
-    /// lct files carry it (`width` is half of it).
+    /// A public dataset's layout (with its published parameters); without it, the generic form
+    /// (--var, --axes, --bin-width-*, --wall-size, --confocal) describes the array.
+    #[arg(long, value_enum, required_unless_present = "axes")]
+    pub format: Option<Format>,
+    /// Generic form: the array's name (`a.b`: field b of struct a); not needed for .npy.
+    #[arg(long, conflicts_with = "format")]
+    pub var: Option<String>,
+    /// Generic form: what the array's axes hold, in its shape order (MATLAB's for .mat files),
+    /// e.g. t,x,y. x and y indices increase along murk's +x and +y.
+    #[arg(long, value_parser = parse_axes, conflicts_with = "format")]
+    pub axes: Option<[Dim; 3]>,
+    /// Generic form: the scan is confocal (required; non-confocal arrays are not read).
+    #[arg(long, conflicts_with = "format")]
+    pub confocal: bool,
+    /// Full side of the square scan (m), first point to last. Overrides the preset's
+    /// (cdt: by scene name; lct, wu2021: twice the file's `width`).
     #[arg(long)]
     pub wall_size: Option<f64>,
-    /// Time bin width in picoseconds (default 16 for cdt, 4 for lct).
-    #[arg(long)]
+    /// Time bin width in picoseconds (converted with c = 3e8 m/s, as the reference codes do).
+    #[arg(long, conflicts_with = "bin_width_m")]
     pub bin_width_ps: Option<f64>,
-    /// Zero the first N bins (direct light off the wall). Default 0 for cdt (the SPAD was gated),
-    /// 600 for lct (as the reference code, with 4 ps bins).
+    /// Time bin width in metres of optical path.
+    #[arg(long)]
+    pub bin_width_m: Option<f64>,
+    /// Zero the first N bins (direct light off the wall). Defaults: 600 for lct and lct-transient,
+    /// 500 for abp (as their reference codes), 0 otherwise.
     #[arg(long)]
     pub gate_bins: Option<usize>,
+    /// Reverse the scan along x, y or both (x,y), on top of the format's orientation.
+    #[arg(long, value_parser = parse_flip)]
+    pub flip: Option<Flip>,
+    /// The bin at path length 0 (the wall); the time axis then starts at −N bins.
+    #[arg(long)]
+    pub t0_bin: Option<usize>,
+    /// fk only: the scene's tof.mat (`tofgrid`, ps per scan point) to rectify the scan with.
+    #[arg(long)]
+    pub tof: Option<PathBuf>,
     /// Output capture (y-tal HDF5).
     #[arg(long)]
     pub out: PathBuf,
 }
 
-/// Published scan sides of the CDT scenes (README: scan_size × size_calibration).
-pub const CDT_SCENES: [(&str, f64, f64); 5] = [
-    // (file stem, scan side m, Wiener snr of the reference reconstruction)
-    ("letter_s", 0.636, 1e4),
-    ("mannequin", 0.609, 2e4),
-    ("letter_t", 0.7, 2.5e3),
-    ("cones", 0.7, 2e4),
-    ("letters_ut", 0.7, 1e4),
-];
-
-/// What to import and how; `None` takes the format's defaults.
-pub struct ImportOptions {
-    pub format: Format,
-    pub wall_size_m: Option<f64>,
-    pub bin_width_ps: Option<f64>,
-    pub gate_bins: Option<usize>,
+/// `t,x,y` in any order; the library checks that each axis appears once.
+fn parse_axes(s: &str) -> Result<[Dim; 3], String> {
+    let dims = s
+        .split(',')
+        .map(|a| match a.trim() {
+            "t" => Ok(Dim::T),
+            "x" => Ok(Dim::X),
+            "y" => Ok(Dim::Y),
+            other => Err(format!("'{other}' is not an axis (t, x or y)")),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    dims.try_into()
+        .map_err(|d: Vec<Dim>| format!("name three axes (t, x and y), not {}", d.len()))
 }
 
-fn header_check(path: &Path, format: Format) -> anyhow::Result<()> {
-    let mut head = [0u8; 19];
-    let n = std::io::Read::read(
-        &mut std::fs::File::open(path).with_context(|| path.display().to_string())?,
-        &mut head,
-    )
-    .with_context(|| path.display().to_string())?;
-    let head = &head[..n];
-    match format {
-        Format::Cdt if head.starts_with(b"MATLAB 5.0") => bail!(
-            "{}: this is a MATLAB v5 file, but CDT captures are v7.3 (HDF5); for LCT data use --format lct",
-            path.display()
-        ),
-        Format::Lct if head.starts_with(b"MATLAB 7.3") => bail!(
-            "{}: this is a MATLAB v7.3 (HDF5) file, but LCT captures are v5; for CDT data use --format cdt",
-            path.display()
-        ),
-        _ => Ok(()),
+fn parse_flip(s: &str) -> Result<Flip, String> {
+    let mut flip = Flip::default();
+    for a in s.split(',') {
+        match a.trim() {
+            "x" => flip.x = true,
+            "y" => flip.y = true,
+            other => return Err(format!("'{other}' is not an axis to flip (x or y)")),
+        }
     }
+    Ok(flip)
 }
 
-/// Reads a CDT or LCT capture into a confocal capture (see the module comment for the geometry).
-pub fn import(path: &Path, o: &ImportOptions) -> anyhow::Result<Capture> {
-    header_check(path, o.format)?;
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let (var, shape, data, side, bin_ps, gate) = match o.format {
-        Format::Cdt => {
-            let (shape, data) = murk_io::read_mat_v73_array(path, "meas")?;
-            let known = CDT_SCENES.iter().find(|s| s.0 == stem).map(|s| s.1);
-            let Some(side) = o.wall_size_m.or(known) else {
-                bail!(
-                    "{}: unknown scene '{stem}' (known: {}); give its scan side with --wall-size",
-                    path.display(),
-                    CDT_SCENES.map(|s| s.0).join(", ")
-                );
-            };
-            // MATLAB t × a × b: already (t, a, b) row-major.
-            (
-                "meas",
-                shape,
-                data,
-                side,
-                o.bin_width_ps.unwrap_or(16.0),
-                o.gate_bins.unwrap_or(0),
-            )
-        }
-        Format::Lct => {
-            let (shape, data) = murk_io::read_mat_v5_array(path, "rect_data")?;
-            let side = match o.wall_size_m {
-                Some(s) => s,
-                None => {
-                    let (ws, w) = murk_io::read_mat_v5_array(path, "width")
-                        .context("give the scan side with --wall-size")?;
-                    if w.len() != 1 {
-                        bail!(
-                            "{}: 'width' should be a scalar (half the scan side), got shape {ws:?}",
-                            path.display()
-                        );
-                    }
-                    2.0 * w[0] as f64
-                }
-            };
-            // MATLAB N × N × T (i, j, t) → (t, a, b) with a = j, b = N − 1 − i.
-            let [ni, nj, nt] = shape[..] else {
-                bail!(
-                    "{}: 'rect_data' should be N × N × T, got shape {shape:?}",
-                    path.display()
-                );
-            };
-            let mut tab = vec![0f32; data.len()];
-            for (k, &v) in data.iter().enumerate() {
-                let (i, j, t) = (k / (nj * nt), k / nt % nj, k % nt);
-                tab[(t * nj + j) * ni + ni - 1 - i] = v;
-            }
-            (
-                "rect_data",
-                vec![nt, nj, ni],
-                tab,
-                side,
-                o.bin_width_ps.unwrap_or(4.0),
-                o.gate_bins.unwrap_or(600),
-            )
-        }
-    };
-    let [nt, na, nb] = shape[..] else {
-        bail!(
-            "{}: '{var}' should be a 3-D array, got shape {shape:?}",
-            path.display()
-        );
-    };
-    if na < 2 || nb < 2 || nt < 2 {
-        bail!(
-            "{}: '{var}' has shape {shape:?}; a confocal scan needs at least 2 × 2 points and 2 time bins",
-            path.display()
-        );
+impl ImportArgs {
+    fn options(&self) -> anyhow::Result<ImportOptions> {
+        let layout = match (self.format, self.axes) {
+            (Some(f), _) => Layout::Preset(f.0),
+            (None, Some(axes)) => Layout::Generic(Generic {
+                var: self.var.clone().unwrap_or_default(),
+                axes,
+                confocal: self.confocal,
+            }),
+            (None, None) => bail!("give --format, or describe the array with --axes"),
+        };
+        Ok(ImportOptions {
+            layout,
+            wall_size_m: self.wall_size,
+            bin_width: self
+                .bin_width_ps
+                .map(BinWidth::Ps)
+                .or(self.bin_width_m.map(BinWidth::M)),
+            gate_bins: self.gate_bins,
+            flip: self.flip.unwrap_or_default(),
+            t0_bin: self.t0_bin,
+            tof: self.tof.clone(),
+        })
     }
-    if let Some(v) = data.iter().find(|v| !v.is_finite()) {
-        bail!("{}: '{var}' holds a non-finite value ({v})", path.display());
-    }
-    if !(side.is_finite() && side > 0.0 && bin_ps.is_finite() && bin_ps > 0.0) {
-        bail!("scan side ({side} m) and bin width ({bin_ps} ps) must be positive");
-    }
-    // Grid point (ix, iy) is scan column b = nb − 1 − ix, row a = na − 1 − iy.
-    let (nx, ny) = (nb, na);
-    let at = |n: usize, i: usize| -side / 2.0 + side * i as f64 / (n - 1) as f64;
-    let points: Vec<DVec3> = (0..nx * ny)
-        .map(|i| DVec3::new(at(nx, i / ny), at(ny, i % ny), 0.0))
-        .collect();
-    let grid = PointSet {
-        normals: vec![DVec3::Z; points.len()],
-        points,
-        layout: PointLayout::Grid { nx, ny },
-    };
-    let mut h = vec![0f32; nx * ny * nt];
-    for (i, hist) in h.chunks_mut(nt).enumerate() {
-        let (a, b) = (na - 1 - i % ny, nb - 1 - i / ny);
-        for (t, v) in hist.iter_mut().enumerate().skip(gate) {
-            *v = data[(t * na + a) * nb + b];
-        }
-    }
-    let bin_width_m = REFERENCE_C_M_PER_S * bin_ps * 1e-12;
-    let scene_info = format!(
-        "generator: murk import\nmurk_version: {}\nsource_file: '{}'\nformat: {}\nscene: '{stem}'\nvariable: {var}\nscan_side_m: {side}\nbin_width_ps: {bin_ps}\nspeed_of_light_m_per_s: {REFERENCE_C_M_PER_S}\ngated_bins: {gate}\norientation: 'grid (ix, iy) = scan (column {nb} - 1 - ix, row {na} - 1 - iy)'\n",
-        env!("CARGO_PKG_VERSION"),
-        path.display().to_string().replace('\'', "''"),
-        match o.format {
-            Format::Cdt => "cdt (t = 0 at the slab front face)",
-            Format::Lct => "lct (t = 0 at the wall)",
-        },
-    );
-    let cap = Capture {
-        illum: grid.clone(),
-        sensor: grid,
-        laser_xyz: None,
-        sensor_xyz: None,
-        time: TimeAxis {
-            start_m: 0.0,
-            bin_width_m,
-            bins: nt,
-        },
-        t_accounts_first_and_last_bounces: false,
-        pairing: Pairing::Paired,
-        h,
-        scene_info,
-    };
-    cap.validate()?;
-    Ok(cap)
 }
 
 pub fn run(a: ImportArgs, quiet: bool) -> anyhow::Result<()> {
-    murk_io::refuse_overwrite(&a.out, &[&a.file])?;
-    let cap = import(
-        &a.file,
-        &ImportOptions {
-            format: a.format,
-            wall_size_m: a.wall_size,
-            bin_width_ps: a.bin_width_ps,
-            gate_bins: a.gate_bins,
-        },
-    )?;
+    let mut inputs = vec![a.file.as_path()];
+    inputs.extend(a.tof.as_deref());
+    murk_io::refuse_overwrite(&a.out, &inputs)?;
+    let cap = murk_io::import::import(&a.file, &a.options()?)?;
     murk_io::write_capture(&a.out, &cap)?;
     say(quiet, format!("wrote {}", a.out.display()));
     if !quiet {

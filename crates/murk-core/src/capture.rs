@@ -131,7 +131,9 @@ impl Capture {
             let (l, s) = self.hist_pair(i);
             let f = leg(laser, self.illum.points[l], self.illum.normals[l])
                 * leg(spad, self.sensor.points[s], self.sensor.normals[s]);
-            self.h[i * nt..(i + 1) * nt].iter_mut().for_each(|v| *v *= f);
+            self.h[i * nt..(i + 1) * nt]
+                .iter_mut()
+                .for_each(|v| *v *= f);
         }
     }
 

@@ -10,6 +10,7 @@
 
 mod atomic;
 mod h5;
+pub mod import;
 mod mat;
 pub mod mat5;
 pub use mat5::{write_mat_v5, MatArray, MatClass};
@@ -20,7 +21,7 @@ mod truth;
 mod volume;
 
 pub use atomic::{refuse_overwrite, remove_temporaries, write_atomic};
-pub use mat::{read_mat_v5_array, read_mat_v73_array};
+pub use mat::{read_mat_v5_array, read_mat_v73_array, ArrayFile};
 pub use npy::{read_npy_f32, read_npy_f32_with_limit, write_npy_f32};
 pub use scene_info::scene_info_summary;
 pub use tal::{

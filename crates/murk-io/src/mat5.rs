@@ -461,8 +461,7 @@ pub fn write_mat_v5(path: &Path, vars: &[MatArray], compress: bool) -> Result<()
                 encode_values(MI_UINT16, v.values, |x| (x as u16).to_le_bytes().to_vec()),
             ),
         };
-        let dims: Vec<i32> = v.dims.iter().map(|&d| d as i32).collect();
-        matrices.push(encode_matrix(class, &dims, v.name, &data));
+        matrices.push(encode_matrix(class, v.dims, v.name, &data));
     }
     let bytes = encode_file(&matrices, compress);
     crate::write_atomic(path, |w| {
@@ -478,7 +477,7 @@ fn encode_values(ty: u32, values: &[f64], bytes: impl Fn(f64) -> Vec<u8>) -> Vec
 }
 
 /// The 128-byte header and the variables (miMATRIX elements), each zlib-compressed if asked.
-fn encode_file(matrices: &[Vec<u8>], compress: bool) -> Vec<u8> {
+pub(crate) fn encode_file(matrices: &[Vec<u8>], compress: bool) -> Vec<u8> {
     let mut f = format!("{:<116}", "MATLAB 5.0 MAT-file, written by murk").into_bytes();
     f.extend([0u8; 8]);
     f.extend(0x0100u16.to_le_bytes());
@@ -500,7 +499,7 @@ fn encode_file(matrices: &[Vec<u8>], compress: bool) -> Vec<u8> {
 }
 
 /// A tagged data element, padded to 8 bytes.
-fn encode_element(ty: u32, data: &[u8]) -> Vec<u8> {
+pub(crate) fn encode_element(ty: u32, data: &[u8]) -> Vec<u8> {
     let mut v = ty.to_le_bytes().to_vec();
     v.extend((data.len() as u32).to_le_bytes());
     v.extend(data);
@@ -509,9 +508,12 @@ fn encode_element(ty: u32, data: &[u8]) -> Vec<u8> {
 }
 
 /// A miMATRIX element: array flags of `class`, dimensions, name, then `body` (encoded elements).
-fn encode_matrix(class: u8, dims: &[i32], name: &str, body: &[u8]) -> Vec<u8> {
+pub(crate) fn encode_matrix(class: u8, dims: &[usize], name: &str, body: &[u8]) -> Vec<u8> {
     let mut m = encode_element(MI_UINT32, &[class, 0, 0, 0, 0, 0, 0, 0]);
-    let d: Vec<u8> = dims.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let d: Vec<u8> = dims
+        .iter()
+        .flat_map(|&v| (v as i32).to_le_bytes())
+        .collect();
     m.extend(encode_element(MI_INT32, &d));
     m.extend(encode_element(MI_INT8, name.as_bytes()));
     m.extend(body);
@@ -533,38 +535,76 @@ pub fn lookup<'v>(vars: &'v [(String, MatValue)], path: &str) -> Option<&'v MatV
     Some(v)
 }
 
+/// A test-only v5 encoder (little-endian; variables uncompressed or zlib-compressed).
 #[cfg(test)]
-mod tests {
+pub(crate) mod write {
     use super::*;
 
-    fn doubles(name: &str, dims: &[i32], v: &[f64]) -> Vec<u8> {
+    pub(crate) use super::{
+        encode_element as element, encode_file as file, encode_matrix as matrix_bytes,
+    };
+
+    /// A double array; `v` in MATLAB's column-major order.
+    pub(crate) fn doubles(name: &str, dims: &[usize], v: &[f64]) -> Vec<u8> {
         let raw: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
-        encode_matrix(6, dims, name, &encode_element(MI_DOUBLE, &raw))
+        matrix_bytes(6, dims, name, &element(MI_DOUBLE, &raw))
     }
+
+    /// A uint8 (`wide` false) or uint16 array, as MATLAB stores captures of counts.
+    pub(crate) fn counts(name: &str, dims: &[usize], v: &[f64], wide: bool) -> Vec<u8> {
+        if wide {
+            let raw: Vec<u8> = v.iter().flat_map(|&x| (x as u16).to_le_bytes()).collect();
+            matrix_bytes(11, dims, name, &element(MI_UINT16, &raw))
+        } else {
+            let raw: Vec<u8> = v.iter().map(|&x| x as u8).collect();
+            matrix_bytes(9, dims, name, &element(MI_UINT8, &raw))
+        }
+    }
+
+    /// A 1×1 struct of `fields` (each written with an empty name, as MATLAB does).
+    pub(crate) fn structure(name: &str, fields: &[(&str, Vec<u8>)]) -> Vec<u8> {
+        const LEN: usize = 32;
+        let mut names = Vec::new();
+        for (n, _) in fields {
+            let mut b = n.as_bytes().to_vec();
+            b.resize(LEN, 0);
+            names.extend(b);
+        }
+        // The field-name length is a small element in MATLAB's files.
+        let mut body = (MI_INT32 | (4 << 16)).to_le_bytes().to_vec();
+        body.extend((LEN as i32).to_le_bytes());
+        body.extend(element(MI_INT8, &names));
+        for (_, v) in fields {
+            body.extend(v);
+        }
+        matrix_bytes(2, &[1, 1], name, &body)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::write::*;
+    use super::*;
 
     /// A 1×1 struct with a 2×3 numeric field and a char field (the shape of Ahn 2019's `NLOSDATA`),
     /// next to a cell array, compressed and not.
     #[test]
     fn structs_cells_and_numbers() {
-        let mut names = b"transient".to_vec();
-        names.resize(16, 0);
-        let mut n2 = b"note".to_vec();
-        n2.resize(16, 0);
-        names.extend(n2);
-        // The field-name length is a small element in MATLAB's files.
-        let mut body = (MI_INT32 | (4 << 16)).to_le_bytes().to_vec();
-        body.extend(16i32.to_le_bytes());
-        body.extend(encode_element(MI_INT8, &names));
-        body.extend(doubles("", &[2, 3], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
         let chars: Vec<u8> = "hi".encode_utf16().flat_map(|u| u.to_le_bytes()).collect();
-        body.extend(encode_matrix(
-            4,
-            &[1, 2],
-            "",
-            &encode_element(MI_UINT16, &chars),
-        ));
-        let st = encode_matrix(2, &[1, 1], "NLOSDATA", &body);
-        let cell = encode_matrix(1, &[1, 1], "c", &doubles("", &[1, 1], &[7.5]));
+        let st = structure(
+            "NLOSDATA",
+            &[
+                (
+                    "transient",
+                    doubles("", &[2, 3], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0]),
+                ),
+                (
+                    "note",
+                    matrix_bytes(4, &[1, 2], "", &element(MI_UINT16, &chars)),
+                ),
+            ],
+        );
+        let cell = matrix_bytes(1, &[1, 1], "c", &doubles("", &[1, 1], &[7.5]));
         for compress in [false, true] {
             let bytes = encode_file(&[st.clone(), cell.clone()], compress);
             let vars = parse(&bytes).unwrap();

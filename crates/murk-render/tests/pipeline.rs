@@ -328,5 +328,8 @@ fn device_radiometry_scales_each_histogram_by_its_legs() {
     )
     .unwrap_err()
     .to_string();
-    assert!(e.contains("capture.device_radiometry") && e.contains("laser_position"), "{e}");
+    assert!(
+        e.contains("capture.device_radiometry") && e.contains("laser_position"),
+        "{e}"
+    );
 }
