@@ -4,7 +4,7 @@
 
 use crate::cmd::figure::ORDER;
 use crate::cmd::progress::say;
-use crate::cmd::reconstruct::{default_volume, slab_delay_m};
+use crate::cmd::reconstruct::default_volume;
 use anyhow::Context;
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams};
 use murk_core::{Axis, Capture, Volume};
@@ -32,7 +32,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
         ..PfParams::default()
     };
     let cdt = CdtParams::default();
-    let delay = slab_delay_m(&cdt.slab);
+    let delay = cdt.slab.round_trip_delay_m(None);
     let mut table: Vec<(&str, Vec<f64>)> = Vec::new();
     let mut record = |name: &'static str, s: f64| match table.iter_mut().find(|r| r.0 == name) {
         Some(r) => r.1.push(s),

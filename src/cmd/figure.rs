@@ -4,10 +4,9 @@
 //! (rows CDT, PF, PF; a column per scene) and an index.html with parameters, depths and timings.
 
 use crate::cmd::progress::{say, Bar};
-use crate::cmd::reconstruct::slab_delay_m;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use murk_baselines::{CdtParams, CdtPlan};
+use murk_baselines::{CdtParams, CdtPlan, Pulse};
 use murk_core::{Capture, Volume};
 use murk_io::import::{import, ImportOptions, Preset, CDT_SCENES};
 use murk_recon::{Falloff, Method, PfParams, Wavelength};
@@ -97,9 +96,6 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> anyhow::Result
         intensity: r.data,
         secs,
     };
-    // PF depth from the back of the slab: remove the slab's round-trip delay.
-    let mut shifted = cap.clone();
-    shifted.time.start_m -= slab_delay_m(&params.slab);
     // PF on CDT's voxels (the scan grid laterally, the same depths) but the first: PF needs z > 0.
     let z = cdt.volume.z;
     let vol = Volume {
@@ -109,6 +105,13 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> anyhow::Result
     let hidden = Bar::new("pf", true);
     let mut cells = vec![cdt];
     for pf in pfs {
+        // PF depth from the back of the slab: remove the slab's round-trip delay as PF's pulse sees it.
+        let wavelength_m = pf.wavelength_m(&cap)?;
+        let mut shifted = cap.clone();
+        shifted.time.start_m -= params.slab.round_trip_delay_m(Some(Pulse {
+            wavelength_m,
+            sigma_m: pf.sigma_m(wavelength_m),
+        }));
         let (secs, r) = timed(runs, || {
             Ok(murk_recon::reconstruct(
                 &shifted,
@@ -153,8 +156,8 @@ pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
         (
             "PF".to_string(),
             format!(
-                "confocal round-trip kernel, 8 cycles, no falloff, fast form; time shifted by the slab's round-trip peak delay {:.4} m of path; same voxels as CDT. Row 2: λ = 4Δc of depth (one-way distance) = 8Δc of path (--wavefactor 8). Row 3: λ = 4Δc of path (--wavefactor 4), at the Nyquist limit of the round-trip kernel",
-                slab_delay_m(&slab)
+                "confocal round-trip kernel, 8 cycles, no falloff, fast form; time shifted by the slab's round-trip delay as each row's pulse sees it (docs/slab-delay.md; the response's peak is {:.4} m of path); same voxels as CDT. Row 2: λ = 4Δc of depth (one-way distance) = 8Δc of path (--wavefactor 8). Row 3: λ = 4Δc of path (--wavefactor 4), at the Nyquist limit of the round-trip kernel",
+                slab.round_trip_delay_m(None)
             ),
         ),
         (

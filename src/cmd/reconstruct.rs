@@ -382,11 +382,6 @@ fn near_face_warning(vol: &Volume, intensity: &[f32], gated: bool) -> Option<Str
     })
 }
 
-/// Peak delay (m of path) of the slab's round trip (see [`SlabParams::round_trip_delay_m`]).
-pub fn slab_delay_m(slab: &SlabParams) -> f64 {
-    slab.round_trip_delay_m(None)
-}
-
 /// The optical path `--t-offset` asks to remove (0 without it).
 /// `pulse`: PF's, whose band-pass moves the slab's apparent delay (see
 /// [`SlabParams::round_trip_delay_m`]); `None` for the other methods.
