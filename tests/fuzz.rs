@@ -106,7 +106,7 @@ fn exercise(kind: &str, path: &Path) {
                     &cap,
                     &vol,
                     &murk_recon::PfParams::default(),
-                    murk_recon::Method::Fast,
+                    murk_recon::PfForm::Fast,
                     &murk_recon::NoProgress,
                 );
             }

@@ -665,7 +665,7 @@ print(' '.join(repr(float(v)) for v in (np.abs(r) ** 2).ravel()))
         &murk_io::read_capture(&file).unwrap(),
         &vol,
         &params,
-        murk_recon::Method::Fast,
+        murk_recon::PfForm::Fast,
         &murk_recon::NoProgress,
     )
     .unwrap();

@@ -5,7 +5,7 @@
 
 use murk_baselines::{through_slab, Pulse, SlabParams};
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
-use murk_recon::{Method, NoProgress, PfParams};
+use murk_recon::{PfForm, NoProgress, PfParams};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
 
 /// Median depth of the brightest voxel per column over the columns whose front view reaches 30 %
@@ -77,7 +77,7 @@ fn pf_finds_a_square_behind_the_foam_at_its_depth() {
     let depth_with = |delay_m: f64| {
         let mut cap = through.clone();
         cap.time.start_m -= delay_m;
-        let rec = murk_recon::reconstruct(&cap, &vol, &params, Method::Fast, &NoProgress).unwrap();
+        let rec = murk_recon::reconstruct(&cap, &vol, &params, PfForm::Fast, &NoProgress).unwrap();
         depth_m(&vol, &rec.intensity)
     };
     let (seen, peak) = (

@@ -5,7 +5,7 @@ use crate::cmd::progress::say;
 use anyhow::{bail, Context};
 use clap::Args;
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
-use murk_recon::{Method, NoProgress, PfParams, Wavelength};
+use murk_recon::{PfForm, NoProgress, PfParams, Wavelength};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -265,13 +265,13 @@ fn paper_case(
             &cap,
             &vol,
             &PfParams::default(),
-            Method::Fast,
+            PfForm::Fast,
             &NoProgress,
         )?);
         times.push(t.elapsed().as_secs_f64());
     }
     let rec = rec.expect("runs ≥ 1");
-    let (p, _) = crate::cmd::reconstruct::peak(&vol, &rec.intensity);
+    let (p, _) = murk_recon::pipeline::peak(&vol, &rec.intensity);
     say(quiet, format!(
         "{label} (fast PF; {} depth slabs of {:.1} frequencies per plane on average, against {} over the whole volume's window): median {:.3} s (runs {:?}); synthesis {:.2} s; peak depth {:.3} m (Z at 2.000 m); peak RSS {:.0} MiB",
         rec.info.slabs.len(),
@@ -332,7 +332,7 @@ fn versus_tal(python: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
     let mut murk_times = Vec::new();
     for _ in 0..runs.max(3) {
         let t = Instant::now();
-        murk_recon::reconstruct(&loaded, &vol, &params, Method::Fast, &NoProgress)?;
+        murk_recon::reconstruct(&loaded, &vol, &params, PfForm::Fast, &NoProgress)?;
         murk_times.push(t.elapsed().as_secs_f64());
     }
     let script = format!(

@@ -4,12 +4,12 @@
 
 use crate::cmd::figure::ORDER;
 use crate::cmd::progress::say;
-use crate::cmd::reconstruct::default_volume;
+use murk_recon::pipeline::default_volume;
 use anyhow::Context;
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams};
 use murk_core::{Axis, Capture, Volume};
 use murk_io::import::{import, ImportOptions, Preset};
-use murk_recon::{Method, NoProgress, PfParams, Wavelength};
+use murk_recon::{PfForm, NoProgress, PfParams, Wavelength};
 use std::path::Path;
 use std::time::Instant;
 
@@ -59,7 +59,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
             anyhow::Ok(())
         };
         let pf_on = |v: &Volume| {
-            murk_recon::reconstruct(&shifted, v, &pf, Method::Fast, &NoProgress)?;
+            murk_recon::reconstruct(&shifted, v, &pf, PfForm::Fast, &NoProgress)?;
             anyhow::Ok(())
         };
         time("bp", &mut || {

@@ -5,7 +5,7 @@ use crate::cmd::reconstruct;
 use anyhow::Context;
 use clap::Args;
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
-use murk_recon::{Method, PfParams};
+use murk_recon::{PfForm, PfParams};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
 use murk_view::pictures;
 use std::path::PathBuf;
@@ -77,7 +77,7 @@ pub fn run(a: DemoArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let bar = Bar::new("reconstruct", quiet);
     let t1 = std::time::Instant::now();
-    let rec = murk_recon::reconstruct(&cap, &volume, &PfParams::default(), Method::Fast, &bar)?;
+    let rec = murk_recon::reconstruct(&cap, &volume, &PfParams::default(), PfForm::Fast, &bar)?;
     bar.finish();
     let recon_s = t1.elapsed().as_secs_f64();
     let mut table = reconstruct::summary(&capture_path, &cap, &rec, recon_s);
@@ -87,7 +87,7 @@ pub fn run(a: DemoArgs, quiet: bool) -> anyhow::Result<()> {
         format!("{synth_s:.3}"),
     ));
     let volume_path = a.out.join("volume.npy");
-    reconstruct::write_volume(&volume_path, &volume, &rec.intensity, &table)?;
+    murk_io::write_volume(&volume_path, &volume, &rec.intensity, &table)?;
     let pics = pictures::write_views(&a.out, &volume, &rec.intensity)?;
     let index = pictures::write_index(
         &a.out,
@@ -95,7 +95,7 @@ pub fn run(a: DemoArgs, quiet: bool) -> anyhow::Result<()> {
         &table,
         &pics,
     )?;
-    let (peak, _) = reconstruct::peak(&volume, &rec.intensity);
+    let (peak, _) = murk_recon::pipeline::peak(&volume, &rec.intensity);
     say(quiet, format!("murk demo: hidden Z at {LETTER_DEPTH_M} m; reconstruction peak at depth {:.3} m ({:.2} s synthesis, {:.2} s reconstruction)", peak[2], synth_s, recon_s));
     say(quiet, format!("  capture  {}", capture_path.display()));
     say(quiet, format!("  volume   {}", volume_path.display()));

@@ -9,7 +9,7 @@ use clap::{Args, ValueEnum};
 use murk_baselines::{CdtParams, CdtPlan, Pulse};
 use murk_core::{Capture, Volume};
 use murk_io::import::{import, ImportOptions, Preset, CDT_SCENES};
-use murk_recon::{Falloff, Method, PfParams, Wavelength};
+use murk_recon::{Falloff, PfForm, PfParams, Wavelength};
 use murk_view::pictures::{self, Plane};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -59,7 +59,7 @@ fn timed<T>(runs: usize, mut f: impl FnMut() -> anyhow::Result<T>) -> anyhow::Re
 /// maximum-intensity projection exceeds half of its maximum.
 pub fn depths(vol: &Volume, intensity: &[f32]) -> (f64, f64) {
     let nz = vol.z.n;
-    let (p, _) = crate::cmd::reconstruct::peak(vol, intensity);
+    let (p, _) = murk_recon::pipeline::peak(vol, intensity);
     let cols: Vec<(usize, f32)> = intensity
         .chunks(nz)
         .map(|c| {
@@ -117,7 +117,7 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> anyhow::Result
                 &shifted,
                 &vol,
                 pf,
-                Method::Fast,
+                PfForm::Fast,
                 &hidden,
             )?)
         })?;

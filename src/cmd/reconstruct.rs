@@ -3,10 +3,11 @@
 use crate::cmd::progress::{say, Bar};
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
-use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, Pulse, Reflectance, SlabParams};
-use murk_core::window::{apply_gate, handle_end, shortest_path_m, WindowEnd};
-use murk_core::{Axis, Capture, Volume};
-use murk_recon::{Compensation, Falloff, Lateral, Method, PfParams, Wavelength};
+use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, Reflectance, SlabParams};
+use murk_core::window::WindowEnd;
+use murk_core::{Capture, CaptureKind, Volume};
+use murk_recon::pipeline::{self, Gate, Method, Request, TOffset, VolumeSpec};
+use murk_recon::{Compensation, Falloff, Lateral, PfParams, Wavelength};
 use murk_view::pictures;
 use std::path::{Path, PathBuf};
 
@@ -26,17 +27,6 @@ pub enum MethodArg {
     Fk,
     /// Confocal diffuse tomography: slab deconvolution, then f-k (confocal grid behind a slab; own volume).
     Cdt,
-}
-
-impl MethodArg {
-    /// Methods that reconstruct on the confocal scan grid and ignore --volume.
-    pub fn own_grid(self) -> bool {
-        matches!(self, MethodArg::Lct | MethodArg::Fk | MethodArg::Cdt)
-    }
-
-    pub fn is_pf(self) -> bool {
-        matches!(self, MethodArg::Pf | MethodArg::PfExact)
-    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -142,15 +132,6 @@ pub struct ReconstructArgs {
     pub slab: SlabArgs,
 }
 
-/// How many edge widths before the volume's shortest path `--gate auto` opens.
-const GATE_MARGIN_EDGES: f64 = 3.0;
-
-enum Gate {
-    Off,
-    At(f64),
-    Auto,
-}
-
 fn parse_gate(text: &str) -> anyhow::Result<Gate> {
     Ok(match text {
         "off" => Gate::Off,
@@ -162,9 +143,16 @@ fn parse_gate(text: &str) -> anyhow::Result<Gate> {
     })
 }
 
-/// Ramp length (bins) at a window's end for the methods without a pulse: measured on the CDT letter S
-/// cut at 1.44 m of path (docs/window-ends.md).
-const BASELINE_TAPER_BINS: usize = 20;
+fn parse_t_offset(spec: Option<&str>, slab: SlabParams) -> anyhow::Result<TOffset> {
+    Ok(match spec {
+        None => TOffset::None,
+        Some("slab") => TOffset::Slab(slab),
+        Some(s) => match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => TOffset::Metres(v),
+            _ => bail!("--t-offset '{s}': expected metres or 'slab'"),
+        },
+    })
+}
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum WindowEndArg {
@@ -227,6 +215,41 @@ impl SlabArgs {
 }
 
 impl ReconstructArgs {
+    /// The library request these arguments make for `cap`.
+    pub fn request(&self, cap: &Capture) -> anyhow::Result<Request> {
+        let slab = self.slab.slab();
+        let method = match self.method {
+            MethodArg::Pf => Method::Pf(self.params(cap)?),
+            MethodArg::PfExact => Method::PfExact(self.params(cap)?),
+            MethodArg::Bp => Method::Bp,
+            MethodArg::Fbp => Method::Fbp(FbpOptions::default()),
+            MethodArg::Lct => Method::Lct(LctParams {
+                snr: self.slab.snr.unwrap_or(LctParams::default().snr),
+                reflectance: match self.slab.weighting {
+                    WeightingArg::Diffuse => Reflectance::Diffuse,
+                    WeightingArg::Retroreflective => Reflectance::Retroreflective,
+                },
+                ..Default::default()
+            }),
+            MethodArg::Fk => Method::Fk(FkParams::default()),
+            MethodArg::Cdt => Method::Cdt(CdtParams {
+                slab,
+                snr: self.slab.snr.unwrap_or(CdtParams::default().snr),
+                ..Default::default()
+            }),
+        };
+        Ok(Request {
+            method,
+            volume: match &self.volume {
+                Some(spec) => VolumeSpec::Given(Volume::parse(spec)?),
+                None => VolumeSpec::Default,
+            },
+            t_offset: parse_t_offset(self.t_offset.as_deref(), slab)?,
+            gate: parse_gate(&self.gate)?,
+            window_end: self.window_end.into(),
+        })
+    }
+
     /// Phasor Fields parameters for `cap` (the default wavelength depends on whether it is confocal).
     pub fn params(&self, cap: &Capture) -> anyhow::Result<PfParams> {
         let confocal = cap.kind() == murk_core::CaptureKind::Confocal;
@@ -261,340 +284,32 @@ impl ReconstructArgs {
     }
 }
 
-/// The wall grid's extent and spacing in x and y; depth from 0.1 m to what the time window reaches.
-pub fn default_volume(cap: &Capture) -> anyhow::Result<Volume> {
-    let side = if cap.sensor.len() > cap.illum.len() {
-        &cap.sensor
-    } else {
-        &cap.illum
-    };
-    let spacing = murk_recon::wall_spacing_m(cap)
-        .context("the capture has a single wall point; give --volume")?;
-    let (lo, hi) = side
-        .points
-        .iter()
-        .fold((side.points[0], side.points[0]), |(a, b), p| {
-            (a.min(*p), b.max(*p))
-        });
-    let count = |a: f64, b: f64| ((b - a) / spacing).round() as usize + 1;
-    let offsets = (0..cap.n_hist())
-        .map(|i| {
-            let (l, s) = cap.hist_pair(i);
-            cap.first_bounce_m(l) + cap.last_bounce_m(s)
-        })
-        .fold(f64::MAX, f64::min);
-    // The shortest round trip to depth z is 2z (a voxel straight in front of the wall points).
-    let z_max = (cap.time.end_m() - offsets) / 2.0;
-    let z_min = 0.1;
-    if z_max <= z_min {
-        bail!("the capture's time window ends at {:.3} m of path, before any depth beyond {z_min} m; give --volume", cap.time.end_m());
-    }
-    let nz = (((z_max - z_min) / spacing).round() as usize + 1).clamp(2, 256);
-    let v = Volume {
-        x: Axis::new(lo.x, hi.x, count(lo.x, hi.x)),
-        y: Axis::new(lo.y, hi.y, count(lo.y, hi.y)),
-        z: Axis::new(z_min, z_max, nz),
-    };
-    v.validate()?;
-    Ok(v)
-}
-
-/// Writes the intensity volume by extension.
-/// Output volume formats, chosen by the file extension.
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub enum VolumeFormat {
-    Npy,
-    Hdf5,
-}
-
-impl VolumeFormat {
-    /// Checked before any work so a typo costs nothing.
-    pub fn of(path: &Path) -> anyhow::Result<VolumeFormat> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .unwrap_or("")
-            .to_ascii_lowercase();
-        match ext.as_str() {
-            "npy" => Ok(VolumeFormat::Npy),
-            "h5" | "hdf5" => Ok(VolumeFormat::Hdf5),
-            _ => bail!(
-                "{}: unknown output type '.{ext}' (use .npy or .h5)",
-                path.display()
-            ),
-        }
-    }
-}
-
-/// Writes the intensity volume in the format its extension names.
-pub fn write_volume(
-    path: &Path,
-    vol: &Volume,
-    intensity: &[f32],
-    params: &[(String, String)],
-) -> anyhow::Result<()> {
-    match VolumeFormat::of(path)? {
-        VolumeFormat::Npy => murk_io::write_npy_f32(path, &vol.shape(), intensity)?,
-        VolumeFormat::Hdf5 => {
-            let attrs: Vec<(&str, murk_io::AttrValue)> = params
-                .iter()
-                .map(|(k, v)| (k.as_str(), murk_io::AttrValue::Text(v.clone())))
-                .collect();
-            murk_io::write_volume_h5(
-                path,
-                vol.shape(),
-                intensity,
-                &vol.x.values(),
-                &vol.y.values(),
-                &vol.z.values(),
-                &attrs,
-            )?
-        }
-    }
-    Ok(())
-}
-
-/// Peak voxel position and value of an intensity volume.
-pub fn peak(vol: &Volume, intensity: &[f32]) -> ([f64; 3], f32) {
-    let (i, &v) = intensity
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .unwrap_or((0, &0.0));
-    let (ix, iy, iz) = (
-        i / (vol.y.n * vol.z.n),
-        (i / vol.z.n) % vol.y.n,
-        i % vol.z.n,
-    );
-    (vol.centre(ix, iy, iz).to_array(), v)
-}
-
-/// In a medium the backscatter near the relay is the strongest early signal: a peak on the volume's
-/// nearest plane, with no gate, usually images it rather than the scene.
-fn near_face_warning(vol: &Volume, intensity: &[f32], gated: bool) -> Option<String> {
-    let (p, _) = peak(vol, intensity);
-    let near = vol.z.start.min(vol.z.end);
-    (!gated && vol.z.n > 2 && (p[2] - near).abs() < 1e-9).then(|| {
-        format!(
-            "the brightest voxel lies on the volume's nearest plane (z = {} m): if the capture is in a medium, that is its backscatter near the relay; start the volume further away or fade out the early paths with --gate PATH_M",
-            murk_core::short(near)
-        )
-    })
-}
-
-/// The optical path `--t-offset` asks to remove (0 without it).
-/// `pulse`: PF's, whose band-pass moves the slab's apparent delay (see
-/// [`SlabParams::round_trip_delay_m`]); `None` for the other methods.
-pub fn t_offset_m(
-    spec: Option<&str>,
-    slab: &SlabParams,
-    pulse: Option<Pulse>,
-) -> anyhow::Result<f64> {
-    match spec {
-        None => Ok(0.0),
-        Some("slab") => Ok(slab.round_trip_delay_m(pulse)),
-        Some(s) => {
-            let v: f64 = s
-                .parse()
-                .map_err(|_| anyhow::anyhow!("--t-offset '{s}': expected metres or 'slab'"))?;
-            if !v.is_finite() {
-                bail!("--t-offset must be finite, got {v}");
-            }
-            Ok(v)
-        }
-    }
-}
-
-/// A reconstruction by any method, with the rows that describe how it was made.
-pub struct Output {
-    pub volume: Volume,
-    pub intensity: Vec<f32>,
-    pub method_rows: Vec<(String, String)>,
-    pub warnings: Vec<String>,
-}
-
-/// Runs `method` on `cap`; `volume` is used by pf, pf-exact, bp and fbp.
-pub fn reconstruct_any(
-    cap: &Capture,
-    method: MethodArg,
-    pf: &PfParams,
-    slab: &SlabArgs,
-    volume: &Volume,
-    bar: &Bar,
-) -> anyhow::Result<Output> {
-    let row = |k: &str, v: String| (k.to_string(), v);
-    let baseline = |r: murk_baselines::Reconstruction, rows: Vec<(String, String)>| Output {
-        volume: r.volume,
-        intensity: r.data,
-        method_rows: rows,
-        warnings: Vec::new(),
-    };
-    Ok(match method {
-        MethodArg::Pf | MethodArg::PfExact => {
-            let m = if method == MethodArg::PfExact {
-                Method::Exact
-            } else {
-                Method::Fast
-            };
-            let rec = murk_recon::reconstruct(cap, volume, pf, m, bar)?;
-            let mut rows = pf_rows(&rec.info);
-            if rec.info.evaluated_with == "fast" {
-                rows.push(row("lateral", format!("{:?}", pf.lateral).to_lowercase()));
-            }
-            Output {
-                volume: rec.volume,
-                intensity: rec.intensity,
-                method_rows: rows,
-                warnings: rec.info.warnings,
-            }
-        }
-        MethodArg::Bp => baseline(
-            murk_baselines::backproject(cap, volume, Default::default())?,
-            vec![row(
-                "method",
-                "backprojection (linear reads at bin centres)".into(),
-            )],
-        ),
-        MethodArg::Fbp => baseline(
-            murk_baselines::fbp(cap, volume, FbpOptions::default())?,
-            vec![row(
-                "method",
-                "filtered backprojection (−∇²G, 5³ voxels, σ = 1 voxel)".into(),
-            )],
-        ),
-        MethodArg::Lct => {
-            let p = LctParams {
-                snr: slab.snr.unwrap_or(LctParams::default().snr),
-                reflectance: match slab.weighting {
-                    WeightingArg::Diffuse => Reflectance::Diffuse,
-                    WeightingArg::Retroreflective => Reflectance::Retroreflective,
-                },
-                ..Default::default()
-            };
-            baseline(
-                murk_baselines::lct(cap, p)?,
-                vec![
-                    row("method", "light-cone transform (Wiener)".into()),
-                    row("snr", format!("{}", p.snr)),
-                    row("reflectance", format!("{:?}", p.reflectance)),
-                ],
-            )
-        }
-        MethodArg::Fk => baseline(
-            murk_baselines::fk(cap, FkParams::default())?,
-            vec![row("method", "f-k migration".into())],
-        ),
-        MethodArg::Cdt => {
-            let p = CdtParams {
-                slab: slab.slab(),
-                snr: slab.snr.unwrap_or(CdtParams::default().snr),
-                ..Default::default()
-            };
-            let s = p.slab;
-            baseline(
-                murk_baselines::cdt(cap, p)?,
-                vec![
-                    row(
-                        "method",
-                        "confocal diffuse tomography (slab Wiener + f-k)".into(),
-                    ),
-                    row(
-                        "slab",
-                        format!(
-                            "{} m, μa {} /m, μs′ {} /m, n {}, ze {} m",
-                            s.thickness_m, s.mu_a, s.mu_s_prime, s.n, s.ze_m
-                        ),
-                    ),
-                    row("snr", format!("{}", p.snr)),
-                    row("time grid", format!("{:?}", p.grid)),
-                ],
-            )
-        }
-    })
-}
-
 pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
-    VolumeFormat::of(&a.out)?;
+    murk_io::check_volume_path(&a.out)?;
     murk_io::refuse_overwrite(&a.out, &[&a.file])?;
     if let Some(png) = &a.png {
         murk_io::refuse_overwrite(png, &[&a.file])?;
     }
-    let mut cap = murk_io::read_capture(&a.file)?;
-    let params = a.params(&cap)?;
-    let pulse = if a.method.is_pf() {
-        let wavelength_m = params.wavelength_m(&cap)?;
-        Some(Pulse {
-            wavelength_m,
-            sigma_m: params.sigma_m(wavelength_m),
-        })
-    } else {
-        None
-    };
-    let offset = t_offset_m(a.t_offset.as_deref(), &a.slab.slab(), pulse)?;
-    cap.time.start_m -= offset;
-    // The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.
-    let edge_m = if a.method.is_pf() {
-        params.sigma_m(params.wavelength_m(&cap)?)
-    } else {
-        BASELINE_TAPER_BINS as f64 * cap.time.bin_width_m
-    };
-    let volume = match &a.volume {
-        Some(_) if a.method.own_grid() => {
-            if !quiet {
-                eprintln!("murk: warning: --volume is ignored by {:?}: it reconstructs on the capture's scan grid", a.method);
-            }
-            None
-        }
-        Some(spec) => Some(Volume::parse(spec)?),
-        None if a.method.own_grid() => None,
-        None => Some(default_volume(&cap).with_context(|| a.file.display().to_string())?),
-    };
-    let open_m = match (parse_gate(&a.gate)?, &volume) {
-        (Gate::Auto, Some(v)) => Some(shortest_path_m(&cap, v) - GATE_MARGIN_EDGES * edge_m),
-        // Own-grid methods have no volume to derive it from.
-        (Gate::Auto, None) | (Gate::Off, _) => None,
-        (Gate::At(p), _) => Some(p),
-    };
-    let gated = apply_gate(&mut cap, open_m, edge_m);
-    let mut end = handle_end(&mut cap, a.window_end.into(), edge_m);
+    let cap = murk_io::read_capture(&a.file)?;
+    let req = a.request(&cap)?;
+    if a.volume.is_some() && req.method.own_grid() && !quiet {
+        eprintln!(
+            "murk: warning: --volume is ignored by {:?}: it reconstructs on the capture's scan grid",
+            a.method
+        );
+    }
+    let kind = cap.kind();
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
-    // Own-grid methods never read the volume; an empty one stands in.
-    let empty = Volume {
-        x: Axis::new(0.0, 0.0, 1),
-        y: Axis::new(0.0, 0.0, 1),
-        z: Axis::new(0.0, 0.0, 1),
-    };
-    let out = reconstruct_any(
-        &cap,
-        a.method,
-        &params,
-        &a.slab,
-        volume.as_ref().unwrap_or(&empty),
-        &bar,
-    )
-    .with_context(|| a.file.display().to_string())?;
+    let out = pipeline::run(cap, &req, &bar).with_context(|| a.file.display().to_string())?;
     bar.finish();
-    let mut out = out;
-    end.trim(&cap, &out.volume, &mut out.intensity);
     let secs = t0.elapsed().as_secs_f64();
-    let near_face = near_face_warning(&out.volume, &out.intensity, gated.open_m.is_some());
-    for w in out
-        .warnings
-        .iter()
-        .chain(&end.warning())
-        .chain(&near_face)
-        .filter(|_| !quiet)
-    {
+    for w in out.warnings.iter().filter(|_| !quiet) {
         eprintln!("murk: warning: {w}");
     }
-    let mut rows = out.method_rows.clone();
-    rows.push(("t_offset_m".into(), format!("{offset:.6}")));
-    rows.push(("gate".into(), gated.describe()));
-    rows.push(("window_end".into(), end.describe()));
-    let table = table(&a.file, &cap, rows, &out.volume, &out.intensity, secs);
+    let table = table(&a.file, kind, out.rows, &out.volume, &out.intensity, secs);
     let v = &out.volume;
-    write_volume(&a.out, v, &out.intensity, &table)?;
+    murk_io::write_volume(&a.out, v, &out.intensity, &table)?;
     say(
         quiet,
         format!(
@@ -621,37 +336,6 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn pf_rows(i: &murk_recon::ReconInfo) -> Vec<(String, String)> {
-    vec![
-        (
-            "method".into(),
-            format!("Phasor Fields ({} form)", i.evaluated_with),
-        ),
-        ("wavelength_m".into(), format!("{:.6}", i.wavelength_m)),
-        ("sigma_m".into(), format!("{:.6}", i.sigma_m)),
-        (
-            "wall_spacing_m".into(),
-            i.wall_spacing_m
-                .map(|d| format!("{d:.6}"))
-                .unwrap_or_else(|| "n/a".into()),
-        ),
-        (
-            "frequencies".into(),
-            if i.slabs.len() > 1 {
-                format!(
-                    "{:.1} per plane over {} depth slabs with their own time windows (the whole volume's window: {} of a {}-point DFT)",
-                    i.frequencies_per_plane(),
-                    i.slabs.len(),
-                    i.frequencies,
-                    i.dft_len
-                )
-            } else {
-                format!("{} of a {}-point DFT", i.frequencies, i.dft_len)
-            },
-        ),
-    ]
-}
-
 /// The parameters and results of a Phasor Fields reconstruction worth recording next to a volume.
 pub fn summary(
     file: &Path,
@@ -661,8 +345,8 @@ pub fn summary(
 ) -> Vec<(String, String)> {
     table(
         file,
-        cap,
-        pf_rows(&rec.info),
+        cap.kind(),
+        rec.info.rows(),
         &rec.volume,
         &rec.intensity,
         secs,
@@ -672,16 +356,16 @@ pub fn summary(
 /// Capture, method rows, volume, peak and time as a key/value table.
 pub fn table(
     file: &Path,
-    cap: &Capture,
+    kind: CaptureKind,
     method_rows: Vec<(String, String)>,
     v: &Volume,
     intensity: &[f32],
     secs: f64,
 ) -> Vec<(String, String)> {
-    let (p, val) = peak(v, intensity);
+    let (p, val) = pipeline::peak(v, intensity);
     let mut t = vec![
         ("capture".into(), file.display().to_string()),
-        ("capture kind".into(), cap.kind().to_string()),
+        ("capture kind".into(), kind.to_string()),
     ];
     t.extend(method_rows);
     t.extend([

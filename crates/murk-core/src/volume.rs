@@ -54,6 +54,12 @@ impl Volume {
     pub fn index(&self, ix: usize, iy: usize, iz: usize) -> usize {
         (ix * self.y.n + iy) * self.z.n + iz
     }
+    /// The (ix, iy, iz) of C-order index `i` (the inverse of [`Volume::index`]).
+    pub fn unravel(&self, i: usize) -> (usize, usize, usize) {
+        let (ny, nz) = (self.y.n, self.z.n);
+        (i / (ny * nz), (i / nz) % ny, i % nz)
+    }
+
     pub fn centre(&self, ix: usize, iy: usize, iz: usize) -> DVec3 {
         DVec3::new(self.x.at(ix), self.y.at(iy), self.z.at(iz))
     }

@@ -29,4 +29,6 @@ pub use tal::{
     DEFAULT_READ_LIMIT_BYTES, TAL_FIELDS,
 };
 pub use truth::{read_truth_h5, write_truth_h5};
-pub use volume::{read_volume_h5, write_volume_h5, AttrValue, VolumeData};
+pub use volume::{
+    check_volume_path, read_volume_h5, write_volume, write_volume_h5, AttrValue, VolumeData,
+};

@@ -58,6 +58,61 @@ pub fn write_volume_h5(
     })
 }
 
+/// Writes an intensity volume in the format its extension names: `.npy` (the array alone) or
+/// `.h5`/`.hdf5` (the array, its x, y, z axes and `attrs` as text attributes).
+pub fn write_volume(
+    path: &Path,
+    volume: &murk_core::Volume,
+    intensity: &[f32],
+    attrs: &[(String, String)],
+) -> Result<()> {
+    match volume_format(path)? {
+        VolumeFormat::Npy => crate::write_npy_f32(path, &volume.shape(), intensity),
+        VolumeFormat::Hdf5 => {
+            let attrs: Vec<(&str, AttrValue)> = attrs
+                .iter()
+                .map(|(k, v)| (k.as_str(), AttrValue::Text(v.clone())))
+                .collect();
+            write_volume_h5(
+                path,
+                volume.shape(),
+                intensity,
+                &volume.x.values(),
+                &volume.y.values(),
+                &volume.z.values(),
+                &attrs,
+            )
+        }
+    }
+}
+
+enum VolumeFormat {
+    Npy,
+    Hdf5,
+}
+
+/// The volume format `path`'s extension names; callers check it before any work, so a typo costs
+/// nothing.
+pub fn check_volume_path(path: &Path) -> Result<()> {
+    volume_format(path).map(|_| ())
+}
+
+fn volume_format(path: &Path) -> Result<VolumeFormat> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    match ext.as_str() {
+        "npy" => Ok(VolumeFormat::Npy),
+        "h5" | "hdf5" => Ok(VolumeFormat::Hdf5),
+        _ => Err(Error::param(format!(
+            "{}: unknown output type '.{ext}' (use .npy or .h5)",
+            path.display()
+        ))),
+    }
+}
+
 /// A volume written by [`write_volume_h5`]: intensity (C order over x, y, z) and the three axes.
 pub struct VolumeData {
     pub intensity: Vec<f32>,

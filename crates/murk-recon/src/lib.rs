@@ -11,6 +11,7 @@ mod compensation;
 mod fft2;
 mod pf_exact;
 mod pf_fast;
+pub mod pipeline;
 mod resample;
 pub mod spectrum;
 
@@ -56,7 +57,7 @@ pub enum Lateral {
 
 /// How to evaluate the camera.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
+pub enum PfForm {
     /// Planar FFT convolution when the capture allows it, otherwise the exact form.
     Fast,
     /// Time-domain filtered backprojection with exact per-voxel paths (any geometry; slow).
@@ -136,6 +137,36 @@ pub struct ReconInfo {
 }
 
 impl ReconInfo {
+    /// How the field was computed, as (key, value) rows for summaries and file attributes.
+    pub fn rows(&self) -> Vec<(String, String)> {
+        let frequencies = if self.slabs.len() > 1 {
+            format!(
+                "{:.1} per plane over {} depth slabs with their own time windows (the whole volume's window: {} of a {}-point DFT)",
+                self.frequencies_per_plane(),
+                self.slabs.len(),
+                self.frequencies,
+                self.dft_len
+            )
+        } else {
+            format!("{} of a {}-point DFT", self.frequencies, self.dft_len)
+        };
+        vec![
+            (
+                "method".into(),
+                format!("Phasor Fields ({} form)", self.evaluated_with),
+            ),
+            ("wavelength_m".into(), format!("{:.6}", self.wavelength_m)),
+            ("sigma_m".into(), format!("{:.6}", self.sigma_m)),
+            (
+                "wall_spacing_m".into(),
+                self.wall_spacing_m
+                    .map(|d| format!("{d:.6}"))
+                    .unwrap_or_else(|| "n/a".into()),
+            ),
+            ("frequencies".into(), frequencies),
+        ]
+    }
+
     /// Band frequencies per depth plane: the mean over the fast form's slabs, else the whole window's.
     pub fn frequencies_per_plane(&self) -> f64 {
         let planes: usize = self.slabs.iter().map(|s| s.planes.len()).sum();
@@ -197,7 +228,7 @@ pub fn reconstruct(
     cap: &Capture,
     volume: &Volume,
     params: &PfParams,
-    method: Method,
+    method: PfForm,
     progress: &dyn Progress,
 ) -> Result<Reconstruction> {
     cap.validate()?;
@@ -259,8 +290,8 @@ pub fn reconstruct(
     };
     // The fast plan (FFT plans, resamplers) is built only when the fast form is asked for.
     let (field, evaluated_with, slabs) = match method {
-        Method::Exact => (exact(progress), "exact", Vec::new()),
-        Method::Fast => match pf_fast::Plan::new(cap, volume, params.falloff, params.lateral) {
+        PfForm::Exact => (exact(progress), "exact", Vec::new()),
+        PfForm::Fast => match pf_fast::Plan::new(cap, volume, params.falloff, params.lateral) {
             Ok(plan) => {
                 let (field, slabs) = plan.run(sigma_m, wavelength_m, progress)?;
                 (field, "fast", slabs)

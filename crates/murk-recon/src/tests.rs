@@ -76,7 +76,7 @@ fn assert_localised(r: &Reconstruction, what: &str) {
     }
 }
 
-fn run(cap: &Capture, vol: &Volume, method: Method) -> Reconstruction {
+fn run(cap: &Capture, vol: &Volume, method: PfForm) -> Reconstruction {
     reconstruct(cap, vol, &PfParams::default(), method, &NoProgress).unwrap()
 }
 
@@ -105,11 +105,11 @@ fn point_found_for_every_capture_kind_fast_and_exact() {
     ] {
         for (start, devices) in [(0.0, false), (0.2371, true)] {
             let cap = capture(kind, start, devices);
-            for method in [Method::Fast, Method::Exact] {
+            for method in [PfForm::Fast, PfForm::Exact] {
                 let r = run(&cap, &vol, method);
                 assert_eq!(
                     r.info.evaluated_with,
-                    if method == Method::Fast {
+                    if method == PfForm::Fast {
                         "fast"
                     } else {
                         "exact"
@@ -157,8 +157,8 @@ fn exhaustive_point_found() {
         y: Axis::new(-c, c, 8),
         z: Axis::new(0.3, 0.7, 11),
     };
-    let fast = run(&cap, &vol, Method::Fast);
-    let exact = run(&cap, &vol, Method::Exact);
+    let fast = run(&cap, &vol, PfForm::Fast);
+    let exact = run(&cap, &vol, PfForm::Exact);
     assert_localised(&fast, "exhaustive fast");
     assert!(rel_l2(&fast.intensity, &exact.intensity) < 1e-2);
 }
@@ -206,8 +206,8 @@ fn fast_equals_exact_for_smaller_larger_finer_and_offset_volumes() {
     for kind in [LayoutKind::LaserGridSinglePoint, LayoutKind::Confocal] {
         let cap = capture(kind, 0.1, true);
         for (what, vol) in &cases {
-            let fast = run(&cap, vol, Method::Fast);
-            let exact = run(&cap, vol, Method::Exact);
+            let fast = run(&cap, vol, PfForm::Fast);
+            let exact = run(&cap, vol, PfForm::Exact);
             let e = rel_l2(&fast.intensity, &exact.intensity);
             assert!(e <= 1e-2, "{kind:?}, {what}: relative L2 {e}");
         }
@@ -233,8 +233,8 @@ fn deep_volumes_split_into_slabs_that_match_the_exact_form() {
         z: Axis::new(0.2, 2.6, 61),
         ..aligned_volume()
     };
-    let fast = run(&cap, &vol, Method::Fast);
-    let exact = run(&cap, &vol, Method::Exact);
+    let fast = run(&cap, &vol, PfForm::Fast);
+    let exact = run(&cap, &vol, PfForm::Exact);
     let slabs = &fast.info.slabs;
     assert!(slabs.len() > 1, "one slab: {slabs:?}");
     assert_eq!(slabs[0].planes.start, 0);
@@ -312,7 +312,7 @@ fn assert_matches_oracle(cap: &Capture, vol: &Volume, tol: f64) {
             lateral: Lateral::Full,
             ..PfParams::default()
         };
-        let fast = reconstruct(cap, vol, &params, Method::Fast, &NoProgress).unwrap();
+        let fast = reconstruct(cap, vol, &params, PfForm::Fast, &NoProgress).unwrap();
         let want = oracle(cap, vol, &params);
         let scale = want.iter().map(|w| w.norm()).fold(0.0, f64::max);
         for (f, w) in fast.field.iter().zip(&want) {
@@ -347,7 +347,7 @@ fn lateral_cut_error(cap: &Capture, vol: &Volume) -> f64 {
             lateral,
             ..PfParams::default()
         };
-        reconstruct(cap, vol, &p, Method::Fast, &NoProgress)
+        reconstruct(cap, vol, &p, PfForm::Fast, &NoProgress)
             .unwrap()
             .field
     };
@@ -451,8 +451,8 @@ fn reciprocity_and_linearity() {
         y: Axis::new(-0.4, 0.0, 8),
         z: Axis::new(0.45, 0.55, 3),
     };
-    let a = run(&cap, &vol, Method::Fast);
-    let b = run(&cap.swapped_roles(), &vol, Method::Fast);
+    let a = run(&cap, &vol, PfForm::Fast);
+    let b = run(&cap.swapped_roles(), &vol, PfForm::Fast);
     let peak = a.field.iter().map(|u| u.norm()).fold(0.0, f32::max);
     for (x, y) in a.field.iter().zip(&b.field) {
         assert!((x - y).norm() <= 1e-4 * peak);
@@ -469,8 +469,8 @@ fn reciprocity_and_linearity() {
         .iter_mut()
         .zip(&other.h)
         .for_each(|(m, o)| *m = 2.0 * *m + 3.0 * o);
-    let u2 = run(&other, &vol, Method::Fast);
-    let um = run(&mix, &vol, Method::Fast);
+    let u2 = run(&other, &vol, PfForm::Fast);
+    let um = run(&mix, &vol, PfForm::Fast);
     let scale = um.field.iter().map(|u| u.norm()).fold(0.0, f32::max);
     for ((m, x), y) in um.field.iter().zip(&a.field).zip(&u2.field) {
         assert!((m - (x * 2.0 + y * 3.0)).norm() <= 1e-4 * scale);
@@ -523,7 +523,7 @@ fn doubling_the_wavelength_doubles_lateral_and_depth_widths() {
             ..PfParams::default()
         };
         let w = |vol: &Volume, step: f64| {
-            let r = reconstruct(&cap, vol, &params, Method::Fast, &NoProgress).unwrap();
+            let r = reconstruct(&cap, vol, &params, PfForm::Fast, &NoProgress).unwrap();
             fwhm(
                 &r.intensity.iter().map(|&v| v as f64).collect::<Vec<_>>(),
                 step,
@@ -554,7 +554,7 @@ fn bad_parameters_are_refused_with_a_reason() {
         wavelength: Wavelength::WallFactor(1.5),
         ..PfParams::default()
     };
-    let e = reconstruct(&cap, &vol, &p, Method::Fast, &NoProgress)
+    let e = reconstruct(&cap, &vol, &p, PfForm::Fast, &NoProgress)
         .unwrap_err()
         .to_string();
     assert!(e.contains("Nyquist"), "{e}");
@@ -563,7 +563,7 @@ fn bad_parameters_are_refused_with_a_reason() {
         wavelength: Wavelength::WallFactor(3.0),
         ..PfParams::default()
     };
-    assert!(reconstruct(&conf, &vol, &p, Method::Fast, &NoProgress).is_err());
+    assert!(reconstruct(&conf, &vol, &p, PfForm::Fast, &NoProgress).is_err());
     let behind = Volume {
         z: Axis::new(-0.1, 0.5, 3),
         ..vol
@@ -572,14 +572,14 @@ fn bad_parameters_are_refused_with_a_reason() {
         &cap,
         &behind,
         &PfParams::default(),
-        Method::Fast,
+        PfForm::Fast,
         &NoProgress
     )
     .is_err());
     let mut nan = cap.clone();
     nan.h[5] = f32::NAN;
     assert!(
-        reconstruct(&nan, &vol, &PfParams::default(), Method::Fast, &NoProgress)
+        reconstruct(&nan, &vol, &PfParams::default(), PfForm::Fast, &NoProgress)
             .unwrap_err()
             .to_string()
             .contains("non-finite")
@@ -600,7 +600,7 @@ fn truncated_window_is_padded_not_wrapped() {
     assert_eq!(nt, 1400);
     cap.h = h;
     cap.time.bins = keep;
-    let r = run(&cap, &aligned_volume(), Method::Fast);
+    let r = run(&cap, &aligned_volume(), PfForm::Fast);
     assert!(r
         .info
         .warnings
@@ -610,7 +610,7 @@ fn truncated_window_is_padded_not_wrapped() {
         z: Axis::new(1.0, 1.2, 3),
         ..aligned_volume()
     };
-    let f = run(&cap, &far, Method::Fast);
+    let f = run(&cap, &far, PfForm::Fast);
     let peak = r.intensity.iter().cloned().fold(0.0, f32::max);
     assert!(
         f.intensity.iter().all(|&v| v <= 1e-6 * peak),
@@ -648,7 +648,7 @@ fn ballistic_compensation_restores_an_attenuated_point() {
                 compensation,
                 ..PfParams::default()
             },
-            Method::Fast,
+            PfForm::Fast,
             &NoProgress,
         )
         .unwrap();

@@ -3,7 +3,7 @@
 //! shows the Z at its depth.
 
 use murk_core::{Axis, Volume};
-use murk_recon::{Compensation, Method, NoProgress, PfParams};
+use murk_recon::{Compensation, PfForm, NoProgress, PfParams};
 use murk_render::{Overrides, Plan, RenderOptions, Scene};
 use std::path::Path;
 use std::time::Duration;
@@ -44,7 +44,7 @@ fn rendered_z_letter_reconstructs_at_two_metres() {
         compensation: Compensation::Ballistic { mu_t_per_m: 1.0 },
         ..PfParams::default()
     };
-    let rec = murk_recon::reconstruct(&cap, &vol, &params, Method::Fast, &NoProgress)
+    let rec = murk_recon::reconstruct(&cap, &vol, &params, PfForm::Fast, &NoProgress)
         .expect("reconstruct");
     let nz = vol.z.n;
     let (imax, _) =

@@ -4,7 +4,7 @@
 use crate::metrics::{self, IouScores};
 use crate::plan::{CaptureJob, Cell, Format, Plan, SceneKind};
 use murk_core::{Capture, Error, GroundTruth, Result, Volume};
-use murk_recon::{Compensation, Method, NoProgress, PfParams, Wavelength};
+use murk_recon::{Compensation, PfForm, NoProgress, PfParams, Wavelength};
 use murk_render::{merge, RenderOptions};
 use murk_view::{views, Plane};
 use rustfft::num_complex::Complex32;
@@ -303,7 +303,7 @@ fn pf_field(cap: &Capture, volume: &Volume, lambda_factor: f64) -> Result<Vec<Co
         wavelength: Wavelength::WallFactor(4.0 * lambda_factor),
         ..PfParams::default()
     };
-    Ok(murk_recon::reconstruct(cap, volume, &params, Method::Fast, &NoProgress)?.field)
+    Ok(murk_recon::reconstruct(cap, volume, &params, PfForm::Fast, &NoProgress)?.field)
 }
 
 /// The largest signal in the last 5 % of bins over the peak, both of the histograms' sum.
