@@ -5,7 +5,7 @@
 
 use murk_baselines::{through_slab, Pulse, SlabParams};
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
-use murk_recon::{PfForm, NoProgress, PfParams};
+use murk_recon::{NoProgress, PfForm, PfParams};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
 
 /// Median depth of the brightest voxel per column over the columns whose front view reaches 30 %

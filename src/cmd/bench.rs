@@ -5,7 +5,7 @@ use crate::cmd::progress::say;
 use anyhow::{bail, Context};
 use clap::Args;
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
-use murk_recon::{PfForm, NoProgress, PfParams, Wavelength};
+use murk_recon::{NoProgress, PfForm, PfParams, Wavelength};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
 use std::path::{Path, PathBuf};
 use std::process::Command;

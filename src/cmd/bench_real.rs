@@ -4,12 +4,12 @@
 
 use crate::cmd::figure::ORDER;
 use crate::cmd::progress::say;
-use murk_recon::pipeline::default_volume;
 use anyhow::Context;
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams};
 use murk_core::{Axis, Capture, Volume};
 use murk_io::import::{import, ImportOptions, Preset};
-use murk_recon::{PfForm, NoProgress, PfParams, Wavelength};
+use murk_recon::pipeline::default_volume;
+use murk_recon::{NoProgress, PfForm, PfParams, Wavelength};
 use std::path::Path;
 use std::time::Instant;
 

@@ -3,10 +3,19 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Python is `$MURK_PYTHON` or `<repo>/.venv/bin/python` (`.ci/run` creates it); it must import tal
-/// and h5py, else the caller prints "skipped: <why>".
+/// The reason the tests that need y-tal are `#[ignore]`d; `.ci/run` creates `.venv` and runs them.
 #[allow(dead_code)] // not every test crate that shares this module needs y-tal
-pub fn python() -> Result<PathBuf, String> {
+pub const NEEDS_TAL: &str = "needs a Python with y-tal and h5py";
+
+/// Python is `$MURK_PYTHON` or `<repo>/.venv/bin/python` (`.ci/run` creates it); it must import tal
+/// and h5py. The tests that call this are ignored by default, so when one runs, a missing Python is
+/// a failure that says why, not a skip.
+#[allow(dead_code)] // not every test crate that shares this module needs y-tal
+pub fn python() -> PathBuf {
+    usable_python().unwrap_or_else(|why| panic!("{NEEDS_TAL}: {why}"))
+}
+
+fn usable_python() -> Result<PathBuf, String> {
     let py = std::env::var_os("MURK_PYTHON")
         .map(PathBuf::from)
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));

@@ -238,15 +238,16 @@ pub fn read_mat_v5_array(path: &Path, var: &str) -> Result<(Vec<usize>, Vec<f32>
 mod tests {
     use super::*;
 
-    const CDT: &str = "/work/shared/data/real/cdt_lindell2020";
+    const CDT: &str = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/real/cdt_lindell2020"
+    );
 
     /// The real CDT capture matches its lossless `.npy` copy (made with h5py + transpose(2, 1, 0)).
     #[test]
+    #[ignore = "needs ../shared/data/real/cdt_lindell2020 (.ci/run runs it where the folder exists)"]
     fn cdt_letter_s_matches_npy_copy() {
         let mat = Path::new(CDT).join("letter_s.mat");
-        if !mat.exists() {
-            return println!("skipped: {} not present", mat.display());
-        }
         let (shape, data) = read_mat_v73_array(&mat, "meas").unwrap();
         assert_eq!(shape, vec![512, 32, 32]);
         let (nshape, ndata) =

@@ -5,7 +5,9 @@
 
 use crate::{PfForm, PfParams, Progress};
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, Pulse, SlabParams};
-use murk_core::window::{apply_gate, handle_end, shortest_path_m, EndReport, GateReport, WindowEnd};
+use murk_core::window::{
+    apply_gate, handle_end, shortest_path_m, EndReport, GateReport, WindowEnd,
+};
 use murk_core::{Axis, Capture, Error, Result, Volume};
 
 /// Every reconstruction method, with its parameters.
@@ -128,12 +130,16 @@ pub fn run(mut cap: Capture, req: &Request, progress: &dyn Progress) -> Result<O
     let offset_m = match req.t_offset {
         TOffset::None => 0.0,
         TOffset::Metres(v) if v.is_finite() => v,
-        TOffset::Metres(v) => return Err(Error::param(format!("time offset must be finite, got {v}"))),
+        TOffset::Metres(v) => {
+            return Err(Error::param(format!("time offset must be finite, got {v}")))
+        }
         TOffset::Slab(slab) => slab.round_trip_delay_m(pulse),
     };
     cap.time.start_m -= offset_m;
     // The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.
-    let edge_m = pulse.map_or(BASELINE_EDGE_BINS as f64 * cap.time.bin_width_m, |p| p.sigma_m);
+    let edge_m = pulse.map_or(BASELINE_EDGE_BINS as f64 * cap.time.bin_width_m, |p| {
+        p.sigma_m
+    });
     let volume = match (req.volume, m.own_grid()) {
         (_, true) => None,
         (VolumeSpec::Given(v), false) => {
@@ -177,9 +183,7 @@ fn dispatch(
     volume: Option<&Volume>,
     progress: &dyn Progress,
 ) -> Result<Output> {
-    let on_volume = || {
-        volume.ok_or_else(|| Error::param("this method needs a volume"))
-    };
+    let on_volume = || volume.ok_or_else(|| Error::param("this method needs a volume"));
     let baseline = |r: murk_baselines::Reconstruction, rows: Vec<(String, String)>| Output {
         volume: r.volume,
         intensity: r.data,
@@ -203,7 +207,7 @@ fn dispatch(
                 intensity: rec.intensity,
                 rows,
                 warnings: rec.info.warnings,
-                    }
+            }
         }
         Method::Bp => baseline(
             murk_baselines::backproject(cap, on_volume()?, Default::default())?,

@@ -3,7 +3,7 @@
 //! shows the Z at its depth.
 
 use murk_core::{Axis, Volume};
-use murk_recon::{Compensation, PfForm, NoProgress, PfParams};
+use murk_recon::{Compensation, NoProgress, PfForm, PfParams};
 use murk_render::{Overrides, Plan, RenderOptions, Scene};
 use std::path::Path;
 use std::time::Duration;

@@ -4,7 +4,7 @@
 use crate::metrics::{self, IouScores};
 use crate::plan::{CaptureJob, Cell, Format, Plan, SceneKind};
 use murk_core::{Capture, Error, GroundTruth, Result, Volume};
-use murk_recon::{Compensation, PfForm, NoProgress, PfParams, Wavelength};
+use murk_recon::{Compensation, NoProgress, PfForm, PfParams, Wavelength};
 use murk_render::{merge, RenderOptions};
 use murk_view::{views, Plane};
 use rustfft::num_complex::Complex32;
