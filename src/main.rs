@@ -34,8 +34,6 @@ enum Command {
     Synth(cmd::synth::SynthArgs),
     /// Reconstruct a capture into a volume (.npy / .h5) and pictures.
     Reconstruct(cmd::reconstruct::ReconstructArgs),
-    /// Measure reconstruction speed (paper format; side by side with y-tal when available).
-    Bench(cmd::bench::BenchArgs),
     /// Render a scene file (scenes/*.toml) into a capture by time-resolved volumetric path tracing.
     Render(cmd::render::RenderArgs),
     /// Import a real capture (a public NLOS dataset with --format, or any 3-D array) into y-tal HDF5.
@@ -72,7 +70,6 @@ fn main() {
         Command::Info(a) => cmd::info::run(a),
         Command::Synth(a) => cmd::synth::run(a, cli.quiet),
         Command::Reconstruct(a) => cmd::reconstruct::run(a, cli.quiet),
-        Command::Bench(a) => cmd::bench::run(a, cli.quiet),
         Command::Render(a) => cmd::render::run(a, cli.quiet),
         Command::Import(a) => cmd::import::run(a, cli.quiet),
         Command::Figure(a) => cmd::figure::run(a, cli.quiet),

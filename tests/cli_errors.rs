@@ -236,7 +236,6 @@ fn help_teaches_and_demo_runs() {
         "info",
         "synth",
         "reconstruct",
-        "bench",
         "render",
         "import",
         "figure",

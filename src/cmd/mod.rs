@@ -1,7 +1,3 @@
-pub mod bench;
-pub mod bench_confocal;
-pub mod bench_real;
-pub mod bench_render;
 pub mod demo;
 pub mod experiment;
 pub mod figure;

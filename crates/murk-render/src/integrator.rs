@@ -71,7 +71,7 @@
 //!   optical path, and scaled by the phase function's ratio at the first vertex when it is anisotropic.
 //!   Each point's first-segment techniques (single scattering, the direct object return) stay its own.
 //!   On z-letter the techniques past the first vertex carried ~90 % of the object window's second
-//!   moment. Paper format (`murk bench --render --only z-letter`, 128 spp): relL2 2.37 → 1.35 (2 × 2),
+//!   moment. Paper format (`murk-bench --render --only z-letter`, 128 spp): relL2 2.37 → 1.35 (2 × 2),
 //!   0.91 (4 × 4), 0.75 (8 × 8) for 1.1×, 1.7×, 2.9× the CPU per path: 6.65 → 3.06, 1.72, 2.13 CPU-h.
 //!   t-wall-medium: 8.1× → 14.6× less CPU than mitransient (8 × 8: 8.0×, its first segments dominate).
 //!   Once object draws and first-segment time draws cut the first segments' share, 8 × 8 pays on both

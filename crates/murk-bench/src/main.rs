@@ -1,9 +1,13 @@
-//! `murk bench`: reconstruction speed on the paper's Z-letter configuration, and side by side with
-//! y-tal's pf_dev, fk and lct on its own benchmark captures when a Python with y-tal is available.
+//! `murk-bench`: reconstruction speed on the paper's Z-letter configuration, and side by side with
+//! y-tal's pf_dev, fk and lct on its own benchmark captures when a Python with y-tal is available;
+//! every method on the real captures (`--real`); the renderer next to mitransient (`--render`).
 
-use crate::cmd::progress::say;
+mod confocal;
+mod real;
+mod render;
+
 use anyhow::{bail, Context};
-use clap::Args;
+use clap::Parser;
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
 use murk_recon::{NoProgress, PfForm, PfParams, Wavelength};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
@@ -11,13 +15,21 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-#[derive(Args)]
-#[command(after_help = "Examples:\n  \
-murk bench                                   # PF on the paper's formats (and y-tal with .venv)\n  \
-murk bench --runs 9 --skip-z\n  \
-murk bench --render --only z-letter          # the renderer on the paper's format\n  \
-murk bench --real ../shared/data/real/cdt_lindell2020")]
+#[derive(Parser)]
+#[command(
+    name = "murk-bench",
+    version,
+    about = "murk's benchmarks: speed and error, side by side with y-tal and mitransient",
+    after_help = "Examples:\n  \
+cargo run --release -p murk-bench                               # PF on the paper's formats (and y-tal with .venv)\n  \
+cargo run --release -p murk-bench -- --runs 9 --skip-z\n  \
+cargo run --release -p murk-bench -- --render --only z-letter   # the renderer on the paper's format\n  \
+cargo run --release -p murk-bench -- --real ../shared/data/real/cdt_lindell2020"
+)]
 pub struct BenchArgs {
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
     /// Timed repetitions per case (the median is reported).
     #[arg(long, default_value_t = 5)]
     pub runs: usize,
@@ -58,10 +70,7 @@ pub struct BenchArgs {
     pub tal_bench: PathBuf,
 }
 
-pub fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
+pub use murk_render::bench::median;
 
 /// `python` ready to import y-tal, with `$MURK_TAL_PYTHONPATH` in front of `PYTHONPATH` (as in
 /// tests/interop_baselines.rs) so a checkout of y-tal's git HEAD, which has lct, can shadow the
@@ -77,35 +86,25 @@ pub fn tal_command(python: &Path) -> anyhow::Result<Command> {
     Ok(cmd)
 }
 
-/// The text of `"key": value` in one line of flat JSON as Python's json.dumps writes it: a number,
-/// `true`/`false`, a `[…]` list of numbers, or a string's contents (escapes kept).
-pub fn json_value<'a>(line: &'a str, key: &str) -> Option<&'a str> {
-    let rest = line.split_once(&format!("\"{key}\": "))?.1;
-    if let Some(s) = rest.strip_prefix('"') {
-        let end = s
-            .char_indices()
-            .find(|&(i, c)| c == '"' && !s[..i].ends_with('\\'))?
-            .0;
-        return Some(&s[..end]);
-    }
-    let end = if rest.starts_with('[') {
-        rest.find(']')? + 1
-    } else {
-        rest.find([',', '}'])?
-    };
-    Some(&rest[..end])
+/// One line of `json.dumps` output from a peer's benchmark script.
+pub fn json_line(line: &str) -> anyhow::Result<serde_json::Value> {
+    serde_json::from_str(line).with_context(|| format!("not a JSON line: {line}"))
 }
 
-/// The number, or the numbers of the list, at `key` (see [`json_value`]); empty when absent.
-pub fn json_numbers(line: &str, key: &str) -> Vec<f64> {
-    json_value(line, key)
-        .map(|v| {
-            v.trim_matches(['[', ']'])
-                .split(',')
-                .filter_map(|x| x.trim().parse().ok())
-                .collect()
-        })
-        .unwrap_or_default()
+/// The number, or the numbers of the list, at `key`; empty when absent.
+pub fn json_numbers(v: &serde_json::Value, key: &str) -> Vec<f64> {
+    match v.get(key) {
+        Some(serde_json::Value::Array(a)) => a.iter().filter_map(|x| x.as_f64()).collect(),
+        Some(x) => x.as_f64().into_iter().collect(),
+        None => Vec::new(),
+    }
+}
+
+/// Prints `line` unless `quiet`.
+pub fn say(quiet: bool, line: impl AsRef<str>) {
+    if !quiet {
+        println!("{}", line.as_ref());
+    }
 }
 
 /// A scratch folder under the system temp dir, removed when dropped (early returns included).
@@ -125,20 +124,29 @@ impl Drop for Scratch {
     }
 }
 
-pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
+fn main() {
+    let a = BenchArgs::parse();
+    if let Err(e) = run(&a) {
+        eprintln!("murk-bench: error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(a: &BenchArgs) -> anyhow::Result<()> {
+    let quiet = a.quiet;
     if a.runs == 0 {
         bail!("--runs must be at least 1");
     }
     say(
         quiet,
         format!(
-            "murk bench: {} rayon threads, median of {} runs",
+            "murk-bench: {} rayon threads, median of {} runs",
             rayon::current_num_threads(),
             a.runs
         ),
     );
     if let Some(dir) = &a.real {
-        return crate::cmd::bench_real::run(dir, a.runs, quiet);
+        return crate::real::run(dir, a.runs, quiet);
     }
     if a.render {
         if let Some(python) = &a.mitransient_python {
@@ -148,27 +156,21 @@ pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
                 }
             }
         }
-        let mit =
-            a.mitransient_python
-                .as_deref()
-                .map(|python| crate::cmd::bench_render::Mitransient {
-                    python,
-                    script: &a.mitransient_bench,
-                });
-        return crate::cmd::bench_render::run(
-            &a.scenes,
-            a.runs,
-            a.only.as_deref(),
-            mit.as_ref(),
-            quiet,
-        );
+        let mit = a
+            .mitransient_python
+            .as_deref()
+            .map(|python| crate::render::Mitransient {
+                python,
+                script: &a.mitransient_bench,
+            });
+        return crate::render::run(&a.scenes, a.runs, a.only.as_deref(), mit.as_ref(), quiet);
     }
     let python = a
         .tal_python
         .clone()
         .or_else(|| Some(PathBuf::from(".venv/bin/python")).filter(|p| p.exists()));
     if a.confocal_vs_tal {
-        return crate::cmd::bench_confocal::run(python.as_deref(), &a.tal_bench, a.runs, quiet);
+        return crate::confocal::run(python.as_deref(), &a.tal_bench, a.runs, quiet);
     }
     if !a.skip_z {
         z_letter(a.runs, quiet)?;
@@ -176,7 +178,7 @@ pub fn run(a: BenchArgs, quiet: bool) -> anyhow::Result<()> {
     match python {
         Some(py) => {
             versus_tal(&py, a.runs, quiet)?;
-            crate::cmd::bench_confocal::run(Some(&py), &a.tal_bench, a.runs, quiet)?;
+            crate::confocal::run(Some(&py), &a.tal_bench, a.runs, quiet)?;
         }
         None => say(
             quiet,
@@ -382,7 +384,9 @@ print(json.dumps({{"times": times, "version": tal.__version__}}))
     }
     let text = String::from_utf8_lossy(&out.stdout);
     let line = text.lines().last().unwrap_or("");
-    let times = json_numbers(line, "times");
+    let times = json_line(line)
+        .map(|v| json_numbers(&v, "times"))
+        .unwrap_or_default();
     if times.is_empty() {
         bail!("could not parse tal's timing output: {line}");
     }

@@ -2,8 +2,8 @@
 //! mitransient 1.3.1 (its figures recorded on this machine in §7.4, or rendered in the same run), and
 //! the paper-format Z-letter capture.
 
-use crate::cmd::bench::{json_numbers, json_value, Scratch};
-use crate::cmd::progress::say;
+use crate::say;
+use crate::{json_line, json_numbers, Scratch};
 use anyhow::{bail, Context};
 use murk_core::TimeAxis;
 use murk_render::bench::{median, peak_rss_mib, rel_l2, split_rel_l2, timed_render, window_mask};
@@ -187,10 +187,14 @@ fn mitransient_live(
                 err.lines().last().unwrap_or("no output")
             );
         };
-        let cpu = *json_numbers(line, "cpu_s")
+        let line = json_line(line)?;
+        let cpu = *json_numbers(&line, "cpu_s")
             .last()
             .context("no cpu_s in its output")?;
-        let npy = json_value(line, "npy").context("no npy in its output")?;
+        let npy = line
+            .get("npy")
+            .and_then(|v| v.as_str())
+            .context("no npy in its output")?;
         let (shape, h) = murk_io::read_npy_f32(Path::new(npy))?;
         // [x, y, bins, channels]: channel 0 is the transient.
         let [_, _, _, ch] = shape[..] else {

@@ -5,8 +5,8 @@
 //! bench process itself has already held other cases' buffers; y-tal's figure is likewise its whole
 //! subprocess (tal_bench.py's ru_maxrss, interpreter and imports included).
 
-use super::bench::{json_numbers, json_value, median, tal_command, Scratch};
-use crate::cmd::progress::say;
+use crate::say;
+use crate::{json_line, json_numbers, median, tal_command, Scratch};
 use anyhow::{bail, Context};
 use murk_baselines::{FkParams, LctParams, Reconstruction};
 use murk_core::{Capture, DVec3, TimeAxis};
@@ -136,7 +136,16 @@ fn murk_peak_rss_mib(file: &Path, method: &str, scratch: &Path) -> anyhow::Resul
     if !Path::new(GNU_TIME).exists() {
         return Ok(None);
     }
-    let exe = std::env::current_exe().context("locating the murk executable")?;
+    // `murk` is built next to `murk-bench` (cargo build --release --workspace).
+    let exe = std::env::current_exe()
+        .context("locating murk-bench")?
+        .with_file_name(format!("murk{}", std::env::consts::EXE_SUFFIX));
+    if !exe.exists() {
+        anyhow::bail!(
+            "{} not found: build it too (cargo build --release --workspace)",
+            exe.display()
+        );
+    }
     let report = scratch.join(format!("{method}.rss"));
     let out = Command::new(GNU_TIME)
         .args(["-f", "%M", "-o"])
@@ -197,9 +206,18 @@ fn y_tal(
         let last = stderr.lines().last().unwrap_or("no output");
         return Err(format!("{} {}: {last}", python.display(), script.display()));
     };
-    let version = json_value(result, "tal").unwrap_or("?").to_string();
-    if json_value(result, "ok") != Some("true") {
-        let error = json_value(result, "error").unwrap_or("failed");
+    let result = json_line(result).map_err(|e| e.to_string())?;
+    let text = |key: &str| match result.get(key) {
+        Some(serde_json::Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => "?".into(),
+    };
+    let version = text("tal");
+    if result.get("ok") != Some(&serde_json::Value::Bool(true)) {
+        let error = result
+            .get("error")
+            .and_then(|e| e.as_str())
+            .unwrap_or("failed");
         // y-tal 0.20.0 on PyPI predates tal.reconstruct.lct (it arrived in y-tal's git HEAD).
         let hint = if error.contains("has no attribute 'lct'") {
             "; set MURK_TAL_PYTHONPATH to a folder with y-tal HEAD's tal package"
@@ -209,7 +227,7 @@ fn y_tal(
         return Err(format!("y-tal {version}: {error}{hint}"));
     }
     let number = |key: &str| {
-        json_numbers(result, key)
+        json_numbers(&result, key)
             .first()
             .copied()
             .ok_or_else(|| format!("no {key} in tal_bench.py's RESULT line: {result}"))
@@ -217,7 +235,7 @@ fn y_tal(
     Ok(TalRun {
         secs: number("solve_s")?,
         peak_mib: number("peak_rss_mb")?,
-        peak_err_m: json_value(result, "peak_err_m").unwrap_or("?").to_string(),
+        peak_err_m: text("peak_err_m"),
         version,
     })
 }

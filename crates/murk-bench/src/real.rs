@@ -2,12 +2,11 @@
 //! captures (Lindell & Wetzstein 2020), as `murk reconstruct` runs them: plan and run together, the
 //! default volume for the voxel methods, the median of several runs per scene.
 
-use crate::cmd::figure::ORDER;
-use crate::cmd::progress::say;
+use crate::say;
 use anyhow::Context;
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams};
 use murk_core::{Axis, Capture, Volume};
-use murk_io::import::{import, ImportOptions, Preset};
+use murk_io::import::{import, ImportOptions, Preset, CDT_SCENES};
 use murk_recon::pipeline::default_volume;
 use murk_recon::{NoProgress, PfForm, PfParams, Wavelength};
 use std::path::Path;
@@ -21,7 +20,7 @@ fn median_secs(runs: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow
         f()?;
         secs.push(t0.elapsed().as_secs_f64());
     }
-    Ok(super::bench::median(secs))
+    Ok(crate::median(secs))
 }
 
 pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
@@ -38,7 +37,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
         Some(r) => r.1.push(s),
         None => table.push((name, vec![s])),
     };
-    for scene in ORDER {
+    for (scene, _, _) in CDT_SCENES {
         let path = dir.join(format!("{scene}.mat"));
         let cap: Capture = import(&path, &ImportOptions::preset(Preset::Cdt))?;
         let ctx = || path.display().to_string();
@@ -85,7 +84,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
         time("pf", &mut || pf_on(&vol))?;
         time("pf-cdt-voxels", &mut || pf_on(&pf_grid))?;
         say(quiet, line.trim_end_matches(','));
-        if scene == ORDER[0] {
+        if scene == CDT_SCENES[0].0 {
             say(
                 quiet,
                 format!(
@@ -100,7 +99,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
             quiet,
             format!(
                 "{name:>14}: median over scenes {:.1} ms (worst {:.1} ms)",
-                super::bench::median(secs.clone()) * 1e3,
+                crate::median(secs.clone()) * 1e3,
                 secs.iter().copied().fold(0.0, f64::max) * 1e3
             ),
         );
