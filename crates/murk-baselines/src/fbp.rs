@@ -3,7 +3,7 @@
 //!
 //! Sign: the Laplacian of a Gaussian ∇²G is negative at its centre, so ∇²G ⊛ BP has its *minimum* at
 //! a point scatterer (and its maximum a few voxels away in depth). The filter is therefore −∇²G
-//! (algorithms.md §5.2, pitfall 10).
+//! (docs/reconstruction.md: the sign).
 
 use crate::bp::{backproject, BpOptions};
 use crate::Reconstruction;

@@ -158,7 +158,7 @@ mod tests {
 
     #[test]
     fn point_at_half_a_metre_is_at_depth_index_100() {
-        // algorithms.md §7.2 #18: z = 0.5 m, Δs = 1 cm, M = 256, N = 32.
+        // docs/reconstruction.md, f-k: z = 0.5 m, Δs = 1 cm, M = 256, N = 32.
         let mut c = confocal(32, 0.64, axis(0.0, 0.01, 256));
         add_point(&mut c, DVec3::new(ON_GRID, ON_GRID, 0.5));
         let r = fk(&c, FkParams::default()).unwrap();

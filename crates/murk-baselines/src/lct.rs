@@ -221,7 +221,7 @@ mod tests {
 
     #[test]
     fn point_at_half_a_metre_is_within_one_voxel_of_index_100() {
-        // algorithms.md §7.2 #17: z = 0.5 m, Δs = 1 cm, M = 256, N = 32; scan point (16, 16).
+        // docs/reconstruction.md, LCT: z = 0.5 m, Δs = 1 cm, M = 256, N = 32; scan point (16, 16).
         let mut c = confocal(32, 0.64, axis(0.0, 0.01, 256));
         add_point(&mut c, DVec3::new(0.01, 0.01, 0.5));
         let r = lct(&c, LctParams::default()).unwrap();

@@ -57,7 +57,7 @@ pub struct BenchArgs {
     /// peak memory (y-tal's lct needs its git HEAD: put it in MURK_TAL_PYTHONPATH).
     #[arg(long)]
     pub confocal_vs_tal: bool,
-    /// With --render: a Python with mitransient 1.3.1 and mitsuba (see mitransient.md §7.1), to render
+    /// With --render: a Python with mitransient 1.3.1 and mitsuba (pip install mitransient mitsuba; Dr.Jit 1.5 needs Debian's libllvm19), to render
     /// the T-letter cases with mitransient in the same run instead of quoting its recorded figures
     /// (about 5 minutes more: 10 000 spp and a 100 000-spp reference per case).
     #[arg(long)]
@@ -288,7 +288,7 @@ fn paper_case(
     Ok(())
 }
 
-/// y-tal's benchmark case (tal.md §11): 64 × 64 single-laser capture, 512 bins of 1 cm, point at
+/// y-tal's benchmark case (docs/benchmarks.md): 64 × 64 single-laser capture, 512 bins of 1 cm, point at
 /// (0.1, −0.2, 1.0); 32 planes of 64 × 64 at z = 0.85…1.16; λ = σ = 0.06 m. tal's pf_dev needs one call
 /// per plane for several planes (its multi-plane DIRECT_LIGHT path fails), as in its own benchmark.
 fn versus_tal(python: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {

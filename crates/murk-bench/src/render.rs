@@ -1,4 +1,4 @@
-//! `murk bench --render`: the renderer's efficiency on mitransient.md §7.2's T-letter scenes, next to
+//! `murk bench --render`: the renderer's efficiency on the T-letter scenes of docs/benchmarks.md, next to
 //! mitransient 1.3.1 (its figures recorded on this machine in §7.4, or rendered in the same run), and
 //! the paper-format Z-letter capture.
 
@@ -12,7 +12,7 @@ use std::path::Path;
 use std::process::Command;
 
 /// One T-letter case: scene file, spp, reference spp, object window (m; `None`: all bins),
-/// mitransient's relL2 and CPU seconds for it as recorded in mitransient.md §7.4 (10 000 spp against a
+/// mitransient's relL2 and CPU seconds for it as recorded in docs/benchmarks.md (10 000 spp against a
 /// 100 000-spp reference, 2 vCPU EPYC; `transient_nlos_path` without a medium, `transient_prbvolpath`
 /// with one), and the arguments of mitransient_bench.py that render the same case live.
 struct Case {
@@ -24,7 +24,7 @@ struct Case {
     mit_args: &'static [&'static str],
 }
 
-/// mitransient's spp and reference spp in the live comparison (those of mitransient.md §7.4).
+/// mitransient's spp and reference spp in the live comparison (those of docs/benchmarks.md).
 const MIT_SPP: u64 = 10_000;
 const MIT_REF_SPP: u64 = 100_000;
 
@@ -127,7 +127,7 @@ fn t_case(
     );
     let ((em, cm), source) = match mit {
         Some(m) => (mitransient_live(m, c, &mask, quiet)?, "measured now"),
-        None => (c.mitransient, "recorded in mitransient.md §7.4"),
+        None => (c.mitransient, "recorded in docs/benchmarks.md"),
     };
     // CPU time to mitransient's error, by error ∝ CPU^−½.
     let ours = cpu * (e / em).powi(2);

@@ -1,4 +1,4 @@
-//! Medium compensation applied to the intensity (algorithms.md §4).
+//! Medium compensation applied to the intensity (docs/reconstruction.md).
 
 use murk_core::{DVec3, Error, Result};
 
@@ -71,7 +71,7 @@ mod tests {
 
     #[test]
     fn paper_table() {
-        // algorithms.md §4.1, d = 0, 0.5, 1, 2 m.
+        // docs/reconstruction.md, d = 0, 0.5, 1, 2 m.
         let table = [
             ((0.5, 0.15), [0.85, 1.10534, 1.43586, 2.41622]),
             ((1.0, 0.83), [0.17, 0.745086, 1.73448, 6.22295]),

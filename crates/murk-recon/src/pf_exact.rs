@@ -1,4 +1,4 @@
-//! Exact Phasor Fields for any geometry and voxel set (algorithms.md §1.4 A): each histogram is filtered
+//! Exact Phasor Fields for any geometry and voxel set (docs/reconstruction.md): each histogram is filtered
 //! into its complex band-limited signal once, then every voxel sums the signals read (linear
 //! interpolation) at its exact round-trip path. Cost O(voxels × histograms).
 

@@ -1,4 +1,4 @@
-//! Fast Phasor Fields for planar wall grids (algorithms.md §2): for each frequency and depth plane, the
+//! Fast Phasor Fields for planar wall grids (docs/reconstruction.md): for each frequency and depth plane, the
 //! camera-side RSD sum over the wall grid is a 2-D linear convolution, done by zero-padded FFTs and
 //! cropped where no wrap-around can reach. The single point of the other side gets its exact per-voxel
 //! phase afterwards; confocal captures use the round-trip kernel e^{2ikr}. Volumes whose lateral samples

@@ -328,7 +328,7 @@ mod tests {
 
     #[test]
     fn band_matches_tal_table() {
-        // algorithms.md §2.2: 2 m wall / 128 points, λ = 4Δc, cycles 4, Nf = 5104, 1 mm bins → [20, 142].
+        // docs/reconstruction.md: 2 m wall / 128 points, λ = 4Δc, cycles 4, Nf = 5104, 1 mm bins → [20, 142].
         let dc = 2.0 / 127.0;
         let lambda = 4.0 * dc;
         let b = Band::new(5104, 0.001, lambda, 4.0 * lambda / 6.0);

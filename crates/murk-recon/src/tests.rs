@@ -1,4 +1,4 @@
-//! Reconstruction tests against analytic cases and slow references (algorithms.md §7).
+//! Reconstruction tests against analytic cases and slow references (docs/reconstruction.md).
 
 use super::*;
 use murk_core::{Axis, TimeAxis};
@@ -251,7 +251,7 @@ fn deep_volumes_split_into_slabs_that_match_the_exact_form() {
     assert!(e <= 1e-2, "relative L2 {e}");
 }
 
-/// The frequency-domain voxel sum (algorithms.md §1.4 B), the slowest and most literal form.
+/// The frequency-domain voxel sum (docs/reconstruction.md), the slowest and most literal form.
 fn oracle(cap: &Capture, vol: &Volume, params: &PfParams) -> Vec<Complex64> {
     let lambda = match params.wavelength {
         Wavelength::Metres(l) => l,
@@ -534,7 +534,7 @@ fn doubling_the_wavelength_doubles_lateral_and_depth_widths() {
     let (lat1, dep1) = widths(4.0);
     let (lat2, dep2) = widths(8.0);
     let sigma = 4.0 * (4.0 / 32.0) / 6.0;
-    // algorithms.md §7.2 #11–12: depth FWHM ≈ 0.83–0.89 σ; both widths scale ×(1.8–2.2) with λ.
+    // docs/reconstruction.md, resolution and λ scaling: depth FWHM ≈ 0.83–0.89 σ; both widths scale ×(1.8–2.2) with λ.
     assert!(
         (0.7..1.1).contains(&(dep1 / sigma)),
         "depth FWHM {dep1} vs σ {sigma}"
@@ -620,7 +620,7 @@ fn truncated_window_is_padded_not_wrapped() {
 
 #[test]
 fn ballistic_compensation_restores_an_attenuated_point() {
-    // algorithms.md §7.2 #15: a point seen through a medium attenuating exp(−μt(d_l + d_s)), μt = 1/m.
+    // docs/reconstruction.md, ballistic compensation: a point seen through a medium attenuating exp(−μt(d_l + d_s)), μt = 1/m.
     let clear = capture(LayoutKind::LaserGridSinglePoint, 0.0, false);
     let mut foggy = clear.clone();
     foggy.h.iter_mut().for_each(|v| *v = 0.0);

@@ -1,5 +1,5 @@
 //! Efficiency benchmark: object-window relative L2 error against a long reference render, CPU time and
-//! paths per CPU-second, median of several seeds (the protocol of mitransient.md §7.4).
+//! paths per CPU-second, median of several seeds (the protocol of docs/benchmarks.md).
 //!
 //! `cargo run --release -p murk-render --example bench_error -- SCENE.toml SPP REF_SPP RUNS [WIN_START WIN_END]`
 

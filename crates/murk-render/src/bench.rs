@@ -1,4 +1,4 @@
-//! Efficiency measurement, the protocol of mitransient.md §7.4: relative L2 error over an object time
+//! Efficiency measurement, the protocol of docs/benchmarks.md: relative L2 error over an object time
 //! window, CPU time of the process (all threads) and paths per CPU-second. Used by `murk-bench --render`
 //! and the `bench_error` example.
 

@@ -265,7 +265,7 @@ fn object_connections_keep_the_expectation() {
 }
 
 /// The T letter 1 m behind a 1 m × 1 m relay wall of `relay_albedo`, in fog filling the box of
-/// mitransient.md §7.2; a laser grid with one SPAD point, 30 bins from 0. The other keys are TOML lines.
+/// docs/benchmarks.md; a laser grid with one SPAD point, 30 bins from 0. The other keys are TOML lines.
 fn fog_t_scene(relay_albedo: f64, capture: &str, render: &str, medium: &str) -> Scene {
     scene(&format!(
         r#"
