@@ -8,82 +8,9 @@
 //! W(ω) = cos θ/π. H(x_l → x_s, t) is the response per unit laser power, binned by optical path.
 //! Relay reflectance at the two endpoints is not applied (it is one constant factor per capture).
 //!
-//! Sampling of the origin's paths, chosen by measurement on the T-letter scenes (1024 units × 1000 spp,
-//! relL2 against a 16 000-spp reference, median of 3 seeds; object window for t-wall-single, all bins
-//! for t-wall-confocal):
-//! - First direction: toward a uniform point of the hidden geometry with probability
-//!   `hidden_geometry_sampling`, else cosine-weighted (one-sample MIS over the mixture). Without a
-//!   scattering medium every contributing first direction meets the hidden geometry (the relay is
-//!   coplanar with the origin), so the default there is 1: relL2 0.121 → 0.103 (single) and 0.171 →
-//!   0.147 (confocal) against 0.8, whose cosine share almost never hits a small object.
-//! - First directions of a unit come from a randomly shifted rank-1 lattice with spp points whose
-//!   generator maximises the shortest lattice vector (each point is uniform, so the estimate stays
-//!   unbiased): relL2 0.103 → 0.089 (single), 0.150 → 0.137 (confocal) against the R2 sequence (which
-//!   gave 2.8× less variance than independent directions); t-wall-medium unchanged (median of 15 seeds
-//!   1.48 → 1.42). Ordering a rectangle's edges for a less anisotropic lattice measured no better.
-//! - Past the first hidden vertex a path goes on with probability `first_vertex_survival` (weight 1/q).
-//!   Without a scattering medium the direct return, which dominates every measure, needs only the
-//!   first vertex while the rest of the path cost a third of the CPU. The default there, 0.1, takes
-//!   ~25 % off the CPU time at an unchanged object-window error (single); over all bins (confocal)
-//!   the error² grows as D + H/q with H ≈ 1.5 % of D, and CPU × error² is least near q = 0.1
-//!   (measured: 13 % below 0.25; 0.05 and 0.15 modelled 4 % and 3 % worse). With fog, multiply
-//!   scattered light is the signal: the defaults stay 0.8 (`z-letter.toml` and `t-wall-medium.toml`
-//!   set 0.2) and 1.
-//! - No Russian roulette where a medium scatters (default `rr_depth`). Roulette with survival
-//!   min(β, 0.95) turns a deep fog path (β ≈ αⁿ) into a rare one of weight ~1: on z-letter the largest
-//!   object-window sample was 10 000× the mean and the top 100 carried 79 % of the second moment. Without
-//!   it: variance ÷2 (t-wall-medium) to ÷5.8 (z-letter, with time samples) for 10–17 % more CPU; the
-//!   paper format's extrapolated CPU time to 6 % fell from 32 to 12.4 h.
-//! - `time_samples` stratified time-window distances per segment and target (`TimeWindow`, the n draws
-//!   counted as n·pdf in every balance weight): on z-letter 4 take 12.4 → 10.1 CPU-h; on t-wall-medium
-//!   they cost more than they remove (the draws of one segment are correlated through it), so it keeps 0.
-//!   The segment leaving the traced point has its own count (`first_time_samples`): once tails are
-//!   shared, its vertices (each point's single scattering) are what no other point helps with. Splitting
-//!   the object window's variance by technique (two seeds, a tag per splat) after sharing: the first
-//!   segment's medium vertices held 0.19 of t-wall-medium's relative variance 0.38 for 3 % of its
-//!   signal², almost all from free-flight vertices that rarely land in the window; with object draws
-//!   (below), 4 draws there took it 0.26 → 0.14 for 20 % more CPU. On z-letter (tile 8) 4 → 8 → 16 → 32
-//!   draws gave relL2 0.53 → 0.45 → 0.40 → 0.37 at 128 spp, 0.77 → 0.67 → 0.55 → 0.61 CPU-h in one
-//!   series (this VM's timings drift by ±20 %); the scene keeps 16.
-//! - Segment starts near a target get more target-side draws (`target_split` up to 64 within
-//!   `target_split_radius` 0.5 m, ∝ radius/distance): on t-wall-medium relay vertices within 5 cm of the
-//!   laser spot carried 42 % of the object window's second moment for 1.4 % of its mean, mostly through
-//!   their one target-side draw. Variance × CPU (16 seeds) 1.80 → 0.88; `murk bench --render`: 5.8× →
-//!   8.1× less CPU than mitransient; z-letter 3.32 → 3.21 relL2 at 128 spp.
-//! - Each path also draws `object_draws` directions from its traced point toward stratified uniform points
-//!   of the hidden geometry and connects only the surface each first meets (`draw_objects`; balance
-//!   heuristic with the path's own first direction, `n·p_hidden-geometry` against the mixture's density).
-//!   The first segment's object return had become the largest single term: 0.28 of z-letter's relative
-//!   variance 0.80 for 6 % of the signal², 0.11 of t-wall-medium's 0.38. Two draws took those to 0.03 and
-//!   0.01, and with them fewer first directions need the hidden geometry: z-letter (tile 4, two draws)
-//!   1.72 → 0.91 CPU-h with `hidden_geometry_sampling` 0.05, 0.82–0.96 with 0.1, 1.01 with 0 (which
-//!   loses the paths that scatter near the Z).
-//! - Medium vertices also connect through a uniform point of the hidden geometry (`object_connections`,
-//!   MIS with the phase direction): on z-letter the object return after one scattering event came from
-//!   rare phase directions meeting the Z (18 % of the second moment from 0.1 % of the samples); relL2 at
-//!   128 spp 2.79 → 2.38 for 15 % more CPU per path (8.5 → 7.3 CPU-h). On t-wall-medium (relL2 1.10 → 1.01
-//!   for ~40 % more CPU per path) it pays nothing, so that scene turns it off.
-//! - Traced points share their paths' tails in tiles (`share_tile`: 4 × 4 by default where a medium
-//!   scatters and every traced point has the same targets; `Plan` makes the tiles). What a path adds past
-//!   its first hidden vertex (from the techniques that leave that vertex on) is replayed for every point
-//!   of the tile: the first vertex is joined to each point again, weighted by the balance heuristic over
-//!   the tile's densities of that vertex (each point traces spp paths), shifted by the difference in
-//!   optical path, and scaled by the phase function's ratio at the first vertex when it is anisotropic.
-//!   Each point's first-segment techniques (single scattering, the direct object return) stay its own.
-//!   On z-letter the techniques past the first vertex carried ~90 % of the object window's second
-//!   moment. Paper format (`murk-bench --render --only z-letter`, 128 spp): relL2 2.37 → 1.35 (2 × 2),
-//!   0.91 (4 × 4), 0.75 (8 × 8) for 1.1×, 1.7×, 2.9× the CPU per path: 6.65 → 3.06, 1.72, 2.13 CPU-h.
-//!   t-wall-medium: 8.1× → 14.6× less CPU than mitransient (8 × 8: 8.0×, its first segments dominate).
-//!   Once object draws and first-segment time draws cut the first segments' share, 8 × 8 pays on both
-//!   fog scenes (4 × 4 → 8 × 8: z-letter relL2 0.72 → 0.53, t-wall-medium 0.36 → 0.29, for ~1.5× the
-//!   CPU per path; `share_tile = 8` in both). The
-//!   tile's weights are ∝ each point's leg integrand f (`share_tail`), which needs only the nearest hit
-//!   up to the vertex, not the mixture density's walk along the whole ray. Replaying the tails of 16–256
-//!   paths at once, for cache locality, measured no faster.
-//! - Equiangular distances toward the targets are off by default (`equiangular`): once target-side
-//!   sampling handles the points near a target and roulette is gone, they took a third of the CPU time
-//!   for no lower error. t-wall-medium (median of 7 seeds, 256 spp): relL2 1.35 at 0.90 CPU-s with them,
-//!   1.36 at 0.60 without; z-letter: 9.8 and 10.4 CPU-h extrapolated (within the runs' spread).
+//! The sampling techniques (first directions, survival past the first vertex, no roulette in a
+//! medium, time-window distances, target-side draws, object draws and connections, shared tails) and the
+//! measurements that chose their defaults are in `docs/renderer-sampling.md`.
 
 use crate::geometry::{Geometry, Hit, Shape, EPS};
 use crate::medium::Medium;
