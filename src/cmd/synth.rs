@@ -1,10 +1,10 @@
 //! `murk synth`: analytic captures (first hidden bounce only) of points and planar shapes.
 
 use crate::cmd::progress::say;
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Args;
 use murk_core::{Capture, DVec3, TimeAxis};
-use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
+use murk_synth::{floats, synthesize, CaptureLayout, SynthOptions, Synthesis};
 use std::path::PathBuf;
 
 #[derive(Args, Clone)]
@@ -62,126 +62,43 @@ pub struct SynthArgs {
     pub cosines: bool,
 }
 
-fn parse_floats<const N: usize>(s: &str) -> Result<[f64; N], String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("'{s}': {e}"))?;
-    let arr: [f64; N] = v
-        .try_into()
-        .map_err(|_| format!("'{s}': expected {N} comma-separated numbers"))?;
-    if arr.iter().any(|x| !x.is_finite()) {
-        return Err(format!("'{s}': numbers must be finite"));
-    }
-    Ok(arr)
-}
-
 fn parse_xy(s: &str) -> Result<[f64; 2], String> {
-    parse_floats::<2>(s)
+    floats::<2>(s)
 }
 
 fn parse_xyz(s: &str) -> Result<DVec3, String> {
-    parse_floats::<3>(s).map(DVec3::from_array)
-}
-
-pub fn parse_target(spec: &str, spacing_m: f64) -> anyhow::Result<Target> {
-    let (kind, rest) = spec
-        .split_once(':')
-        .with_context(|| format!("--target '{spec}': expected KIND:PARAMETERS"))?;
-    let depth = |s: &str| -> anyhow::Result<f64> {
-        let d: f64 = s
-            .trim()
-            .parse()
-            .with_context(|| format!("--target '{spec}': '{s}' is not a depth in metres"))?;
-        if !(d > 0.0 && d.is_finite()) {
-            bail!("--target '{spec}': depth must be > 0 m");
-        }
-        Ok(d)
-    };
-    let polygon = |outline, d| Target::Polygon {
-        outline,
-        offset: [0.0; 2],
-        depth_m: d,
-        albedo: 1.0,
-        spacing_m,
-    };
-    Ok(match kind {
-        "point" => Target::Point {
-            pos: parse_xyz(rest).map_err(|e| anyhow::anyhow!("--target {e}"))?,
-            albedo: 1.0,
-        },
-        "z" => polygon(murk_synth::z_letter_outline(), depth(rest)?),
-        "t" => polygon(murk_synth::t_letter_outline(), depth(rest)?),
-        "polygon" => {
-            let (d, pts) = rest.split_once(':').with_context(|| {
-                format!("--target '{spec}': expected polygon:DEPTH:x,y;x,y;...")
-            })?;
-            let outline = pts
-                .split(';')
-                .map(parse_xy)
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|e| anyhow::anyhow!("--target {e}"))?;
-            polygon(outline, depth(d)?)
-        }
-        _ => bail!("--target '{spec}': unknown kind '{kind}' (point, z, t or polygon)"),
-    })
+    floats::<3>(s).map(DVec3::from_array)
 }
 
 /// Builds the capture described by `a` (no file I/O).
 pub fn build(a: &SynthArgs) -> anyhow::Result<Capture> {
-    let kind: LayoutKind = a.kind.parse()?;
-    let layout = CaptureLayout {
-        kind,
-        wall_size_m: a.wall_size,
-        grid: a.grid,
-        point: DVec3::new(a.point[0], a.point[1], 0.0),
-        time: TimeAxis {
-            start_m: a.start,
-            bin_width_m: a.bin_width,
-            bins: a.bins,
-        },
-        laser_xyz: a.laser_xyz,
-        sensor_xyz: a.sensor_xyz,
-    };
     if !(a.bin_width > 0.0 && a.bin_width.is_finite()) {
         bail!(
             "--bin-width must be a positive number of metres, got {}",
             a.bin_width
         );
     }
-    let mut cap = layout.empty_capture()?;
-    // Half the wall spacing keeps the raster below the reconstruction's resolution.
-    let spacing = a.wall_size / a.grid as f64 / 2.0;
-    let mut scatterers = Vec::new();
-    for t in &a.targets {
-        scatterers.extend(parse_target(t, spacing)?.scatterers()?);
-    }
-    let opts = SynthOptions {
-        cosines: a.cosines,
-        mu_t_per_m: a.mu_t,
-        jitter_sigma_m: a.jitter,
-    };
-    add_first_bounce(&mut cap, &scatterers, &opts)?;
-    if cap.h.iter().all(|&v| v == 0.0) {
-        bail!(
-            "the time window ({:.3}..{:.3} m of path) contains none of the scene's paths; adjust --start, --bins or --bin-width",
-            cap.time.start_m,
-            cap.time.end_m()
-        );
-    }
-    cap.scene_info = format!(
-        "generator: murk synth\nmurk_version: {}\nkind: {}\ntargets: [{}]\nwall_size_m: {}\ngrid: {}\nmu_t_per_m: {}\njitter_sigma_m: {}\ncosines: {}\n",
-        env!("CARGO_PKG_VERSION"),
-        a.kind,
-        a.targets.iter().map(|t| format!("'{t}'")).collect::<Vec<_>>().join(", "),
-        a.wall_size,
-        a.grid,
-        a.mu_t,
-        a.jitter,
-        a.cosines
-    );
-    Ok(cap)
+    Ok(synthesize(&Synthesis {
+        layout: CaptureLayout {
+            kind: a.kind.parse()?,
+            wall_size_m: a.wall_size,
+            grid: a.grid,
+            point: DVec3::new(a.point[0], a.point[1], 0.0),
+            time: TimeAxis {
+                start_m: a.start,
+                bin_width_m: a.bin_width,
+                bins: a.bins,
+            },
+            laser_xyz: a.laser_xyz,
+            sensor_xyz: a.sensor_xyz,
+        },
+        targets: a.targets.clone(),
+        options: SynthOptions {
+            cosines: a.cosines,
+            mu_t_per_m: a.mu_t,
+            jitter_sigma_m: a.jitter,
+        },
+    })?)
 }
 
 pub fn run(a: SynthArgs, quiet: bool) -> anyhow::Result<()> {

@@ -15,10 +15,13 @@
 //! let index = murk_study::run_study(std::path::Path::new("study"), &opt, &Silent).unwrap();
 //! ```
 
+mod figure_real;
 pub mod metrics;
 pub mod plan;
 pub mod report;
 pub mod run;
+
+pub use figure_real::figure_real;
 
 use murk_core::{Error, Result};
 use plan::{Plan, StudyOptions};

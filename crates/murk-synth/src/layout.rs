@@ -13,6 +13,17 @@ pub enum LayoutKind {
     Exhaustive,
 }
 
+impl std::fmt::Display for LayoutKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            LayoutKind::LaserGridSinglePoint => "laser-grid",
+            LayoutKind::SinglePointSensorGrid => "single",
+            LayoutKind::Confocal => "confocal",
+            LayoutKind::Exhaustive => "exhaustive",
+        })
+    }
+}
+
 impl std::str::FromStr for LayoutKind {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {

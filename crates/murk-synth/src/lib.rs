@@ -7,9 +7,11 @@
 //! This is the oracle the reconstruction tests use and what `murk synth` and `murk demo` build.
 
 mod layout;
+mod request;
 mod targets;
 
 pub use layout::{CaptureLayout, LayoutKind};
+pub use request::{floats, synthesize, Synthesis};
 pub use targets::{t_letter_outline, z_letter_outline, Scatterer, Target};
 
 use murk_core::{Capture, DVec3, Error, Result};
