@@ -603,8 +603,8 @@ impl<'a> Tracer<'a> {
                 if t < m0 || t > m1 {
                     return None;
                 }
-                let tr = (-m.sigma_t * (t - m0)).exp();
-                let opl = o.extra_m + t + (m.ior - 1.0) * (t - m0);
+                let tr = m.transmittance(t - m0);
+                let opl = o.extra_m + t + m.extra_path_m(t - m0);
                 Some(Leg {
                     f: g * tr * m.sigma_s(),
                     opl,
@@ -907,7 +907,7 @@ impl<'a> Tracer<'a> {
         let Some((m0, m1)) = m.region.clip(from.x, w, hit) else {
             return;
         };
-        let pff = m.sigma_t * (-m.sigma_t * (t - m0)).exp();
+        let pff = m.free_flight_pdf(t - m0);
         let p_path = self.dir_pdf(from, w)
             * (pff
                 + self
@@ -917,13 +917,13 @@ impl<'a> Tracer<'a> {
         let cos_l = tgt.n.dot(wl);
         let p_l = cos_l / PI * peq / (tl * tl);
         // Integrand (volume measure) over the sum of densities: the balance-weighted estimate.
-        let value = from.beta * f * (-m.sigma_t * ((t - m0) + (tl - a))).exp() / t2
+        let value = from.beta * f * m.transmittance((t - m0) + (tl - a)) / t2
             * m.sigma_s()
             * m.phase.eval(-w.dot(wl))
             * cos_l
             / (PI * tl * tl)
             / (n as f64 * p_l + p_path);
-        let opl = from.opl + t + tl + (m.ior - 1.0) * ((t - m0) + (tl - a)) + tgt.extra_m;
+        let opl = from.opl + t + tl + m.extra_path_m((t - m0) + (tl - a)) + tgt.extra_m;
         self.splat(out, k, opl, value, s);
     }
 
@@ -989,7 +989,7 @@ impl<'a> Tracer<'a> {
     fn transmit(&self, o: DVec3, d: DVec3, t_max: f64) -> (f64, f64) {
         self.medium().map_or((1.0, 0.0), |m| {
             let l = m.overlap(o, d, t_max);
-            ((-m.sigma_t * l).exp(), (m.ior - 1.0) * l)
+            (m.transmittance(l), m.extra_path_m(l))
         })
     }
 
@@ -1150,7 +1150,7 @@ impl<'a> Tracer<'a> {
                     medium_len = m1 - m0;
                     let sigma_s = m.sigma_s();
                     if sigma_s > 0.0 {
-                        let pdf_ff = |t: f64| m.sigma_t * (-m.sigma_t * (t - m0)).exp();
+                        let pdf_ff = |t: f64| m.free_flight_pdf(t - m0);
                         // Connections from distances drawn toward each target (equiangular, and uniform in the
                         // capture's time window), MIS-combined (balance heuristic) with each other, with the
                         // free-flight vertex's connection below and with target-side sampling.
@@ -1174,9 +1174,9 @@ impl<'a> Tracer<'a> {
                                     continue;
                                 }
                                 let y = pos + d * t;
-                                let b = beta * sigma_s * (-m.sigma_t * (t - m0)).exp() / pdf;
+                                let b = beta * sigma_s * m.transmittance(t - m0) / pdf;
                                 let w = pdf / (seg[k].pdf(t) + pdf_ff(t) + target_pdf(m, k, y, t));
-                                let o = opl + t + (m.ior - 1.0) * (t - m0);
+                                let o = opl + t + m.extra_path_m(t - m0);
                                 let v = Vertex::Medium { dir: d };
                                 self.connect(
                                     y,
@@ -1201,7 +1201,7 @@ impl<'a> Tracer<'a> {
                             connected = true;
                         }
                         // Free flight: scatter with density σt·exp(−σt·(t − m0)), else cross (weight T/P = 1).
-                        let t = m0 - (1.0 - s.next()).ln() / m.sigma_t;
+                        let t = m0 + m.sample_distance(s.next());
                         if t < m1 {
                             depth += 1;
                             // What leaves this vertex keeps the first vertex's outgoing direction.
@@ -1211,7 +1211,7 @@ impl<'a> Tracer<'a> {
                             let mis =
                                 |k: usize| pff / (pff + seg[k].pdf(t) + target_pdf(m, k, y, t));
                             pos = y;
-                            opl += t + (m.ior - 1.0) * (t - m0);
+                            opl += t + m.extra_path_m(t - m0);
                             beta *= m.albedo;
                             self.connect(
                                 pos,
@@ -1252,14 +1252,14 @@ impl<'a> Tracer<'a> {
                         }
                     } else {
                         // Pure absorber: weight by the transmittance instead of sampling.
-                        beta *= (-m.sigma_t * medium_len).exp();
+                        beta *= m.transmittance(medium_len);
                     }
                 }
             }
             let Some((h, on_relay)) = hit else { return };
             depth += 1;
             pos += d * h.t;
-            opl += h.t + self.medium().map_or(0.0, |m| (m.ior - 1.0) * medium_len);
+            opl += h.t + self.medium().map_or(0.0, |m| m.extra_path_m(medium_len));
             // A vertex on the relay is coplanar with every target: its connections vanish.
             let v = Vertex::Surface {
                 n: h.n,

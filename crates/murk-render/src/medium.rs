@@ -69,6 +69,26 @@ impl Medium {
         self.sigma_t * self.albedo
     }
 
+    /// Fraction of light that crosses `len_m` of the medium unscattered and unabsorbed.
+    pub fn transmittance(&self, len_m: f64) -> f64 {
+        (-self.sigma_t * len_m).exp()
+    }
+
+    /// Density of a free flight ending after `len_m` (σt·e^{−σt·len}).
+    pub fn free_flight_pdf(&self, len_m: f64) -> f64 {
+        self.sigma_t * self.transmittance(len_m)
+    }
+
+    /// A free-flight distance drawn from [`Medium::free_flight_pdf`] with the uniform number `u`.
+    pub fn sample_distance(&self, u: f64) -> f64 {
+        -(1.0 - u).ln() / self.sigma_t
+    }
+
+    /// Optical path that `len_m` of geometric path inside the medium adds beyond `len_m` itself.
+    pub fn extra_path_m(&self, len_m: f64) -> f64 {
+        (self.ior - 1.0) * len_m
+    }
+
     /// Whether it scatters light (not only absorbs it).
     pub fn scatters(&self) -> bool {
         self.sigma_s() > 0.0
