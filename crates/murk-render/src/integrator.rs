@@ -394,6 +394,28 @@ struct Sink<'o> {
 }
 
 /// Per-scene precomputation shared by all work units.
+/// A ray o + t·d (d unit).
+#[derive(Clone, Copy)]
+struct Ray {
+    o: DVec3,
+    d: DVec3,
+}
+
+/// A path's throughput and the optical path it has travelled.
+#[derive(Clone, Copy)]
+struct Carry {
+    beta: f64,
+    opl: f64,
+}
+
+/// A vertex to connect: where it is, what scatters there, and the start of the segment that reached
+/// it (which sees it, so a target there needs no occlusion test).
+struct At<'v> {
+    y: DVec3,
+    seen: DVec3,
+    v: &'v Vertex,
+}
+
 pub struct Tracer<'a> {
     scene: &'a Scene,
     hidden: HiddenSampler,
@@ -759,7 +781,11 @@ impl<'a> Tracer<'a> {
             let (p_mix, p_h, hit) = self.origin_pdfs(origin.p, origin.n, w);
             let Some(h) = hit else { continue };
             let b = cos / PI / (p_mix + n as f64 * p_h);
-            self.connect_hit(origin.p, w, &h, b, origin.extra_m, targets, s, out);
+            let carry = Carry {
+                beta: b,
+                opl: origin.extra_m,
+            };
+            self.connect_hit(Ray { o: origin.p, d: w }, &h, carry, targets, s, out);
         }
     }
 
@@ -948,18 +974,16 @@ impl<'a> Tracer<'a> {
     /// function's direction to meet the object: on z-letter those rare hits carried 18 % of the object
     /// window's second moment from 0.1 % of its samples. Balance heuristic against the phase direction
     /// (`object_weight`).
-    #[allow(clippy::too_many_arguments)]
     fn connect_object(
         &self,
         m: &Medium,
-        x: DVec3,
-        dir: DVec3,
-        beta: f64,
-        opl: f64,
+        ray: Ray,
+        carry: Carry,
         targets: &[Endpoint],
         s: &mut Sampler,
         out: &mut Sink,
     ) {
+        let (x, dir) = (ray.o, ray.d);
         if !self.medium_objects {
             return;
         }
@@ -978,11 +1002,12 @@ impl<'a> Tracer<'a> {
         if p_h <= 0.0 || ph <= 0.0 {
             return;
         }
-        let b = beta * ph / (ph + p_h);
+        let beta = carry.beta * ph / (ph + p_h);
         if out.at_first {
             out.w = w;
         }
-        self.connect_hit(x, w, &h, b, opl, targets, s, out);
+        let carry = Carry { beta, ..carry };
+        self.connect_hit(Ray { o: x, d: w }, &h, carry, targets, s, out);
     }
 
     /// Transmittance along `o + t·d`, t ∈ [0, t_max], and the optical path the medium adds to it.
@@ -995,54 +1020,48 @@ impl<'a> Tracer<'a> {
 
     /// Connects the surface hit `h` of the ray `x + t·w` to every target, through the transmittance of
     /// the segment from `x` (reached with throughput `beta` at optical path `opl`).
-    #[allow(clippy::too_many_arguments)]
     fn connect_hit(
         &self,
-        x: DVec3,
-        w: DVec3,
+        ray: Ray,
         h: &Hit,
-        beta: f64,
-        opl: f64,
+        carry: Carry,
         targets: &[Endpoint],
         s: &mut Sampler,
         out: &mut Sink,
     ) {
+        let (x, w) = (ray.o, ray.d);
         let (tr, extra) = self.transmit(x, w, h.t);
         let v = Vertex::Surface {
             n: h.n,
             albedo: h.albedo,
         };
-        let o = opl + h.t + extra;
-        self.connect(
-            x + w * h.t,
-            x,
-            &v,
-            beta * tr,
-            o,
-            (0, targets),
-            |_| 1.0,
-            s,
-            out,
-        );
+        let at = At {
+            y: x + w * h.t,
+            seen: x,
+            v: &v,
+        };
+        let carry = Carry {
+            beta: carry.beta * tr,
+            opl: carry.opl + h.t + extra,
+        };
+        self.connect(at, carry, (0, targets), |_| 1.0, s, out);
     }
 
     /// Connects vertex `y` (reached with throughput `beta` at optical path `opl`) to every target of
     /// `(k0, targets)` (the first one is target k0). `mis(k)` weights the connection to `targets[k]`.
     /// `seen` is the start of the segment that reached y, which sees y: a target there (confocal: the
     /// origin at the first vertex) needs no occlusion test.
-    #[allow(clippy::too_many_arguments)]
     fn connect(
         &self,
-        y: DVec3,
-        seen: DVec3,
-        v: &Vertex,
-        beta: f64,
-        opl: f64,
+        at: At,
+        carry: Carry,
         (k0, targets): (usize, &[Endpoint]),
         mis: impl Fn(usize) -> f64,
         s: &mut Sampler,
         out: &mut Sink,
     ) {
+        let (y, seen, v) = (at.y, at.seen, at.v);
+        let (beta, opl) = (carry.beta, carry.opl);
         for (k, tgt) in targets.iter().enumerate() {
             let v_y = tgt.p - y;
             let r2 = v_y.length_squared();
@@ -1178,17 +1197,13 @@ impl<'a> Tracer<'a> {
                                 let w = pdf / (seg[k].pdf(t) + pdf_ff(t) + target_pdf(m, k, y, t));
                                 let o = opl + t + m.extra_path_m(t - m0);
                                 let v = Vertex::Medium { dir: d };
-                                self.connect(
+                                let at = At {
                                     y,
-                                    from.x,
-                                    &v,
-                                    b,
-                                    o,
-                                    (k, &targets[k..=k]),
-                                    |_| w,
-                                    s,
-                                    out,
-                                );
+                                    seen: from.x,
+                                    v: &v,
+                                };
+                                let carry = Carry { beta: b, opl: o };
+                                self.connect(at, carry, (k, &targets[k..=k]), |_| w, s, out);
                             }
                         }
                         // The surface the segment reaches is connected now, weighted by the segment's
@@ -1197,7 +1212,8 @@ impl<'a> Tracer<'a> {
                         // again.
                         if let Some((h, false)) = hit {
                             let b = beta * self.object_weight(&from, d, first_object_weight);
-                            self.connect_hit(pos, d, &h, b, opl, targets, s, out);
+                            let carry = Carry { beta: b, opl };
+                            self.connect_hit(Ray { o: pos, d }, &h, carry, targets, s, out);
                             connected = true;
                         }
                         // Free flight: scatter with density σt·exp(−σt·(t − m0)), else cross (weight T/P = 1).
@@ -1213,17 +1229,12 @@ impl<'a> Tracer<'a> {
                             pos = y;
                             opl += t + m.extra_path_m(t - m0);
                             beta *= m.albedo;
-                            self.connect(
-                                pos,
-                                from.x,
-                                &Vertex::Medium { dir: d },
-                                beta,
-                                opl,
-                                (0, targets),
-                                mis,
-                                s,
-                                out,
-                            );
+                            let at = At {
+                                y: pos,
+                                seen: from.x,
+                                v: &Vertex::Medium { dir: d },
+                            };
+                            self.connect(at, Carry { beta, opl }, (0, targets), mis, s, out);
                             if depth >= set.max_depth {
                                 return;
                             }
@@ -1236,7 +1247,8 @@ impl<'a> Tracer<'a> {
                                 out.recording = out.share;
                                 out.at_first = out.share;
                             }
-                            self.connect_object(m, pos, d, beta, opl, targets, s, out);
+                            let ray = Ray { o: pos, d };
+                            self.connect_object(m, ray, Carry { beta, opl }, targets, s, out);
                             if !self.roulette(&mut beta, depth, s) {
                                 return;
                             }
@@ -1267,7 +1279,12 @@ impl<'a> Tracer<'a> {
             };
             if !on_relay && !connected {
                 let b = beta * self.object_weight(&from, d, first_object_weight);
-                self.connect(pos, from.x, &v, b, opl, (0, targets), |_| 1.0, s, out);
+                let at = At {
+                    y: pos,
+                    seen: from.x,
+                    v: &v,
+                };
+                self.connect(at, Carry { beta: b, opl }, (0, targets), |_| 1.0, s, out);
             }
             beta *= h.albedo;
             if beta <= 0.0 || depth >= set.max_depth || !self.roulette(&mut beta, depth, s) {
