@@ -1,0 +1,175 @@
+//! Sharing a path's tail among a tile of traced points: what a path records past its first vertex,
+//! and its replay for every point of the tile.
+
+use super::*;
+
+/// What a path adds past its first hidden vertex, kept to be shared by the traced points of a tile: target
+/// index, optical path (jitter included) in bins from the capture's start (a replay then shifts it
+/// without a division per entry), value, and the direction that left the first vertex on the way to it
+/// (for the phase function's ratio there).
+pub(super) struct Tail {
+    pub(super) k: usize,
+    pub(super) bin: f64,
+    pub(super) value: f64,
+    pub(super) w: DVec3,
+}
+
+/// Adds `tail` to one traced point's histograms `hist`, scaled, shifted by `shift` bins, each entry times
+/// `ratio` of its direction at the first vertex.
+pub(super) fn replay(
+    bins: usize,
+    hist: &mut [f64],
+    tail: &[Tail],
+    scale: f64,
+    shift: f64,
+    ratio: impl Fn(DVec3) -> f64,
+) {
+    for tl in tail {
+        let x = tl.bin + shift;
+        if x >= 0.0 && x < bins as f64 {
+            hist[tl.k * bins + x as usize] += tl.value * scale * ratio(tl.w);
+        }
+    }
+}
+
+/// The leg from a traced point to a path's first vertex, in the measure of that vertex (volume or area):
+/// its integrand `f`, the optical path `opl` to it and the direction `d`.
+#[derive(Clone, Copy)]
+pub(super) struct Leg {
+    pub(super) f: f64,
+    pub(super) opl: f64,
+    pub(super) d: DVec3,
+}
+
+/// A path's first hidden vertex: a medium vertex (`normal` None) or a surface one (its normal facing the
+/// arriving path).
+#[derive(Clone, Copy)]
+pub(super) struct First {
+    pub(super) y: DVec3,
+    pub(super) normal: Option<DVec3>,
+}
+
+/// Where a path's contributions go: the traced point's histograms (`unit` values at `origin · unit`
+/// in the work unit's buffer), or, while `recording`, the tail list shared with the rest of the tile.
+pub(super) struct Sink<'o> {
+    pub(super) out: &'o mut [f64],
+    /// Length of one traced point's histograms, and the point now traced.
+    pub(super) unit: usize,
+    pub(super) origin: usize,
+    /// Whether the unit is a tile of more than one traced point.
+    pub(super) share: bool,
+    pub(super) recording: bool,
+    /// Whether the techniques now running leave from the first vertex (each sets `w`).
+    pub(super) at_first: bool,
+    pub(super) w: DVec3,
+    pub(super) first: Option<First>,
+    pub(super) tail: Vec<Tail>,
+}
+
+impl Tracer<'_> {
+    /// The first leg from origin `o` to the first vertex `f`; None where `o` cannot reach it (behind,
+    /// occluded, outside the medium along the leg).
+    pub(super) fn leg(&self, o: &Endpoint, f: &First) -> Option<Leg> {
+        let v = f.y - o.p;
+        let t = v.length();
+        let w = v / t;
+        let cos = o.n.dot(w);
+        if cos.is_nan() || cos <= 0.0 {
+            return None;
+        }
+        let reach = t * (1.0 + 1e-6) + 1e-6;
+        // Most legs stay clear of the hidden geometry's box: no walk for them.
+        let clear = !crate::geometry::Aabb::empty()
+            .grow(o.p)
+            .grow(o.p + w * reach)
+            .overlaps(&self.hidden_bounds);
+        let t_hit = if clear {
+            f64::INFINITY
+        } else {
+            self.scene
+                .geometry
+                .intersect(o.p, w, reach)
+                .map_or(f64::INFINITY, |h| h.t)
+        };
+        let g = cos / PI / (t * t);
+        match f.normal {
+            None => {
+                let m = self.medium()?;
+                if t_hit < t - EPS {
+                    return None;
+                }
+                let (m0, m1) = m.region.clip(o.p, w, t_hit)?;
+                if t < m0 || t > m1 {
+                    return None;
+                }
+                let tr = m.transmittance(t - m0);
+                let opl = o.extra_m + t + m.extra_path_m(t - m0);
+                Some(Leg {
+                    f: g * tr * m.sigma_s(),
+                    opl,
+                    d: w,
+                })
+            }
+            Some(n) => {
+                // The same surface point, seen from its front (the side the shared path left from).
+                let cos_y = -n.dot(w);
+                if (t_hit - t).abs() > 1e-6 * t.max(1.0) || cos_y <= 0.0 {
+                    return None;
+                }
+                let (tr, extra) = self.transmit(o.p, w, t);
+                Some(Leg {
+                    f: g * tr * cos_y,
+                    opl: o.extra_m + t + extra,
+                    d: w,
+                })
+            }
+        }
+    }
+
+    /// Adds the tail of a path traced from `origins[src]` to every origin of the tile: the first vertex is
+    /// re-joined to each origin, and origin i takes the share f_i/Σf of the tail divided by the source's
+    /// own f (every origin traces the same spp). That is the balance heuristic over the densities of the
+    /// cosine part of the origins' first directions (each is its f times one constant for the whole tile),
+    /// which is nonzero wherever an origin can place the vertex because every first direction has a cosine
+    /// share where a medium scatters (scene validation): each origin's estimate stays unbiased and gets the
+    /// tails of the whole tile. Weighting by the full mixture density instead would walk the hidden
+    /// geometry along every leg's whole ray; this needs only the nearest hit up to the vertex.
+    pub(super) fn share_tail(
+        &self,
+        origins: &[Endpoint],
+        src: usize,
+        sink: &mut Sink,
+        legs: &mut Vec<Option<Leg>>,
+    ) {
+        let Some(first) = sink.first else { return };
+        legs.clear();
+        legs.extend(origins.iter().map(|o| self.leg(o, &first)));
+        let sum_f: f64 = legs.iter().flatten().map(|l| l.f).sum();
+        let (t, unit) = (&self.scene.capture.time, sink.unit);
+        let Some(own) = legs[src].filter(|l| l.f > 0.0) else {
+            // Rounding kept the source from re-joining its own vertex (a grazing or boundary leg): the
+            // tail stays the source's own, unshared.
+            let hist = &mut sink.out[src * unit..(src + 1) * unit];
+            return replay(t.bins, hist, &sink.tail, 1.0, 0.0, |_| 1.0);
+        };
+        let phase = self
+            .medium()
+            .map(|m| m.phase)
+            .filter(|p| first.normal.is_none() && !matches!(p, crate::medium::Phase::Isotropic));
+        if let Some(p) = phase {
+            // The source's phase at the first vertex, divided out once; each origin multiplies its own.
+            for tl in &mut sink.tail {
+                tl.value /= p.eval(own.d.dot(tl.w));
+            }
+        }
+        for (i, leg) in legs.iter().enumerate() {
+            let Some(leg) = leg else { continue };
+            let scale = leg.f / sum_f;
+            let shift = (leg.opl - own.opl) / t.bin_width_m;
+            let hist = &mut sink.out[i * unit..(i + 1) * unit];
+            replay(t.bins, hist, &sink.tail, scale, shift, |w| {
+                phase.map_or(1.0, |p| p.eval(leg.d.dot(w)))
+            });
+        }
+    }
+}
