@@ -42,8 +42,13 @@ fn fails(args: &[&str], needles: &[&str]) {
 
 /// A small valid capture with a distinctive H value and bin width, so tests can corrupt them in place.
 fn good_capture(d: &Path) -> PathBuf {
-    let p = d.join("good.h5");
-    let (code, _, err) = murk(&[
+    synth_capture(d, "good.h5", &[])
+}
+
+/// `murk synth` of a point on an 8² laser grid with 256 bins of 0.0123 m, plus `extra` arguments.
+fn synth_capture(d: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    let p = d.join(name);
+    let mut args = vec![
         "synth",
         "--out",
         p.to_str().unwrap(),
@@ -55,7 +60,9 @@ fn good_capture(d: &Path) -> PathBuf {
         "0.0123",
         "--target",
         "point:0.1,0.1,0.8",
-    ]);
+    ];
+    args.extend(extra);
+    let (code, _, err) = murk(&args);
     assert_eq!(code, 0, "{err}");
     p
 }
@@ -290,25 +297,7 @@ fn help_teaches_and_demo_runs() {
 #[test]
 fn absurd_magnitudes_in_a_capture() {
     let d = dir("absurd");
-    let src = d.join("src.h5");
-    let (code, _, err) = murk(&[
-        "synth",
-        "--out",
-        src.to_str().unwrap(),
-        "--grid",
-        "8",
-        "--bins",
-        "256",
-        "--bin-width",
-        "0.0123",
-        "--start",
-        "0.0456",
-        "--point",
-        "0.0789,0",
-        "--target",
-        "point:0.1,0.1,0.8",
-    ]);
-    assert_eq!(code, 0, "{err}");
+    let src = synth_capture(&d, "src.h5", &["--start", "0.0456", "--point", "0.0789,0"]);
     let out = d.join("v.npy");
     let cases: [(&str, f32, f32, &str); 5] = [
         ("start20.h5", 0.0456, 1e20, "1e20 m"),

@@ -5,7 +5,7 @@
 //! (N × N × 512 capture, default 32; METHOD runs only that method, e.g. to measure its memory.)
 
 use murk_baselines::*;
-use murk_core::{Axis, Capture, DVec3, Pairing, PointSet, TimeAxis, Volume};
+use murk_core::{Axis, Capture, DVec3, PointSet, TimeAxis, Volume};
 use std::time::Instant;
 
 fn main() {
@@ -137,15 +137,5 @@ fn capture(n: usize, bins: usize) -> Capture {
             }
         }
     }
-    Capture {
-        illum: grid.clone(),
-        sensor: grid,
-        laser_xyz: None,
-        sensor_xyz: None,
-        time,
-        t_accounts_first_and_last_bounces: false,
-        pairing: Pairing::Paired,
-        h,
-        scene_info: String::new(),
-    }
+    Capture::confocal(grid, time, h, String::new())
 }

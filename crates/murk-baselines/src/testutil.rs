@@ -1,22 +1,12 @@
 //! Synthetic confocal captures for the tests: point scatterers splatted linearly around bin centres.
 
 use crate::Reconstruction;
-use murk_core::{Capture, DVec3, Pairing, PointSet, TimeAxis};
+use murk_core::{Capture, DVec3, PointSet, TimeAxis};
 
 /// A confocal scan of `n × n` points over a `wall` m square centred on the origin, with empty histograms.
 pub fn confocal(n: usize, wall: f64, time: TimeAxis) -> Capture {
     let grid = PointSet::wall_grid(DVec3::ZERO, wall, wall, n, n);
-    Capture {
-        illum: grid.clone(),
-        sensor: grid,
-        laser_xyz: None,
-        sensor_xyz: None,
-        time,
-        t_accounts_first_and_last_bounces: false,
-        pairing: Pairing::Paired,
-        h: vec![0.0; n * n * time.bins],
-        scene_info: String::new(),
-    }
+    Capture::confocal(grid, time, vec![0.0; n * n * time.bins], String::new())
 }
 
 pub fn axis(start_m: f64, bin_width_m: f64, bins: usize) -> TimeAxis {

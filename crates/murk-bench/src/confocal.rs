@@ -9,8 +9,8 @@ use crate::say;
 use crate::{json_line, json_numbers, median, tal_command, Scratch};
 use anyhow::{bail, Context};
 use murk_baselines::{FkParams, LctParams, Reconstruction};
-use murk_core::{Capture, DVec3, TimeAxis};
-use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
+use murk_core::{Capture, DVec3};
+use murk_synth::{add_first_bounce, LayoutKind, SynthOptions, Target};
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -102,20 +102,7 @@ pub fn run(
 /// murk splats each pulse linearly over two bins where tal_synth.py floors it into one; the
 /// reconstructions' cost does not depend on it.
 fn capture() -> anyhow::Result<Capture> {
-    let layout = CaptureLayout {
-        kind: LayoutKind::Confocal,
-        wall_size_m: 1.0,
-        grid: 64,
-        point: DVec3::ZERO,
-        time: TimeAxis {
-            start_m: 0.0,
-            bin_width_m: 0.01,
-            bins: 512,
-        },
-        laser_xyz: None,
-        sensor_xyz: None,
-    };
-    let mut cap = layout.empty_capture()?;
+    let mut cap = crate::tal_case_layout(LayoutKind::Confocal).empty_capture()?;
     let point = Target::Point {
         pos: POINT,
         albedo: 1.0,

@@ -107,6 +107,24 @@ pub fn say(quiet: bool, line: impl AsRef<str>) {
     }
 }
 
+/// The wall and time axis of y-tal's benchmark captures (docs/benchmarks.md): a 1 m wall with a
+/// 64 × 64 pixel-centre grid, 512 bins of 1 cm from 0.
+pub fn tal_case_layout(kind: LayoutKind) -> CaptureLayout {
+    CaptureLayout {
+        kind,
+        wall_size_m: 1.0,
+        grid: 64,
+        point: DVec3::ZERO,
+        time: TimeAxis {
+            start_m: 0.0,
+            bin_width_m: 0.01,
+            bins: 512,
+        },
+        laser_xyz: None,
+        sensor_xyz: None,
+    }
+}
+
 /// A scratch folder under the system temp dir, removed when dropped (early returns included).
 pub struct Scratch(pub PathBuf);
 
@@ -292,20 +310,7 @@ fn paper_case(
 /// (0.1, −0.2, 1.0); 32 planes of 64 × 64 at z = 0.85…1.16; λ = σ = 0.06 m. tal's pf_dev needs one call
 /// per plane for several planes (its multi-plane DIRECT_LIGHT path fails), as in its own benchmark.
 fn versus_tal(python: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
-    let layout = CaptureLayout {
-        kind: LayoutKind::SinglePointSensorGrid,
-        wall_size_m: 1.0,
-        grid: 64,
-        point: DVec3::ZERO,
-        time: TimeAxis {
-            start_m: 0.0,
-            bin_width_m: 0.01,
-            bins: 512,
-        },
-        laser_xyz: None,
-        sensor_xyz: None,
-    };
-    let mut cap = layout.empty_capture()?;
+    let mut cap = tal_case_layout(LayoutKind::SinglePointSensorGrid).empty_capture()?;
     add_first_bounce(
         &mut cap,
         &Target::Point {

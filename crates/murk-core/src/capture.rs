@@ -92,6 +92,22 @@ impl Capture {
         &self.h[i * nt..(i + 1) * nt]
     }
 
+    /// A confocal capture: each point of `grid` is measured with itself, one histogram per point in
+    /// `h` (not validated: see [`Capture::validate`]).
+    pub fn confocal(grid: PointSet, time: TimeAxis, h: Vec<f32>, scene_info: String) -> Capture {
+        Capture {
+            illum: grid.clone(),
+            sensor: grid,
+            laser_xyz: None,
+            sensor_xyz: None,
+            time,
+            t_accounts_first_and_last_bounces: false,
+            pairing: Pairing::Paired,
+            h,
+            scene_info,
+        }
+    }
+
     /// This capture with its time window cut after `bins` bins (all of them when there are fewer).
     pub fn first_bins(&self, bins: usize) -> Capture {
         let nt = self.time.bins;

@@ -240,26 +240,17 @@ pub fn apply_gate(cap: &mut Capture, open_m: Option<f64>, edge_m: f64) -> GateRe
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Axis, Pairing, TimeAxis};
+    use crate::{Axis, TimeAxis};
 
     /// Confocal 2 × 2 points on x, y ∈ {−0.1, 0.1}, 20 bins of 0.1 m, H = 1.
     fn capture() -> Capture {
         let grid = PointSet::wall_grid(DVec3::ZERO, 0.4, 0.4, 2, 2);
-        Capture {
-            illum: grid.clone(),
-            sensor: grid,
-            laser_xyz: None,
-            sensor_xyz: None,
-            time: TimeAxis {
-                start_m: 0.0,
-                bin_width_m: 0.1,
-                bins: 20,
-            },
-            t_accounts_first_and_last_bounces: false,
-            pairing: Pairing::Paired,
-            h: vec![1.0; 80],
-            scene_info: String::new(),
-        }
+        let time = TimeAxis {
+            start_m: 0.0,
+            bin_width_m: 0.1,
+            bins: 20,
+        };
+        Capture::confocal(grid, time, vec![1.0; 80], String::new())
     }
 
     #[test]

@@ -21,7 +21,7 @@ mod presets;
 mod tests;
 
 use crate::mat::ArrayFile;
-use murk_core::{Capture, DVec3, Error, Limits, Pairing, PointLayout, PointSet, Result, TimeAxis};
+use murk_core::{Capture, DVec3, Error, Limits, PointLayout, PointSet, Result, TimeAxis};
 use std::path::{Path, PathBuf};
 
 pub use presets::{Preset, CDT_SCENES};
@@ -395,17 +395,7 @@ fn confocal_capture(
     h: Vec<f32>,
     scene_info: String,
 ) -> Result<Capture> {
-    let cap = Capture {
-        illum: grid.clone(),
-        sensor: grid,
-        laser_xyz: None,
-        sensor_xyz: None,
-        time,
-        t_accounts_first_and_last_bounces: false,
-        pairing: Pairing::Paired,
-        h,
-        scene_info,
-    };
+    let cap = Capture::confocal(grid, time, h, scene_info);
     cap.validate()?;
     Ok(cap)
 }
