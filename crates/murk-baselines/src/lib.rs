@@ -48,8 +48,8 @@ impl Reconstruction {
                 |best, (i, &v)| if v > best.1 { (i, v) } else { best },
             )
             .0;
-        let [_, ny, nz] = self.volume.shape();
-        [i / (ny * nz), i / nz % ny, i % nz]
+        let (ix, iy, iz) = self.volume.unravel(i);
+        [ix, iy, iz]
     }
 
     /// Maximum along depth, [nx][ny] row-major.

@@ -75,12 +75,11 @@ impl EndReport {
         let Some(from) = self.trim_from_m else {
             return;
         };
-        let (ny, nz) = (volume.y.n, volume.z.n);
         let bound = PathBound::new(cap);
         let mut n = 0;
         for (i, v) in intensity.iter_mut().enumerate() {
-            let (ix, iy, iz) = (i / (ny * nz), (i / nz) % ny, i % nz);
-            let p = DVec3::new(volume.x.at(ix), volume.y.at(iy), volume.z.at(iz));
+            let (ix, iy, iz) = volume.unravel(i);
+            let p = volume.centre(ix, iy, iz);
             if bound.at(p) > from {
                 *v = 0.0;
                 n += 1;

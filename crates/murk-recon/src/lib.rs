@@ -335,8 +335,8 @@ pub fn intensity(
         .iter()
         .enumerate()
         .map(|(i, u)| {
-            let (ix, rest) = (i / (volume.y.n * volume.z.n), i % (volume.y.n * volume.z.n));
-            let v = volume.centre(ix, rest / volume.z.n, rest % volume.z.n);
+            let (ix, iy, iz) = volume.unravel(i);
+            let v = volume.centre(ix, iy, iz);
             (u.norm_sqr() as f64 * compensation.gain(v, point, aperture, confocal)) as f32
         })
         .collect()

@@ -50,8 +50,8 @@ fn argmax(r: &Reconstruction) -> [usize; 3] {
         .max_by(|a, b| a.1.total_cmp(b.1))
         .unwrap()
         .0;
-    let v = &r.volume;
-    [i / (v.y.n * v.z.n), (i / v.z.n) % v.y.n, i % v.z.n]
+    let (ix, iy, iz) = r.volume.unravel(i);
+    [ix, iy, iz]
 }
 
 fn nearest(axis: &Axis, x: f64) -> usize {
