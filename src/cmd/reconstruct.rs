@@ -252,11 +252,10 @@ impl ReconstructArgs {
 
     /// Phasor Fields parameters for `cap` (the default wavelength depends on whether it is confocal).
     pub fn params(&self, cap: &Capture) -> anyhow::Result<PfParams> {
-        let confocal = cap.kind() == murk_core::CaptureKind::Confocal;
         let wavelength = match (self.wavelength, self.wavefactor) {
             (Some(m), _) => Wavelength::Metres(m),
             (None, Some(f)) => Wavelength::WallFactor(f),
-            (None, None) => Wavelength::WallFactor(if confocal { 8.0 } else { 4.0 }),
+            (None, None) => Wavelength::default_for(cap.kind()),
         };
         let mu = self.mu_t.unwrap_or(0.0);
         let compensation = match self.compensate {

@@ -30,6 +30,24 @@ pub enum Wavelength {
     WallFactor(f64),
 }
 
+impl Wavelength {
+    /// The default for a capture of `kind`: 4Δc of one-way distance, the paper's choice. Confocal
+    /// data's round-trip kernel e^{2ikr} reads λ on the path, twice the distance, so it is 8Δc there.
+    pub fn default_for(kind: CaptureKind) -> Wavelength {
+        Wavelength::WallFactor(2.0 * nyquist_factor(kind))
+    }
+}
+
+/// The smallest wavefactor a wall sampled every Δc supports: 2, or 4 for confocal data, whose
+/// round-trip kernel e^{2ikr} halves the effective wavelength.
+pub fn nyquist_factor(kind: CaptureKind) -> f64 {
+    if kind == CaptureKind::Confocal {
+        4.0
+    } else {
+        2.0
+    }
+}
+
 /// Amplitude factor a(d) applied to each leg (changes brightness with depth, not focus).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Falloff {
@@ -244,8 +262,7 @@ pub fn reconstruct(
     let wavelength_m = params.wavelength_m(cap)?;
     let confocal = cap.kind() == CaptureKind::Confocal;
     let mut warnings = Vec::new();
-    // The round-trip kernel e^{2ikr} of confocal data halves the effective wavelength.
-    let nyquist_factor = if confocal { 4.0 } else { 2.0 };
+    let nyquist_factor = nyquist_factor(cap.kind());
     if let Some(d) = spacing {
         let limit = nyquist_factor * d;
         if wavelength_m < limit * (1.0 - 1e-9) {

@@ -675,3 +675,22 @@ fn ballistic_compensation_restores_an_attenuated_point() {
         );
     }
 }
+
+/// The confocal rule in its one home: λ defaults to 4Δc of one-way distance (8Δc of path for
+/// confocal data), twice the Nyquist factor.
+#[test]
+fn default_wavelength_follows_the_round_trip() {
+    use murk_core::CaptureKind as K;
+    assert_eq!(
+        Wavelength::default_for(K::Confocal),
+        Wavelength::WallFactor(8.0)
+    );
+    for k in [
+        K::LaserGridSinglePoint,
+        K::SinglePointSensorGrid,
+        K::Exhaustive,
+    ] {
+        assert_eq!(Wavelength::default_for(k), Wavelength::WallFactor(4.0));
+    }
+    assert_eq!(crate::nyquist_factor(K::Confocal), 4.0);
+}
