@@ -84,8 +84,9 @@ fn compare(full: &Path, cut: &Path) -> (f64, f64) {
     ((depth(&cd) - depth(&fd)).abs(), correlation(&fm, &cm))
 }
 
-/// A confocal T at 0.5 m whose returns are blurred by 5 cm of timing jitter: 400 bins hold all of it
-/// (end level ≈ 3 %); cut after 262 bins (1.31 m of path) the last bins still carry ≈ 45 % of the peak.
+/// A confocal T at 0.5 m whose returns are blurred by 5 cm of timing jitter: 400 bins hold all of it,
+/// and cut after 262 bins (1.31 m of path) the last bins still carry over 40 % of the peak (asserted
+/// below).
 #[test]
 fn cut_synthetic_window_keeps_depth_and_picture() {
     let d = dir("synth");
@@ -117,8 +118,8 @@ fn cut_synthetic_window_keeps_depth_and_picture() {
     assert!(murk_io::read_capture(&full).unwrap().end_level() < 0.05);
 
     let volume = "--volume=-0.5:0.5:32,-0.5:0.5:32,0.2:0.7:51";
-    // Depth tolerances per method, about 1 cm where the method resolves it (measured: LCT 2.5 mm,
-    // f-k 12.5 mm, CDT 0); PF's pulse here is σ = 0.17 m of path, and its depth moves by 3 cm.
+    // Depth tolerances per method: about 1 cm where the method resolves it; PF's pulse here is
+    // σ = 0.17 m of path, so its depth is allowed to move by a fifth of that (docs/window-ends.md).
     for (method, depth_tol) in [("pf", 0.035), ("lct", 0.011), ("fk", 0.015), ("cdt", 0.011)] {
         let rec = |cap: &Path, mode: &str| {
             let out = d.join(format!(
@@ -164,8 +165,9 @@ fn cut_synthetic_window_keeps_depth_and_picture() {
     std::fs::remove_dir_all(&d).ok();
 }
 
-/// The CDT letter S through 2.54 cm of foam, cut after 300 of its 512 bins (1.44 m of path; the last
-/// bins carry 69 % of the peak): CDT's depth of the S moved by 18 cm with the step kept.
+/// The CDT letter S through 2.54 cm of foam, cut after 300 of its 512 bins (1.44 m of path), where the
+/// last bins still carry most of the peak; with the step kept CDT's depth of the S moves far
+/// (docs/window-ends.md has the figures).
 #[test]
 #[ignore = "needs ../shared/data/real/cdt_lindell2020 (.ci/run runs it where the folder exists)"]
 fn cut_real_cdt_letter_s() {

@@ -56,8 +56,8 @@ impl Method {
     }
 }
 
-/// Ramp length (bins) at either end of the window for the methods without a pulse: measured on the
-/// CDT letter S cut at 1.44 m of path (docs/window-ends.md).
+/// Ramp length (bins) at either end of the window for the methods without a pulse, chosen on a cut
+/// real capture (docs/window-ends.md).
 const BASELINE_EDGE_BINS: usize = 20;
 
 /// How many edges before the volume's shortest path [`Gate::Auto`] opens.

@@ -38,8 +38,8 @@ impl Tracer<'_> {
     /// Next-event estimation through the hidden geometry from the medium vertex `x` (arrived along
     /// `dir` with throughput `beta`): a direction toward a uniform point of the hidden geometry, its first
     /// hit connected to the targets. The object return after a scattering event otherwise needs the phase
-    /// function's direction to meet the object: on z-letter those rare hits carried 18 % of the object
-    /// window's second moment from 0.1 % of its samples. Balance heuristic against the phase direction
+    /// function's direction to meet the object, and those rare hits carry much of the object window's
+    /// variance (docs/renderer-sampling.md). Balance heuristic against the phase direction
     /// (`object_weight`).
     pub(super) fn connect_object(
         &self,

@@ -218,12 +218,10 @@ impl Tracer<'_> {
     /// volume density ∝ cos/|y − target|² cancels the 1/r² of the connection to the target, which the
     /// path side can only cancel along its own segment: there, the equiangular weight still grows as 1/d
     /// for segments passing at distance d from the target, the fireflies of multiply scattered fog near the
-    /// laser spot (measured: the largest object-window samples had d = 1–15 cm). Balance heuristic against
-    /// the path side's densities (free flight, equiangular, time window) for the same vertex. Measured on
-    /// t-wall-medium (64 spp, variance over 16 seeds): object-window relL2 9.7 → 4.6 at 2.3× the CPU time
-    /// (1.9× the efficiency); the largest in-window samples drop from ~700× to ~200× the mean one. What
-    /// was left is segment starts (mostly relay vertices) a few cm from the target, whose one draw has a
-    /// spread growing as 1/distance: those get `target_draws` draws.
+    /// laser spot. Balance heuristic against the path side's densities (free flight, equiangular, time
+    /// window) for the same vertex. Segment starts (mostly relay vertices) a few cm from the target keep
+    /// a spread growing as 1/distance, so they get `target_draws` draws. The measurements are in
+    /// docs/renderer-sampling.md.
     pub(super) fn sample_from_target(
         &self,
         m: &Medium,
