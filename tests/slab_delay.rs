@@ -11,22 +11,15 @@ use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Targ
 /// Median depth of the brightest voxel per column over the columns whose front view reaches 30 %
 /// of its maximum.
 fn depth_m(vol: &Volume, intensity: &[f32]) -> f64 {
-    let nz = vol.z.n;
-    let cols: Vec<(f32, f64)> = intensity
-        .chunks_exact(nz)
-        .map(|c| {
-            let (k, m) = c
-                .iter()
-                .enumerate()
-                .fold((0, f32::MIN), |b, (k, &v)| if v > b.1 { (k, v) } else { b });
-            (m, vol.z.at(k))
-        })
-        .collect();
-    let top = cols.iter().map(|c| c.0).fold(f32::MIN, f32::max);
-    let mut d: Vec<f64> = cols
+    let v = murk_view::pictures::views(vol, intensity);
+    let top = v.front.values.iter().cloned().fold(f32::MIN, f32::max);
+    let mut d: Vec<f64> = v
+        .front
+        .values
         .iter()
-        .filter(|c| c.0 >= 0.3 * top)
-        .map(|c| c.1)
+        .zip(&v.depth.values)
+        .filter(|(f, _)| **f >= 0.3 * top)
+        .map(|(_, d)| *d as f64)
         .collect();
     d.sort_by(f64::total_cmp);
     d[d.len() / 2]

@@ -31,21 +31,16 @@ fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
 /// Depth of the brightest voxel, and the median per-pixel argmax depth over pixels whose
 /// maximum-intensity projection exceeds half of its maximum.
 fn depths(vol: &Volume, intensity: &[f32]) -> (f64, f64) {
-    let nz = vol.z.n;
     let (p, _) = murk_recon::pipeline::peak(vol, intensity);
-    let cols: Vec<(usize, f32)> = intensity
-        .chunks(nz)
-        .map(|c| {
-            c.iter()
-                .enumerate()
-                .fold((0, f32::MIN), |a, (k, &v)| if v > a.1 { (k, v) } else { a })
-        })
-        .collect();
-    let max = cols.iter().map(|c| c.1).fold(f32::MIN, f32::max);
-    let mut zs: Vec<f64> = cols
+    let v = pictures::views(vol, intensity);
+    let max = v.front.values.iter().cloned().fold(f32::MIN, f32::max);
+    let mut zs: Vec<f64> = v
+        .front
+        .values
         .iter()
-        .filter(|c| c.1 > 0.5 * max)
-        .map(|c| vol.z.at(c.0))
+        .zip(&v.depth.values)
+        .filter(|(f, _)| **f > 0.5 * max)
+        .map(|(_, d)| *d as f64)
         .collect();
     zs.sort_by(f64::total_cmp);
     (p[2], zs[zs.len() / 2])
