@@ -5,11 +5,11 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use murk_baselines::{Reflectance, SlabParams};
 use murk_core::window::WindowEnd;
-use murk_core::{CaptureKind, Reconstruction, Volume};
+use murk_core::{CaptureKind, Volume};
 use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
 use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
 use murk_view::pictures;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// `--method`'s values, with their help, from the library's list.
 fn method_names() -> clap::builder::PossibleValuesParser {
@@ -258,7 +258,7 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     for w in out.warnings.iter().filter(|_| !quiet) {
         eprintln!("murk: warning: {w}");
     }
-    let table = table(&a.file, kind, &out, secs);
+    let table = out.summary(&a.file.display().to_string(), kind, secs);
     let v = &out.volume;
     murk_io::write_volume(&a.out, v, &out.intensity, &table)?;
     say(
@@ -285,39 +285,4 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         say(quiet, format!("  {k}: {v}"));
     }
     Ok(())
-}
-
-/// Capture, method rows, volume, peak and time as a key/value table.
-pub fn table(
-    file: &Path,
-    kind: CaptureKind,
-    rec: &Reconstruction,
-    secs: f64,
-) -> Vec<(String, String)> {
-    let (p, val) = rec.peak();
-    let v = &rec.volume;
-    let mut t = vec![
-        ("capture".into(), file.display().to_string()),
-        ("capture kind".into(), kind.to_string()),
-    ];
-    t.extend(rec.rows.iter().cloned());
-    t.extend([
-        (
-            "volume".into(),
-            format!(
-                "x {:.4}:{:.4}:{}, y {:.4}:{:.4}:{}, z {:.4}:{:.4}:{}",
-                v.x.start, v.x.end, v.x.n, v.y.start, v.y.end, v.y.n, v.z.start, v.z.end, v.z.n
-            ),
-        ),
-        (
-            "peak".into(),
-            format!(
-                "{val:.4e} at x {:+.4}, y {:+.4}, z {:.4} m",
-                p[0], p[1], p[2]
-            ),
-        ),
-        ("seconds".into(), format!("{secs:.3}")),
-        ("murk_version".into(), env!("CARGO_PKG_VERSION").into()),
-    ]);
-    t
 }

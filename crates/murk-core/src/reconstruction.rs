@@ -1,6 +1,6 @@
 //! What every reconstruction method returns.
 
-use crate::Volume;
+use crate::{CaptureKind, Volume};
 
 /// A reconstructed volume by any method: `intensity[volume.index(ix, iy, iz)]`, C order [nx, ny, nz],
 /// with the rows that say how it was made and the warnings met on the way.
@@ -59,5 +59,36 @@ impl Reconstruction {
             .chunks(self.volume.z.n)
             .map(|c| c.iter().copied().fold(f32::MIN, f32::max))
             .collect()
+    }
+
+    /// The capture, the method's rows, the volume, the peak and the time as (key, value) rows: what
+    /// `murk reconstruct` prints and records next to the volume.
+    pub fn summary(&self, capture: &str, kind: CaptureKind, secs: f64) -> Vec<(String, String)> {
+        let (p, val) = self.peak();
+        let v = &self.volume;
+        let mut t = vec![
+            ("capture".into(), capture.to_string()),
+            ("capture kind".into(), kind.to_string()),
+        ];
+        t.extend(self.rows.iter().cloned());
+        t.extend([
+            (
+                "volume".into(),
+                format!(
+                    "x {:.4}:{:.4}:{}, y {:.4}:{:.4}:{}, z {:.4}:{:.4}:{}",
+                    v.x.start, v.x.end, v.x.n, v.y.start, v.y.end, v.y.n, v.z.start, v.z.end, v.z.n
+                ),
+            ),
+            (
+                "peak".into(),
+                format!(
+                    "{val:.4e} at x {:+.4}, y {:+.4}, z {:.4} m",
+                    p[0], p[1], p[2]
+                ),
+            ),
+            ("seconds".into(), format!("{secs:.3}")),
+            ("murk_version".into(), env!("CARGO_PKG_VERSION").into()),
+        ]);
+        t
     }
 }
