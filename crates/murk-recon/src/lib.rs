@@ -111,10 +111,15 @@ impl PfParams {
 
     /// λ in metres for this capture (a wall factor times its grid spacing).
     pub fn wavelength_m(&self, cap: &Capture) -> Result<f64> {
+        self.wavelength_for_spacing(wall_spacing_m(cap))
+    }
+
+    /// λ in metres for a wall sampled every `spacing_m` (`None`: not a grid).
+    fn wavelength_for_spacing(&self, spacing_m: Option<f64>) -> Result<f64> {
         let l = match self.wavelength {
             Wavelength::Metres(l) => l,
             Wavelength::WallFactor(f) => {
-                let d = wall_spacing_m(cap).ok_or_else(|| {
+                let d = spacing_m.ok_or_else(|| {
                     Error::param(
                         "a wavelength factor needs a wall grid; give the wavelength in metres",
                     )
@@ -270,7 +275,7 @@ impl PfPlan {
         params.compensation.validate()?;
         let kind = cap.kind();
         let spacing_m = wall_spacing_m(cap);
-        let wavelength_m = params.wavelength_m(cap)?;
+        let wavelength_m = params.wavelength_for_spacing(spacing_m)?;
         let nyquist_factor = nyquist_factor(kind);
         let mut warnings = Vec::new();
         if let Some(d) = spacing_m {
