@@ -3,7 +3,7 @@
 
 mod capture;
 mod ops;
-// mod recon;
+mod recon;
 
 use pyo3::prelude::*;
 use pyo3::types::PyType;
@@ -170,7 +170,7 @@ fn _murk(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ops::merge, m)?)?;
     m.add_function(wrap_pyfunction!(ops::study_plan, m)?)?;
     m.add_function(wrap_pyfunction!(ops::run_study, m)?)?;
-    // m.add_function(wrap_pyfunction!(recon::reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(recon::reconstruct, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

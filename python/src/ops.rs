@@ -109,10 +109,7 @@ pub fn render(
 /// objects or paths, any order); see `murk.merge`.
 #[pyfunction]
 pub fn merge(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyResult<Capture> {
-    let sources = parts
-        .iter()
-        .map(Source::of)
-        .collect::<PyResult<Vec<_>>>()?;
+    let sources = parts.iter().map(Source::of).collect::<PyResult<Vec<_>>>()?;
     let cap = compute(py, None, None, |_| {
         let owned = sources
             .iter()
