@@ -13,7 +13,7 @@ use std::path::PathBuf;
 ///
 /// `H` is a read-only view of murk's histograms without a copy: time is the *last* axis
 /// (y-tal puts it first), the others are the laser grid's then the sensor grid's (a paired or
-/// confocal capture has only the sensor grid's).
+/// confocal capture, or one with a single laser point, has only the sensor grid's).
 ///
 /// >>> cap = murk.read_capture("z.h5")
 /// >>> cap.H.shape, cap.kind, cap.bin_width_m
@@ -48,9 +48,10 @@ impl Capture {
     #[getter(H)]
     fn h<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
         let c = &slf.get().cap;
+        // y-tal's dimensions in murk's order: a single laser point adds none (its T_Sx_Sy).
         let mut shape = match c.pairing {
-            Pairing::Product => [dims(&c.illum), dims(&c.sensor)].concat(),
-            Pairing::Paired => dims(&c.sensor),
+            Pairing::Product if c.illum.len() > 1 => [dims(&c.illum), dims(&c.sensor)].concat(),
+            _ => dims(&c.sensor),
         };
         shape.push(c.time.bins);
         let view = ArrayView::from_shape(IxDyn(&shape), &c.h)
