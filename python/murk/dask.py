@@ -34,6 +34,7 @@ def render_shard(
 ) -> str:
     """One Dask task: renders shard ``(i, n)`` of ``scene`` into ``part`` (kept if already there),
     resuming from ``part + ".ckpt"``; returns ``part``."""
+    part = os.fspath(part)
     if not os.path.exists(part):
         murk.render(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
                     checkpoint=part + ".ckpt", checkpoint_every=checkpoint_every, out=part,

@@ -55,13 +55,21 @@ pub(crate) struct Ticker {
 struct Cancelled;
 
 impl Ticker {
-    pub(crate) fn set(&self, done: u64, total: u64) {
+    pub(crate) fn count(&self, done: u64, total: u64) {
         self.total.store(total, Relaxed);
         self.done.store(done, Relaxed);
+    }
+    pub(crate) fn set(&self, done: u64, total: u64) {
+        self.count(done, total);
         self.check();
     }
-    /// The library's progress calls are its only cancellation points: unwinding from one drops the
-    /// computation's buffers, and checkpoints already written stay.
+    /// Set by Ctrl-C, for library calls that take a stop flag (the renderer's).
+    pub(crate) fn stop(&self) -> &AtomicBool {
+        &self.cancel
+    }
+    /// Where a library call takes no stop flag, its progress calls are the cancellation points:
+    /// unwinding from one drops the computation's buffers. Work that rayon already split still
+    /// runs to its end, so this stops sequential steps only.
     pub(crate) fn check(&self) {
         if self.cancel.load(Relaxed) {
             std::panic::resume_unwind(Box::new(Cancelled));

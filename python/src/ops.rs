@@ -92,7 +92,11 @@ pub fn render(
             checkpoint: checkpoint.clone(),
             checkpoint_every: Duration::from_secs_f64(checkpoint_every.max(0.0)),
         };
-        let cap = plan.render(&opt, &|done, total| t.set(done as u64, total as u64))?;
+        let cap = plan.render_until(
+            &opt,
+            &|done, total| t.count(done as u64, total as u64),
+            t.stop(),
+        )?;
         if let Some(out) = &out {
             murk_io::write_capture(out, &cap)?;
         }
