@@ -21,10 +21,14 @@ except KeyboardInterrupt:
 
 def test_ctrl_c_interrupts_a_long_render():
     p = subprocess.Popen([sys.executable, "-c", LONG_RENDER], stdout=subprocess.PIPE, text=True)
-    assert p.stdout.readline().strip() == "started"
-    time.sleep(1.0)
-    t0 = time.time()
-    p.send_signal(signal.SIGINT)
-    out, _ = p.communicate(timeout=30)
-    assert p.returncode == 3 and "interrupted" in out
-    assert time.time() - t0 < 10
+    try:
+        assert p.stdout.readline().strip() == "started"
+        time.sleep(1.0)
+        t0 = time.time()
+        p.send_signal(signal.SIGINT)
+        out, _ = p.communicate(timeout=30)
+        assert p.returncode == 3 and "interrupted" in out
+        assert time.time() - t0 < 10
+    finally:
+        p.kill()  # a render that ignored Ctrl-C must not outlive the test
+        p.wait()

@@ -1,3 +1,5 @@
+import importlib.util
+
 import numpy as np
 import pytest
 
@@ -67,3 +69,9 @@ def test_an_exception_in_the_callback_stops_the_reconstruction(captures):
     with pytest.raises(Stop):
         murk.reconstruct(captures["grid"], "pf-exact",
                          volume="-0.99:0.99:41,-0.99:0.99:41,1.5:2.5:41", progress=stop)
+
+
+@pytest.mark.skipif(importlib.util.find_spec("tqdm") is None, reason="tqdm is not installed")
+def test_progress_true_draws_a_tqdm_bar(captures, capsys):
+    murk.reconstruct(captures["grid"], "bp", volume=VOL, progress=True)
+    assert "reconstruct" in capsys.readouterr().err
