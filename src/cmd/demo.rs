@@ -1,7 +1,6 @@
 //! `murk demo`: the whole pipeline on a built-in scene, in seconds, with pictures to look at.
 
 use crate::cmd::progress::{say, Bar};
-use crate::cmd::reconstruct;
 use anyhow::Context;
 use clap::Args;
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
@@ -80,7 +79,7 @@ pub fn run(a: DemoArgs, quiet: bool) -> anyhow::Result<()> {
     let rec = murk_recon::reconstruct(&cap, &volume, &PfParams::default(), PfForm::Fast, &bar)?;
     bar.finish();
     let recon_s = t1.elapsed().as_secs_f64();
-    let mut table = reconstruct::summary(&capture_path, &cap, &rec, recon_s);
+    let mut table = rec.summary(&capture_path.display().to_string(), cap.kind(), recon_s);
     table.insert(0, ("scene".into(), format!("planar Z letter (0.4 m) {LETTER_DEPTH_M} m behind a 1 m × 1 m wall, 64 × 64 laser points, one SPAD point at the centre, 1024 bins of 3 mm")));
     table.push((
         "synthesis + capture write seconds".into(),
@@ -95,7 +94,7 @@ pub fn run(a: DemoArgs, quiet: bool) -> anyhow::Result<()> {
         &table,
         &pics,
     )?;
-    let (peak, _) = murk_recon::pipeline::peak(&volume, &rec.intensity);
+    let (peak, _) = rec.peak();
     say(quiet, format!("murk demo: hidden Z at {LETTER_DEPTH_M} m; reconstruction peak at depth {:.3} m ({:.2} s synthesis, {:.2} s reconstruction)", peak[2], synth_s, recon_s));
     say(quiet, format!("  capture  {}", capture_path.display()));
     say(quiet, format!("  volume   {}", volume_path.display()));

@@ -159,7 +159,7 @@ pub fn run(a: ImportArgs, quiet: bool) -> anyhow::Result<()> {
     murk_io::write_capture(&a.out, &cap)?;
     say(quiet, format!("wrote {}", a.out.display()));
     if !quiet {
-        println!("{}", crate::cmd::info::describe(&cap).join("\n"));
+        println!("{}", murk_io::describe(&cap).join("\n"));
     }
     Ok(())
 }

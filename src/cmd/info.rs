@@ -1,7 +1,6 @@
 //! `murk info`: what a capture file holds.
 
 use clap::Args;
-use murk_core::Capture;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -15,87 +14,6 @@ pub struct InfoArgs {
 
 pub fn run(a: InfoArgs) -> anyhow::Result<()> {
     let cap = murk_io::read_capture(&a.file)?;
-    println!("{}", describe(&cap).join("\n"));
+    println!("{}", murk_io::describe(&cap).join("\n"));
     Ok(())
-}
-
-fn side(name: &str, p: &murk_core::PointSet) -> String {
-    let (nx, ny) = p.shape();
-    let layout = match p.layout {
-        murk_core::PointLayout::Grid { .. } if p.len() == 1 => "one point".to_string(),
-        murk_core::PointLayout::Grid { .. } => format!("{nx} × {ny} grid"),
-        murk_core::PointLayout::List => format!("list of {}", p.len()),
-    };
-    let (lo, hi) = p
-        .points
-        .iter()
-        .fold((p.points[0], p.points[0]), |(a, b), q| {
-            (a.min(*q), b.max(*q))
-        });
-    let spacing = p
-        .spacing_m()
-        .map(|d| format!(", spacing {d:.4} m"))
-        .unwrap_or_default();
-    format!(
-        "{name}: {layout}{spacing}, x {:+.3}..{:+.3}, y {:+.3}..{:+.3}, z {:+.3}..{:+.3} m",
-        lo.x, hi.x, lo.y, hi.y, lo.z, hi.z
-    )
-}
-
-pub fn describe(cap: &Capture) -> Vec<String> {
-    let t = cap.time;
-    let mut out = vec![
-        format!("kind: {}", cap.kind()),
-        side("illumination", &cap.illum),
-        side("sensor", &cap.sensor),
-        format!(
-            "time: {} bins of {:.6} m ({:.3} ps) from {:.6} m to {:.6} m of optical path",
-            t.bins,
-            t.bin_width_m,
-            t.bin_width_m / murk_core::SPEED_OF_LIGHT_M_PER_S * 1e12,
-            t.start_m,
-            t.end_m()
-        ),
-        format!(
-            "paths include laser→wall and wall→SPAD: {}{}",
-            cap.t_accounts_first_and_last_bounces,
-            match (cap.laser_xyz, cap.sensor_xyz) {
-                (Some(l), Some(s)) => format!(
-                    " (laser at {:.3?}, SPAD at {:.3?})",
-                    l.to_array(),
-                    s.to_array()
-                ),
-                _ => String::new(),
-            }
-        ),
-    ];
-    let (mut sum, mut max, mut arg) = (0f64, f32::MIN, 0usize);
-    for (i, &v) in cap.h.iter().enumerate() {
-        sum += v as f64;
-        if v > max {
-            max = v;
-            arg = i;
-        }
-    }
-    let (hist, bin) = (arg / t.bins.max(1), arg % t.bins.max(1));
-    let (l, s) = cap.hist_pair(hist);
-    out.push(format!(
-        "H: {} histograms, sum {sum:.6e}, max {max:.6e} at illumination {l}, sensor {s}, bin {bin} (path {:.4} m)",
-        cap.n_hist(),
-        t.start_m + (bin as f64 + 0.5) * t.bin_width_m
-    ));
-    let level = cap.end_level();
-    out.push(format!(
-        "window end: the last 5 % of bins carry {:.1} % of the summed histogram's peak{}",
-        100.0 * level,
-        if level >= murk_core::window::AUTO_LEVEL {
-            " (cut while strong: reconstructions taper it and clear the far voxels; see reconstruct --window-end)"
-        } else {
-            ""
-        }
-    ));
-    for (k, v) in murk_io::scene_info_summary(&cap.scene_info) {
-        out.push(format!("scene_info.{k}: {v}"));
-    }
-    out
 }

@@ -1,32 +1,21 @@
 //! `murk reconstruct`: a capture file in, a volume (.npy / .h5) and pictures out.
 
 use crate::cmd::progress::{say, Bar};
-use anyhow::{bail, Context};
+use anyhow::Context;
 use clap::{Args, ValueEnum};
-use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, Reflectance, SlabParams};
+use murk_baselines::{Reflectance, SlabParams};
 use murk_core::window::WindowEnd;
-use murk_core::{Capture, CaptureKind, Volume};
-use murk_recon::pipeline::{self, Gate, Method, Request, TOffset, VolumeSpec};
-use murk_recon::{Compensation, Falloff, Lateral, PfParams, Wavelength};
+use murk_core::{CaptureKind, Volume};
+use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
+use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
 use murk_view::pictures;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum MethodArg {
-    /// Phasor Fields, fast planar form (falls back to the exact form when the wall is not a planar grid).
-    Pf,
-    /// Phasor Fields, exact time-domain form for any geometry (slow on big captures).
-    PfExact,
-    /// Backprojection (any capture kind, on --volume).
-    Bp,
-    /// Filtered backprojection: BP then a −∇²G filter (any capture kind, on --volume).
-    Fbp,
-    /// Light-cone transform with Wiener deconvolution (confocal grid; own volume).
-    Lct,
-    /// f-k (Stolt) migration (confocal grid; own volume).
-    Fk,
-    /// Confocal diffuse tomography: slab deconvolution, then f-k (confocal grid behind a slab; own volume).
-    Cdt,
+/// `--method`'s values, with their help, from the library's list.
+fn method_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(
+        Method::NAMES.map(|(name, help)| clap::builder::PossibleValue::new(name).help(help)),
+    )
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -77,8 +66,8 @@ pub struct ReconstructArgs {
     /// Output volume: .npy (float32 [nx, ny, nz]) or .h5/.hdf5 (intensity + x, y, z + parameters).
     #[arg(long)]
     pub out: PathBuf,
-    #[arg(long, value_enum, default_value = "pf")]
-    pub method: MethodArg,
+    #[arg(long, default_value = "pf", value_parser = method_names())]
+    pub method: String,
     /// Virtual wavelength λ in metres.
     #[arg(long, conflicts_with = "wavefactor")]
     pub wavelength: Option<f64>,
@@ -130,28 +119,6 @@ pub struct ReconstructArgs {
     pub gate: String,
     #[command(flatten)]
     pub slab: SlabArgs,
-}
-
-fn parse_gate(text: &str) -> anyhow::Result<Gate> {
-    Ok(match text {
-        "off" => Gate::Off,
-        "auto" => Gate::Auto,
-        t => match t.parse::<f64>() {
-            Ok(p) if p.is_finite() => Gate::At(p),
-            _ => bail!("--gate {t}: expected a path in metres, auto or off"),
-        },
-    })
-}
-
-fn parse_t_offset(spec: Option<&str>, slab: SlabParams) -> anyhow::Result<TOffset> {
-    Ok(match spec {
-        None => TOffset::None,
-        Some("slab") => TOffset::Slab(slab),
-        Some(s) => match s.parse::<f64>() {
-            Ok(v) if v.is_finite() => TOffset::Metres(v),
-            _ => bail!("--t-offset '{s}': expected metres or 'slab'"),
-        },
-    })
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -216,46 +183,26 @@ impl SlabArgs {
 
 impl ReconstructArgs {
     /// The library request these arguments make for `cap`.
-    pub fn request(&self, cap: &Capture) -> anyhow::Result<Request> {
-        let slab = self.slab.slab();
-        let method = match self.method {
-            MethodArg::Pf => Method::Pf(self.params(cap)?),
-            MethodArg::PfExact => Method::PfExact(self.params(cap)?),
-            MethodArg::Bp => Method::Bp,
-            MethodArg::Fbp => Method::Fbp(FbpOptions::default()),
-            MethodArg::Lct => Method::Lct(LctParams {
-                snr: self.slab.snr.unwrap_or(LctParams::default().snr),
-                reflectance: match self.slab.weighting {
-                    WeightingArg::Diffuse => Reflectance::Diffuse,
-                    WeightingArg::Retroreflective => Reflectance::Retroreflective,
-                },
-                ..Default::default()
-            }),
-            MethodArg::Fk => Method::Fk(FkParams::default()),
-            MethodArg::Cdt => Method::Cdt(CdtParams {
-                slab,
-                snr: self.slab.snr.unwrap_or(CdtParams::default().snr),
-                ..Default::default()
-            }),
-        };
+    pub fn request(&self, kind: CaptureKind) -> anyhow::Result<Request> {
+        let o = self.options();
         Ok(Request {
-            method,
+            method: Method::from_name(&self.method, kind, &o)?,
             volume: match &self.volume {
                 Some(spec) => VolumeSpec::Given(Volume::parse(spec)?),
                 None => VolumeSpec::Default,
             },
-            t_offset: parse_t_offset(self.t_offset.as_deref(), slab)?,
-            gate: parse_gate(&self.gate)?,
+            t_offset: TOffset::parse(self.t_offset.as_deref(), o.slab).context("--t-offset")?,
+            gate: self.gate.parse::<Gate>().context("--gate")?,
             window_end: self.window_end.into(),
         })
     }
 
-    /// Phasor Fields parameters for `cap` (the default wavelength depends on whether it is confocal).
-    pub fn params(&self, cap: &Capture) -> anyhow::Result<PfParams> {
+    /// The method options these arguments set.
+    pub fn options(&self) -> Options {
         let wavelength = match (self.wavelength, self.wavefactor) {
-            (Some(m), _) => Wavelength::Metres(m),
-            (None, Some(f)) => Wavelength::WallFactor(f),
-            (None, None) => Wavelength::default_for(cap.kind()),
+            (Some(m), _) => Some(Wavelength::Metres(m)),
+            (None, Some(f)) => Some(Wavelength::WallFactor(f)),
+            (None, None) => None,
         };
         let mu = self.mu_t.unwrap_or(0.0);
         let compensation = match self.compensate {
@@ -266,20 +213,25 @@ impl ReconstructArgs {
             },
             Some(CompensateArg::Ballistic) => Compensation::Ballistic { mu_t_per_m: mu },
         };
-        let falloff = match self.falloff {
-            FalloffArg::None => Falloff::None,
-            FalloffArg::InvR => Falloff::InvR,
-        };
-        Ok(PfParams {
+        Options {
             wavelength,
             cycles: self.cycles,
-            falloff,
+            falloff: match self.falloff {
+                FalloffArg::None => Falloff::None,
+                FalloffArg::InvR => Falloff::InvR,
+            },
             compensation,
             lateral: match self.lateral {
                 LateralArg::Propagating => Lateral::Propagating,
                 LateralArg::Full => Lateral::Full,
             },
-        })
+            snr: self.slab.snr,
+            reflectance: match self.slab.weighting {
+                WeightingArg::Diffuse => Reflectance::Diffuse,
+                WeightingArg::Retroreflective => Reflectance::Retroreflective,
+            },
+            slab: self.slab.slab(),
+        }
     }
 }
 
@@ -290,14 +242,14 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         murk_io::refuse_overwrite(png, &[&a.file])?;
     }
     let cap = murk_io::read_capture(&a.file)?;
-    let req = a.request(&cap)?;
+    let kind = cap.kind();
+    let req = a.request(kind)?;
     if a.volume.is_some() && req.method.own_grid() && !quiet {
         eprintln!(
-            "murk: warning: --volume is ignored by {:?}: it reconstructs on the capture's scan grid",
+            "murk: warning: --volume is ignored by {}: it reconstructs on the capture's scan grid",
             a.method
         );
     }
-    let kind = cap.kind();
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
     let out = pipeline::run(cap, &req, &bar).with_context(|| a.file.display().to_string())?;
@@ -306,7 +258,7 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     for w in out.warnings.iter().filter(|_| !quiet) {
         eprintln!("murk: warning: {w}");
     }
-    let table = table(&a.file, kind, out.rows, &out.volume, &out.intensity, secs);
+    let table = out.summary(&a.file.display().to_string(), kind, secs);
     let v = &out.volume;
     murk_io::write_volume(&a.out, v, &out.intensity, &table)?;
     say(
@@ -333,57 +285,4 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         say(quiet, format!("  {k}: {v}"));
     }
     Ok(())
-}
-
-/// The parameters and results of a Phasor Fields reconstruction worth recording next to a volume.
-pub fn summary(
-    file: &Path,
-    cap: &Capture,
-    rec: &murk_recon::Reconstruction,
-    secs: f64,
-) -> Vec<(String, String)> {
-    table(
-        file,
-        cap.kind(),
-        rec.info.rows(),
-        &rec.volume,
-        &rec.intensity,
-        secs,
-    )
-}
-
-/// Capture, method rows, volume, peak and time as a key/value table.
-pub fn table(
-    file: &Path,
-    kind: CaptureKind,
-    method_rows: Vec<(String, String)>,
-    v: &Volume,
-    intensity: &[f32],
-    secs: f64,
-) -> Vec<(String, String)> {
-    let (p, val) = pipeline::peak(v, intensity);
-    let mut t = vec![
-        ("capture".into(), file.display().to_string()),
-        ("capture kind".into(), kind.to_string()),
-    ];
-    t.extend(method_rows);
-    t.extend([
-        (
-            "volume".into(),
-            format!(
-                "x {:.4}:{:.4}:{}, y {:.4}:{:.4}:{}, z {:.4}:{:.4}:{}",
-                v.x.start, v.x.end, v.x.n, v.y.start, v.y.end, v.y.n, v.z.start, v.z.end, v.z.n
-            ),
-        ),
-        (
-            "peak".into(),
-            format!(
-                "{val:.4e} at x {:+.4}, y {:+.4}, z {:.4} m",
-                p[0], p[1], p[2]
-            ),
-        ),
-        ("seconds".into(), format!("{secs:.3}")),
-        ("murk_version".into(), env!("CARGO_PKG_VERSION").into()),
-    ]);
-    t
 }

@@ -47,10 +47,11 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
         // One wall-leg offset for every scan point keeps the sum shift-invariant.
         let first = read_of(0);
         if (0..capture.n_hist()).all(|h| read_of(h).offset == first.offset) {
-            return Ok(Reconstruction {
-                volume: *volume,
-                data: lattice.backproject(capture, volume, &first),
-            });
+            return Ok(Reconstruction::new(
+                *volume,
+                lattice.backproject(capture, volume, &first),
+                DESCRIPTION,
+            ));
         }
     }
     let confocal = capture.kind() == CaptureKind::Confocal;
@@ -94,11 +95,11 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
             }
         },
     );
-    Ok(Reconstruction {
-        volume: *volume,
-        data,
-    })
+    Ok(Reconstruction::new(*volume, data, DESCRIPTION))
 }
+
+/// The method row of every backprojection.
+const DESCRIPTION: &str = "backprojection (linear reads at bin centres)";
 
 /// Voxel columns per parallel task (their f64 accumulators: TILE × nz × 8 bytes).
 const TILE: usize = 16;
@@ -333,9 +334,9 @@ mod tests {
                 z: Axis::new(z0 - 0.02, z0 + 0.02, 161),
             };
             let r = backproject(&c, &vol, BpOptions::default()).unwrap();
-            let max = r.data.iter().copied().fold(0.0, f32::max);
+            let max = r.intensity.iter().copied().fold(0.0, f32::max);
             let (mut w, mut wz) = (0.0, 0.0);
-            for (k, &v) in r.data.iter().enumerate() {
+            for (k, &v) in r.intensity.iter().enumerate() {
                 if v > 0.5 * max {
                     w += v as f64;
                     wz += v as f64 * vol.z.at(k);
@@ -375,8 +376,8 @@ mod tests {
                 backproject(&c, &on, opts).unwrap(),
                 backproject(&c, &off, opts).unwrap(),
             );
-            let max = a.data.iter().copied().fold(0.0, f32::max);
-            for (x, y) in a.data.iter().zip(&b.data) {
+            let max = a.intensity.iter().copied().fold(0.0, f32::max);
+            for (x, y) in a.intensity.iter().zip(&b.intensity) {
                 assert!((x - y).abs() <= 1e-3 * max, "{x} vs {y} ({opts:?})");
             }
         }
@@ -392,6 +393,6 @@ mod tests {
             z: Axis::new(1.0, 2.0, 3),
         };
         let r = backproject(&c, &vol, BpOptions::default()).unwrap();
-        assert_eq!(r.data, vec![0.0; 3]);
+        assert_eq!(r.intensity, vec![0.0; 3]);
     }
 }

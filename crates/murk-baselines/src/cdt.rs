@@ -217,7 +217,21 @@ impl CdtPlan {
         // regularisation), so the whole padded volume is kept and migrated, as the reference does.
         // Wavefield amplitude √τ. No t² scaling: the reference CDT omits it.
         self.stolt.fft.map_real(&mut spec, |v| v.max(0.0).sqrt());
-        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(spec)))
+        let (p, s) = (&self.params, &self.params.slab);
+        Ok(g.reconstruction(
+            g.nt,
+            self.stolt.migrate_and_crop(spec),
+            "confocal diffuse tomography (slab Wiener + f-k)",
+        )
+        .row(
+            "slab",
+            format!(
+                "{} m, μa {} /m, μs′ {} /m, n {}, ze {} m",
+                s.thickness_m, s.mu_a, s.mu_s_prime, s.n, s.ze_m
+            ),
+        )
+        .row("snr", p.snr)
+        .row("time grid", format!("{:?}", p.grid)))
     }
 }
 

@@ -35,7 +35,7 @@ pub(crate) struct ConfocalGeometry {
 
 impl ConfocalGeometry {
     pub fn new(capture: &Capture, grid: TimeGrid) -> Result<Self> {
-        capture.validate()?;
+        capture.validate_geometry()?;
         if capture.kind() != CaptureKind::Confocal {
             return Err(Error::Unsupported(format!(
                 "this method needs a confocal capture, got {}",
@@ -101,6 +101,7 @@ impl ConfocalGeometry {
 
     /// Fails unless `capture` has this geometry (what a plan was built for).
     pub fn check_same(&self, capture: &Capture, grid: TimeGrid) -> Result<()> {
+        capture.validate()?;
         let other = ConfocalGeometry::new(capture, grid)?;
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs().max(b.abs()));
         let same = self.nx == other.nx
@@ -124,7 +125,7 @@ impl ConfocalGeometry {
 
     /// The output of a method with `nz` depth samples: voxel (ix, iy, k) at the scan point (ix, iy),
     /// k·Δs′/2 in front of the wall.
-    pub fn reconstruction(&self, nz: usize, data: Vec<f32>) -> Reconstruction {
+    pub fn reconstruction(&self, nz: usize, data: Vec<f32>, method: &str) -> Reconstruction {
         let dz = 0.5 * self.ds;
         let volume = Volume {
             x: self.x,
@@ -132,7 +133,7 @@ impl ConfocalGeometry {
             z: Axis::new(self.wall_z, self.wall_z + dz * (nz as f64 - 1.0), nz),
         };
         debug_assert_eq!(volume.len(), data.len());
-        Reconstruction { volume, data }
+        Reconstruction::new(volume, data, method)
     }
 
     /// The capture on this grid: `out[(ix·ny + iy)·nt + k]` = transient of scan point (ix, iy) at

@@ -32,15 +32,20 @@ pub fn fbp(capture: &Capture, volume: &Volume, opts: FbpOptions) -> Result<Recon
         FbpFilter::LaplacianOfGaussian => {
             let mut k = laplacian_of_gaussian_kernel();
             k.iter_mut().for_each(|v| *v = -*v);
-            convolve_same(&r.data, volume.shape(), &k, [5, 5, 5])
+            convolve_same(&r.intensity, volume.shape(), &k, [5, 5, 5])
         }
         FbpFilter::DepthSecondDerivative => {
-            convolve_same(&r.data, volume.shape(), &[-1.0, 2.0, -1.0], [1, 1, 3])
+            convolve_same(&r.intensity, volume.shape(), &[-1.0, 2.0, -1.0], [1, 1, 3])
         }
     };
     let max = filtered.iter().copied().fold(0.0f32, f32::max);
     let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
-    r.data = filtered.into_iter().map(|v| (v * scale).max(0.0)).collect();
+    r.intensity = filtered.into_iter().map(|v| (v * scale).max(0.0)).collect();
+    let method = match opts.filter {
+        FbpFilter::LaplacianOfGaussian => "filtered backprojection (−∇²G, 5³ voxels, σ = 1 voxel)",
+        FbpFilter::DepthSecondDerivative => "filtered backprojection (−∂²/∂z², 3 voxels)",
+    };
+    r.rows = vec![("method".into(), method.into())];
     Ok(r)
 }
 
@@ -139,13 +144,13 @@ mod tests {
         let (c, vol, truth) = point_bp();
         let r = fbp(&c, &vol, FbpOptions::default()).unwrap();
         assert_eq!(r.argmax(), truth);
-        assert_eq!(r.data.iter().copied().fold(0.0, f32::max), 1.0);
-        assert!(r.data.iter().all(|&v| v >= 0.0));
+        assert_eq!(r.intensity.iter().copied().fold(0.0, f32::max), 1.0);
+        assert!(r.intensity.iter().all(|&v| v >= 0.0));
 
         // The wrong sign: +∇²G ⊛ BP has its minimum at the point and its maximum elsewhere.
         let bp = backproject(&c, &vol, BpOptions::default()).unwrap();
         let plus = convolve_same(
-            &bp.data,
+            &bp.intensity,
             vol.shape(),
             &laplacian_of_gaussian_kernel(),
             [5, 5, 5],
@@ -155,11 +160,7 @@ mod tests {
             .enumerate()
             .fold(0, |b, (i, &v)| if v < plus[b] { i } else { b });
         assert_eq!(argmin, vol.index(truth[0], truth[1], truth[2]));
-        let wrong = Reconstruction {
-            volume: vol,
-            data: plus,
-        }
-        .argmax();
+        let wrong = Reconstruction::new(vol, plus, "+∇²G").argmax();
         assert!(
             wrong[2].abs_diff(truth[2]) >= 2,
             "+∇²G maximum at {wrong:?}"

@@ -51,7 +51,7 @@ impl FkPlan {
         let spec = self
             .stolt
             .transform(&g.sample(capture), |k, v| v.max(0.0).sqrt() * k as f32 / m);
-        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(spec)))
+        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(spec), "f-k migration"))
     }
 }
 

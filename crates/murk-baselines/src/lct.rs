@@ -119,7 +119,11 @@ impl LctPlan {
                 out.iter_mut().for_each(|o| *o = o.max(0.0));
             },
         );
-        Ok(g.reconstruction(g.nt, data))
+        Ok(
+            g.reconstruction(g.nt, data, "light-cone transform (Wiener)")
+                .row("snr", self.params.snr)
+                .row("reflectance", format!("{:?}", self.params.reflectance)),
+        )
     }
 }
 

@@ -27,36 +27,4 @@ pub use fbp::{fbp, FbpFilter, FbpOptions};
 pub use fk::{fk, FkParams, FkPlan};
 pub use lct::{lct, LctParams, LctPlan, Reflectance};
 
-use murk_core::Volume;
-
-/// A reconstructed volume: `data[volume.index(ix, iy, iz)]`, C order [nx, ny, nz].
-#[derive(Clone, Debug)]
-pub struct Reconstruction {
-    pub volume: Volume,
-    pub data: Vec<f32>,
-}
-
-impl Reconstruction {
-    /// (ix, iy, iz) of the largest value.
-    pub fn argmax(&self) -> [usize; 3] {
-        let i = self
-            .data
-            .iter()
-            .enumerate()
-            .fold(
-                (0, f32::MIN),
-                |best, (i, &v)| if v > best.1 { (i, v) } else { best },
-            )
-            .0;
-        let (ix, iy, iz) = self.volume.unravel(i);
-        [ix, iy, iz]
-    }
-
-    /// Maximum along depth, [nx][ny] row-major.
-    pub fn max_projection(&self) -> Vec<f32> {
-        self.data
-            .chunks(self.volume.z.n)
-            .map(|c| c.iter().copied().fold(f32::MIN, f32::max))
-            .collect()
-    }
-}
+pub use murk_core::Reconstruction;

@@ -58,7 +58,7 @@ pub fn assert_plane_depth(r: &Reconstruction, k: usize, margin: usize) {
     let [nx, ny, nz] = r.volume.shape();
     for ix in margin..nx - margin {
         for iy in margin..ny - margin {
-            let col = &r.data[r.volume.index(ix, iy, 0)..][..nz];
+            let col = &r.intensity[r.volume.index(ix, iy, 0)..][..nz];
             let kmax = col
                 .iter()
                 .enumerate()

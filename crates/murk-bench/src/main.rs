@@ -278,25 +278,23 @@ fn paper_case(
     )?;
     let synth_s = t0.elapsed().as_secs_f64();
     let mut times = Vec::new();
-    let mut rec = None;
+    let mut last = None;
     for _ in 0..runs {
+        // The field and its intensity: the work of `murk_recon::reconstruct`, keeping the field's info.
         let t = Instant::now();
-        rec = Some(murk_recon::reconstruct(
-            &cap,
-            &vol,
-            &PfParams::default(),
-            PfForm::Fast,
-            &NoProgress,
-        )?);
+        let params = PfParams::default();
+        let f = murk_recon::field(&cap, &vol, &params, PfForm::Fast, &NoProgress)?;
+        let intensity = murk_recon::intensity(&cap, &vol, &f.values, params.compensation);
         times.push(t.elapsed().as_secs_f64());
+        last = Some((f.info, intensity));
     }
-    let rec = rec.expect("runs ≥ 1");
-    let (p, _) = murk_recon::pipeline::peak(&vol, &rec.intensity);
+    let (info, intensity) = last.expect("runs ≥ 1");
+    let (p, _) = murk_core::Reconstruction::new(vol, intensity, "pf").peak();
     say(quiet, format!(
         "{label} (fast PF; {} depth slabs of {:.1} frequencies per plane on average, against {} over the whole volume's window): median {:.3} s (runs {:?}); synthesis {:.2} s; peak depth {:.3} m (Z at 2.000 m); peak RSS {:.0} MiB",
-        rec.info.slabs.len(),
-        rec.info.frequencies_per_plane(),
-        rec.info.frequencies,
+        info.slabs.len(),
+        info.frequencies_per_plane(),
+        info.frequencies,
         median(times.clone()),
         times.iter().map(|t| (t * 1000.0).round() / 1000.0).collect::<Vec<_>>(),
         synth_s,

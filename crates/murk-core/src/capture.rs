@@ -72,6 +72,29 @@ pub struct Capture {
 }
 
 impl Capture {
+    /// The capture without its histograms and metadata: what a reconstruction plan is built from.
+    pub fn geometry(&self) -> Capture {
+        Capture {
+            illum: self.illum.clone(),
+            sensor: self.sensor.clone(),
+            h: Vec::new(),
+            scene_info: String::new(),
+            ..*self
+        }
+    }
+
+    /// Whether `other` has the same points, pairing, device positions and time axis, so that a plan
+    /// built for one serves the other.
+    pub fn same_geometry(&self, other: &Capture) -> bool {
+        self.illum == other.illum
+            && self.sensor == other.sensor
+            && self.laser_xyz == other.laser_xyz
+            && self.sensor_xyz == other.sensor_xyz
+            && self.time == other.time
+            && self.t_accounts_first_and_last_bounces == other.t_accounts_first_and_last_bounces
+            && self.pairing == other.pairing
+    }
+
     pub fn n_hist(&self) -> usize {
         match self.pairing {
             Pairing::Product => self.illum.len() * self.sensor.len(),
@@ -258,6 +281,12 @@ impl Capture {
 
     /// Checks every invariant a reconstructor relies on; the message names the offending field.
     pub fn validate(&self) -> Result<()> {
+        self.validate_geometry()?;
+        self.validate_data()
+    }
+
+    /// The checks of [`Capture::validate`] that do not read H: what a plan needs.
+    pub fn validate_geometry(&self) -> Result<()> {
         self.illum.validate("illumination points")?;
         self.sensor.validate("sensor points")?;
         let t = &self.time;
@@ -304,6 +333,11 @@ impl Capture {
                 self.sensor.len()
             )));
         }
+        Ok(())
+    }
+
+    fn validate_data(&self) -> Result<()> {
+        let t = &self.time;
         let want = self.n_hist().saturating_mul(t.bins);
         if self.h.len() != want {
             return Err(Error::param(format!(

@@ -14,6 +14,7 @@ mod capture;
 mod error;
 mod limits;
 mod points;
+mod reconstruction;
 pub mod simd;
 mod truth;
 mod volume;
@@ -24,6 +25,7 @@ pub use error::{Error, Result};
 pub use glam::DVec3;
 pub use limits::{short, Limits};
 pub use points::{PointLayout, PointSet, RegularGrid};
+pub use reconstruction::Reconstruction;
 pub use truth::GroundTruth;
 pub use volume::{Axis, Volume};
 

@@ -9,6 +9,7 @@
 //! are checked before allocating, and writes are atomic (temporary file + rename).
 
 mod atomic;
+mod describe;
 mod h5;
 pub mod import;
 mod mat;
@@ -21,6 +22,7 @@ mod truth;
 mod volume;
 
 pub use atomic::{refuse_overwrite, remove_temporaries, write_atomic};
+pub use describe::describe;
 pub use mat::{read_mat_v5_array, read_mat_v73_array, ArrayFile};
 pub use npy::{read_npy_f32, read_npy_f32_with_limit, write_npy_f32};
 pub use scene_info::scene_info_summary;

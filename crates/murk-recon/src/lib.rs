@@ -18,7 +18,7 @@ pub mod spectrum;
 pub use compensation::Compensation;
 pub use pf_fast::Slab;
 
-use murk_core::{Capture, CaptureKind, DVec3, Error, Result, Volume};
+use murk_core::{Capture, CaptureKind, DVec3, Error, Reconstruction, Result, Volume};
 use rustfft::num_complex::Complex32;
 
 /// Virtual wavelength λ of the phasor pulse.
@@ -200,13 +200,12 @@ impl ReconInfo {
     }
 }
 
+/// The complex field of a Phasor Fields reconstruction, before |U|²·K, and how it was computed.
 #[derive(Debug)]
-pub struct Reconstruction {
+pub struct Field {
     pub volume: Volume,
-    /// Complex field U, volume C order [nx, ny, nz].
-    pub field: Vec<Complex32>,
-    /// |U|²·K.
-    pub intensity: Vec<f32>,
+    /// U, volume C order [nx, ny, nz].
+    pub values: Vec<Complex32>,
     pub info: ReconInfo,
 }
 
@@ -241,102 +240,185 @@ pub fn wall_spacing_m(cap: &Capture) -> Option<f64> {
     nn.get(nn.len() / 2).copied()
 }
 
-/// Reconstructs `volume` from `cap` with Phasor Fields.
+/// Phasor Fields on one volume for captures of one geometry: the checks, the time window and the fast
+/// form's FFT plans and resamplers are made once and serve every capture [`Capture::same_geometry`]
+/// as the one it was built for.
+pub struct PfPlan {
+    geometry: Capture,
+    volume: Volume,
+    params: PfParams,
+    wavelength_m: f64,
+    sigma_m: f64,
+    spacing_m: Option<f64>,
+    window: spectrum::Window,
+    /// The fast form's plan; `None` when the exact form is asked for or the fast one does not apply.
+    fast: Option<pf_fast::Plan>,
+    warnings: Vec<String>,
+}
+
+impl PfPlan {
+    /// Checks `params` against the geometry of `cap` and plans the evaluation in `form`.
+    pub fn new(cap: &Capture, volume: &Volume, params: &PfParams, form: PfForm) -> Result<PfPlan> {
+        cap.validate_geometry()?;
+        volume.validate()?;
+        if !(params.cycles.is_finite() && params.cycles > 0.0) {
+            return Err(Error::param(format!(
+                "cycles must be > 0, got {}",
+                params.cycles
+            )));
+        }
+        params.compensation.validate()?;
+        let kind = cap.kind();
+        let spacing_m = wall_spacing_m(cap);
+        let wavelength_m = params.wavelength_m(cap)?;
+        let nyquist_factor = nyquist_factor(kind);
+        let mut warnings = Vec::new();
+        if let Some(d) = spacing_m {
+            let limit = nyquist_factor * d;
+            if wavelength_m < limit * (1.0 - 1e-9) {
+                return Err(Error::param(format!(
+                    "wavelength {wavelength_m:.4} m is below the Nyquist limit {limit:.4} m of a {}wall sampled every {d:.4} m; use at least {limit:.4} m (wavefactor {nyquist_factor})",
+                    if kind == CaptureKind::Confocal { "confocal " } else { "" }
+                )));
+            }
+        }
+        let sigma_m = params.sigma_m(wavelength_m);
+        if 2.0 * sigma_m < cap.time.bin_width_m {
+            return Err(Error::param(format!(
+                "the virtual pulse (σ = {} m) is shorter than one time bin ({} m); use more cycles or a longer wavelength",
+                murk_core::short(sigma_m),
+                murk_core::short(cap.time.bin_width_m)
+            )));
+        }
+        let window = spectrum::Window::new(
+            cap,
+            spectrum::path_range(cap, volume),
+            sigma_m,
+            wavelength_m,
+        )?;
+        if let Some(d) = spacing_m {
+            let lmin = window.band.min_wavelength_m();
+            if lmin < nyquist_factor * d {
+                warnings.push(format!(
+                    "the pulse band reaches λ = {lmin:.4} m, below the {:.4} m Nyquist limit of the wall sampling: steep angles may alias",
+                    nyquist_factor * d
+                ));
+            }
+        }
+        if window.empty {
+            warnings.push(
+                "the capture's time window does not reach the volume: the result is zero".into(),
+            );
+        } else if window.truncated {
+            warnings.push("the capture's time window covers only part of the paths through the volume (zeros assumed beyond it)".into());
+        }
+        let fast = match form {
+            PfForm::Exact => None,
+            PfForm::Fast => {
+                match pf_fast::Plan::new(cap, kind, volume, params.falloff, params.lateral) {
+                    Ok(plan) => Some(plan),
+                    Err(why) => {
+                        warnings.push(format!(
+                            "fast form not applicable ({why}); used the exact form"
+                        ));
+                        None
+                    }
+                }
+            }
+        };
+        Ok(PfPlan {
+            geometry: cap.geometry(),
+            volume: *volume,
+            params: *params,
+            wavelength_m,
+            sigma_m,
+            spacing_m,
+            window,
+            fast,
+            warnings,
+        })
+    }
+
+    /// The complex field U from `cap`, before any compensation.
+    pub fn field(&self, cap: &Capture, progress: &dyn Progress) -> Result<Field> {
+        if !self.geometry.same_geometry(cap) {
+            return Err(Error::param(
+                "the capture's points or time axis differ from the ones the plan was made for",
+            ));
+        }
+        cap.validate()?;
+        let (values, evaluated_with, slabs) = match &self.fast {
+            Some(plan) => {
+                let (values, slabs) = plan.run(cap, self.sigma_m, self.wavelength_m, progress)?;
+                (values, "fast", slabs)
+            }
+            None => {
+                let spectra = spectrum::spectra(cap, std::slice::from_ref(&self.window));
+                let values = pf_exact::run(
+                    cap,
+                    &self.volume,
+                    &spectra.part(0),
+                    self.params.falloff,
+                    progress,
+                );
+                (values, "exact", Vec::new())
+            }
+        };
+        Ok(Field {
+            volume: self.volume,
+            values,
+            info: ReconInfo {
+                wavelength_m: self.wavelength_m,
+                sigma_m: self.sigma_m,
+                wall_spacing_m: self.spacing_m,
+                frequencies: self.window.band.len(),
+                dft_len: self.window.band.nf,
+                slabs,
+                evaluated_with,
+                warnings: self.warnings.clone(),
+            },
+        })
+    }
+
+    /// |U|²·K from `cap`, with the rows that say how it was made.
+    pub fn run(&self, cap: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        let f = self.field(cap, progress)?;
+        let mut rows = f.info.rows();
+        if f.info.evaluated_with == "fast" {
+            rows.push((
+                "lateral".into(),
+                format!("{:?}", self.params.lateral).to_lowercase(),
+            ));
+        }
+        Ok(Reconstruction {
+            volume: self.volume,
+            intensity: intensity(cap, &self.volume, &f.values, self.params.compensation),
+            rows,
+            warnings: f.info.warnings,
+        })
+    }
+}
+
+/// Reconstructs `volume` from `cap` with Phasor Fields (plans and runs).
 pub fn reconstruct(
     cap: &Capture,
     volume: &Volume,
     params: &PfParams,
-    method: PfForm,
+    form: PfForm,
     progress: &dyn Progress,
 ) -> Result<Reconstruction> {
-    cap.validate()?;
-    volume.validate()?;
-    if !(params.cycles.is_finite() && params.cycles > 0.0) {
-        return Err(Error::param(format!(
-            "cycles must be > 0, got {}",
-            params.cycles
-        )));
-    }
-    params.compensation.validate()?;
-    let spacing = wall_spacing_m(cap);
-    let wavelength_m = params.wavelength_m(cap)?;
-    let confocal = cap.kind() == CaptureKind::Confocal;
-    let mut warnings = Vec::new();
-    let nyquist_factor = nyquist_factor(cap.kind());
-    if let Some(d) = spacing {
-        let limit = nyquist_factor * d;
-        if wavelength_m < limit * (1.0 - 1e-9) {
-            return Err(Error::param(format!(
-                "wavelength {wavelength_m:.4} m is below the Nyquist limit {limit:.4} m of a {}wall sampled every {d:.4} m; use at least {limit:.4} m (wavefactor {nyquist_factor})",
-                if confocal { "confocal " } else { "" }
-            )));
-        }
-    }
-    if 2.0 * params.sigma_m(wavelength_m) < cap.time.bin_width_m {
-        return Err(Error::param(format!(
-            "the virtual pulse (σ = {} m) is shorter than one time bin ({} m); use more cycles or a longer wavelength",
-            murk_core::short(params.sigma_m(wavelength_m)),
-            murk_core::short(cap.time.bin_width_m)
-        )));
-    }
-    let sigma_m = params.sigma_m(wavelength_m);
-    let window = spectrum::Window::new(
-        cap,
-        spectrum::path_range(cap, volume),
-        sigma_m,
-        wavelength_m,
-    )?;
-    if let Some(d) = spacing {
-        let lmin = window.band.min_wavelength_m();
-        if lmin < nyquist_factor * d {
-            warnings.push(format!(
-                "the pulse band reaches λ = {lmin:.4} m, below the {:.4} m Nyquist limit of the wall sampling: steep angles may alias",
-                nyquist_factor * d
-            ));
-        }
-    }
-    if window.empty {
-        warnings
-            .push("the capture's time window does not reach the volume: the result is zero".into());
-    } else if window.truncated {
-        warnings.push("the capture's time window covers only part of the paths through the volume (zeros assumed beyond it)".into());
-    }
-    let exact = |progress: &dyn Progress| {
-        let spectra = spectrum::spectra(cap, std::slice::from_ref(&window));
-        pf_exact::run(cap, volume, &spectra.part(0), params.falloff, progress)
-    };
-    // The fast plan (FFT plans, resamplers) is built only when the fast form is asked for.
-    let (field, evaluated_with, slabs) = match method {
-        PfForm::Exact => (exact(progress), "exact", Vec::new()),
-        PfForm::Fast => match pf_fast::Plan::new(cap, volume, params.falloff, params.lateral) {
-            Ok(plan) => {
-                let (field, slabs) = plan.run(sigma_m, wavelength_m, progress)?;
-                (field, "fast", slabs)
-            }
-            Err(why) => {
-                warnings.push(format!(
-                    "fast form not applicable ({why}); used the exact form"
-                ));
-                (exact(progress), "exact", Vec::new())
-            }
-        },
-    };
-    let intensity = intensity(cap, volume, &field, params.compensation);
-    Ok(Reconstruction {
-        volume: *volume,
-        field,
-        intensity,
-        info: ReconInfo {
-            wavelength_m,
-            sigma_m,
-            wall_spacing_m: spacing,
-            frequencies: window.band.len(),
-            dft_len: window.band.nf,
-            slabs,
-            evaluated_with,
-            warnings,
-        },
-    })
+    PfPlan::new(cap, volume, params, form)?.run(cap, progress)
+}
+
+/// The complex field U of `volume` from `cap`, before any compensation (plans and runs).
+pub fn field(
+    cap: &Capture,
+    volume: &Volume,
+    params: &PfParams,
+    form: PfForm,
+    progress: &dyn Progress,
+) -> Result<Field> {
+    PfPlan::new(cap, volume, params, form)?.field(cap, progress)
 }
 
 /// |U|²·K of a field on `volume` reconstructed from `cap`, so that one field serves every compensation.

@@ -1,14 +1,18 @@
 //! One reconstruction contract over every method: what a user asks for ([`Request`]: the method with
-//! its parameters, the volume, the time offset, the gate and the window's end) and what comes back
-//! ([`Output`]: the volume, its intensity, the rows that say how it was made, warnings). `murk
-//! reconstruct` is this call; a new method is one [`Method`] arm here and its own module.
+//! its parameters, the volume, the time offset, the gate and the window's end), a [`Plan`] made once
+//! per capture geometry, and what comes back (a [`Reconstruction`]: the volume, its intensity, the
+//! rows that say how it was made, warnings). `murk reconstruct` and the Python module are this call;
+//! a new method is its own module plus one arm in [`Method`], [`Method::NAMES`] and [`Engine`].
 
-use crate::{PfForm, PfParams, Progress};
-use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, Pulse, SlabParams};
+use crate::{Compensation, Falloff, Lateral, PfForm, PfParams, PfPlan, Progress, Wavelength};
+use murk_baselines::{
+    BpOptions, CdtParams, CdtPlan, FbpOptions, FkParams, FkPlan, LctParams, LctPlan, Pulse,
+    Reflectance, SlabParams,
+};
 use murk_core::window::{
     apply_gate, handle_end, shortest_path_m, EndReport, GateReport, WindowEnd,
 };
-use murk_core::{Axis, Capture, Error, Result, Volume};
+use murk_core::{Axis, Capture, CaptureKind, Error, Reconstruction, Result, Volume};
 
 /// Every reconstruction method, with its parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,7 +33,107 @@ pub enum Method {
     Cdt(CdtParams),
 }
 
+/// The knobs the methods read, by name: what `murk reconstruct`'s flags and Python's keywords fill.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    /// `None`: [`Wavelength::default_for`] the capture's kind.
+    pub wavelength: Option<Wavelength>,
+    /// Pulse length in wavelengths (PF).
+    pub cycles: f64,
+    pub falloff: Falloff,
+    pub compensation: Compensation,
+    pub lateral: Lateral,
+    /// Wiener signal-to-noise ratio (lct, cdt); `None`: each method's default.
+    pub snr: Option<f64>,
+    pub reflectance: Reflectance,
+    /// The scattering slab in front of the scene (cdt; [`TOffset::Slab`]).
+    pub slab: SlabParams,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        let pf = PfParams::default();
+        Options {
+            wavelength: None,
+            cycles: pf.cycles,
+            falloff: pf.falloff,
+            compensation: pf.compensation,
+            lateral: pf.lateral,
+            snr: None,
+            reflectance: Reflectance::Diffuse,
+            slab: SlabParams::default(),
+        }
+    }
+}
+
+impl Options {
+    fn pf(&self, kind: CaptureKind) -> PfParams {
+        PfParams {
+            wavelength: self
+                .wavelength
+                .unwrap_or_else(|| Wavelength::default_for(kind)),
+            cycles: self.cycles,
+            falloff: self.falloff,
+            compensation: self.compensation,
+            lateral: self.lateral,
+        }
+    }
+}
+
 impl Method {
+    /// Every method's name and a line about it, in the order `--help` lists them.
+    pub const NAMES: [(&'static str, &'static str); 7] = [
+        ("pf", "Phasor Fields, fast planar form (falls back to the exact form when the wall is not a planar grid)"),
+        ("pf-exact", "Phasor Fields, exact time-domain form for any geometry (slow on big captures)"),
+        ("bp", "Backprojection (any capture kind, on the volume)"),
+        ("fbp", "Filtered backprojection: BP then a −∇²G filter (any capture kind, on the volume)"),
+        ("lct", "Light-cone transform with Wiener deconvolution (confocal grid; own volume)"),
+        ("fk", "f-k (Stolt) migration (confocal grid; own volume)"),
+        ("cdt", "Confocal diffuse tomography: slab deconvolution, then f-k (confocal grid behind a slab; own volume)"),
+    ];
+
+    /// The method called `name`, with its parameters from `o`, for a capture of `kind`.
+    pub fn from_name(name: &str, kind: CaptureKind, o: &Options) -> Result<Method> {
+        Ok(match name {
+            "pf" => Method::Pf(o.pf(kind)),
+            "pf-exact" => Method::PfExact(o.pf(kind)),
+            "bp" => Method::Bp,
+            "fbp" => Method::Fbp(FbpOptions::default()),
+            "lct" => Method::Lct(LctParams {
+                snr: o.snr.unwrap_or(LctParams::default().snr),
+                reflectance: o.reflectance,
+                ..Default::default()
+            }),
+            "fk" => Method::Fk(FkParams::default()),
+            "cdt" => Method::Cdt(CdtParams {
+                slab: o.slab,
+                snr: o.snr.unwrap_or(CdtParams::default().snr),
+                ..Default::default()
+            }),
+            other => {
+                let names: Vec<&str> = Method::NAMES.iter().map(|(n, _)| *n).collect();
+                return Err(Error::param(format!(
+                    "unknown method '{other}'; expected one of {}",
+                    names.join(", ")
+                )));
+            }
+        })
+    }
+
+    /// The name [`Method::from_name`] reads.
+    pub fn name(&self) -> &'static str {
+        let i = match self {
+            Method::Pf(_) => 0,
+            Method::PfExact(_) => 1,
+            Method::Bp => 2,
+            Method::Fbp(_) => 3,
+            Method::Lct(_) => 4,
+            Method::Fk(_) => 5,
+            Method::Cdt(_) => 6,
+        };
+        Method::NAMES[i].0
+    }
+
     /// Methods that reconstruct on the confocal scan grid and ignore the requested volume.
     pub fn own_grid(&self) -> bool {
         matches!(self, Method::Lct(_) | Method::Fk(_) | Method::Cdt(_))
@@ -80,6 +184,24 @@ pub enum TOffset {
     Slab(SlabParams),
 }
 
+impl TOffset {
+    /// Reads `metres` or `slab` (the delay of `slab`'s round trip); `None` is no offset.
+    pub fn parse(text: Option<&str>, slab: SlabParams) -> Result<TOffset> {
+        Ok(match text {
+            None => TOffset::None,
+            Some("slab") => TOffset::Slab(slab),
+            Some(s) => match s.parse::<f64>() {
+                Ok(v) if v.is_finite() => TOffset::Metres(v),
+                _ => {
+                    return Err(Error::param(format!(
+                        "time offset '{s}': expected metres or 'slab'"
+                    )))
+                }
+            },
+        })
+    }
+}
+
 /// Where short paths are faded out (see `murk_core::window`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Gate {
@@ -88,6 +210,26 @@ pub enum Gate {
     At(f64),
     /// Three edges before the shortest path that reaches the volume.
     Auto,
+}
+
+impl std::str::FromStr for Gate {
+    type Err = Error;
+
+    /// Reads a path in metres, `auto` or `off`.
+    fn from_str(text: &str) -> Result<Gate> {
+        Ok(match text {
+            "off" => Gate::Off,
+            "auto" => Gate::Auto,
+            t => match t.parse::<f64>() {
+                Ok(p) if p.is_finite() => Gate::At(p),
+                _ => {
+                    return Err(Error::param(format!(
+                        "gate '{t}': expected a path in metres, auto or off"
+                    )))
+                }
+            },
+        })
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -112,57 +254,132 @@ impl Request {
     }
 }
 
-/// A reconstruction by any method.
-pub struct Output {
-    pub volume: Volume,
-    /// Float32 intensity in C order over (x, y, z).
-    pub intensity: Vec<f32>,
-    /// How it was made, as (key, value) rows: the method's parameters, the time offset, the gate and
-    /// the window's end.
-    pub rows: Vec<(String, String)>,
-    pub warnings: Vec<String>,
+/// A method's own plan: what it builds once per geometry.
+enum Engine {
+    Pf(Box<PfPlan>),
+    Bp(Volume, BpOptions),
+    Fbp(Volume, FbpOptions),
+    Lct(LctPlan),
+    Fk(FkPlan),
+    Cdt(CdtPlan),
 }
 
-/// Runs `req` on `cap`.
-pub fn run(mut cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Output> {
-    let m = &req.method;
-    let pulse = m.pulse(&cap)?;
-    let offset_m = match req.t_offset {
-        TOffset::None => 0.0,
-        TOffset::Metres(v) if v.is_finite() => v,
-        TOffset::Metres(v) => {
-            return Err(Error::param(format!("time offset must be finite, got {v}")))
+impl Engine {
+    fn new(geometry: &Capture, method: &Method, volume: Option<&Volume>) -> Result<Engine> {
+        let on_volume = || volume.ok_or_else(|| Error::param("this method needs a volume"));
+        Ok(match *method {
+            Method::Pf(p) => Engine::Pf(Box::new(PfPlan::new(
+                geometry,
+                on_volume()?,
+                &p,
+                PfForm::Fast,
+            )?)),
+            Method::PfExact(p) => Engine::Pf(Box::new(PfPlan::new(
+                geometry,
+                on_volume()?,
+                &p,
+                PfForm::Exact,
+            )?)),
+            Method::Bp => Engine::Bp(*on_volume()?, BpOptions::default()),
+            Method::Fbp(o) => Engine::Fbp(*on_volume()?, o),
+            Method::Lct(p) => Engine::Lct(LctPlan::new(geometry, p)?),
+            Method::Fk(p) => Engine::Fk(FkPlan::new(geometry, p)?),
+            Method::Cdt(p) => Engine::Cdt(CdtPlan::new(geometry, p)?),
+        })
+    }
+
+    fn run(&self, cap: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        match self {
+            Engine::Pf(plan) => plan.run(cap, progress),
+            Engine::Bp(v, o) => murk_baselines::backproject(cap, v, *o),
+            Engine::Fbp(v, o) => murk_baselines::fbp(cap, v, *o),
+            Engine::Lct(plan) => plan.run(cap),
+            Engine::Fk(plan) => plan.run(cap),
+            Engine::Cdt(plan) => plan.run(cap),
         }
-        TOffset::Slab(slab) => slab.round_trip_delay_m(pulse),
-    };
-    cap.time.start_m -= offset_m;
-    // The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.
-    let edge_m = pulse.map_or(BASELINE_EDGE_BINS as f64 * cap.time.bin_width_m, |p| {
-        p.sigma_m
-    });
-    let volume = match (req.volume, m.own_grid()) {
-        (_, true) => None,
-        (VolumeSpec::Given(v), false) => {
-            v.validate()?;
-            Some(v)
+    }
+}
+
+/// A [`Request`] planned for captures of one geometry ([`Capture::same_geometry`]): the time offset,
+/// the volume, the gate and the method's own plan are settled once; [`Plan::run`] serves each capture.
+pub struct Plan {
+    offset_m: f64,
+    edge_m: f64,
+    open_m: Option<f64>,
+    window_end: WindowEnd,
+    /// The geometry the plan was made for, with the time offset applied.
+    geometry: Capture,
+    engine: Engine,
+}
+
+impl Plan {
+    pub fn new(cap: &Capture, req: &Request) -> Result<Plan> {
+        let m = &req.method;
+        let mut geometry = cap.geometry();
+        geometry.validate_geometry()?;
+        let pulse = m.pulse(&geometry)?;
+        let offset_m = match req.t_offset {
+            TOffset::None => 0.0,
+            TOffset::Metres(v) if v.is_finite() => v,
+            TOffset::Metres(v) => {
+                return Err(Error::param(format!("time offset must be finite, got {v}")))
+            }
+            TOffset::Slab(slab) => slab.round_trip_delay_m(pulse),
+        };
+        geometry.time.start_m -= offset_m;
+        // The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.
+        let edge_m = pulse.map_or(BASELINE_EDGE_BINS as f64 * geometry.time.bin_width_m, |p| {
+            p.sigma_m
+        });
+        let volume = match (req.volume, m.own_grid()) {
+            (_, true) => None,
+            (VolumeSpec::Given(v), false) => {
+                v.validate()?;
+                Some(v)
+            }
+            (VolumeSpec::Default, false) => Some(default_volume(&geometry)?),
+        };
+        let open_m = match (req.gate, &volume) {
+            (Gate::Auto, Some(v)) => {
+                Some(shortest_path_m(&geometry, v) - GATE_MARGIN_EDGES * edge_m)
+            }
+            // Own-grid methods have no volume to derive it from.
+            (Gate::Auto, None) | (Gate::Off, _) => None,
+            (Gate::At(p), _) => Some(p),
+        };
+        let engine = Engine::new(&geometry, m, volume.as_ref())?;
+        Ok(Plan {
+            offset_m,
+            edge_m,
+            open_m,
+            window_end: req.window_end,
+            geometry,
+            engine,
+        })
+    }
+
+    /// Reconstructs `cap`, which must have the geometry the plan was made for.
+    pub fn run(&self, mut cap: Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        cap.time.start_m -= self.offset_m;
+        if !self.geometry.same_geometry(&cap) {
+            return Err(Error::param(
+                "the capture's points or time axis differ from the ones the plan was made for",
+            ));
         }
-        (VolumeSpec::Default, false) => Some(default_volume(&cap)?),
-    };
-    let open_m = match (req.gate, &volume) {
-        (Gate::Auto, Some(v)) => Some(shortest_path_m(&cap, v) - GATE_MARGIN_EDGES * edge_m),
-        // Own-grid methods have no volume to derive it from.
-        (Gate::Auto, None) | (Gate::Off, _) => None,
-        (Gate::At(p), _) => Some(p),
-    };
-    let gated = apply_gate(&mut cap, open_m, edge_m);
-    let mut end = handle_end(&mut cap, req.window_end, edge_m);
-    let mut out = dispatch(&cap, m, volume.as_ref(), progress)?;
-    end.trim(&cap, &out.volume, &mut out.intensity);
-    out.warnings.extend(end.warning());
-    out.warnings
-        .extend(near_face_warning(&out.volume, &out.intensity, &gated));
-    out.rows.extend(closing_rows(offset_m, &gated, &end));
-    Ok(out)
+        let gated = apply_gate(&mut cap, self.open_m, self.edge_m);
+        let mut end = handle_end(&mut cap, self.window_end, self.edge_m);
+        let mut out = self.engine.run(&cap, progress)?;
+        end.trim(&cap, &out.volume, &mut out.intensity);
+        out.warnings.extend(end.warning());
+        out.warnings.extend(near_face_warning(&out, &gated));
+        out.rows.extend(closing_rows(self.offset_m, &gated, &end));
+        Ok(out)
+    }
+}
+
+/// Runs `req` on `cap` (plans and runs).
+pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Reconstruction> {
+    Plan::new(&cap, req)?.run(cap, progress)
 }
 
 fn closing_rows(offset_m: f64, gated: &GateReport, end: &EndReport) -> Vec<(String, String)> {
@@ -171,92 +388,6 @@ fn closing_rows(offset_m: f64, gated: &GateReport, end: &EndReport) -> Vec<(Stri
         ("gate".into(), gated.describe()),
         ("window_end".into(), end.describe()),
     ]
-}
-
-fn row(k: &str, v: String) -> (String, String) {
-    (k.to_string(), v)
-}
-
-fn dispatch(
-    cap: &Capture,
-    method: &Method,
-    volume: Option<&Volume>,
-    progress: &dyn Progress,
-) -> Result<Output> {
-    let on_volume = || volume.ok_or_else(|| Error::param("this method needs a volume"));
-    let baseline = |r: murk_baselines::Reconstruction, rows: Vec<(String, String)>| Output {
-        volume: r.volume,
-        intensity: r.data,
-        rows,
-        warnings: Vec::new(),
-    };
-    Ok(match *method {
-        Method::Pf(p) | Method::PfExact(p) => {
-            let form = if matches!(method, Method::PfExact(_)) {
-                PfForm::Exact
-            } else {
-                PfForm::Fast
-            };
-            let rec = crate::reconstruct(cap, on_volume()?, &p, form, progress)?;
-            let mut rows = rec.info.rows();
-            if rec.info.evaluated_with == "fast" {
-                rows.push(row("lateral", format!("{:?}", p.lateral).to_lowercase()));
-            }
-            Output {
-                volume: rec.volume,
-                intensity: rec.intensity,
-                rows,
-                warnings: rec.info.warnings,
-            }
-        }
-        Method::Bp => baseline(
-            murk_baselines::backproject(cap, on_volume()?, Default::default())?,
-            vec![row(
-                "method",
-                "backprojection (linear reads at bin centres)".into(),
-            )],
-        ),
-        Method::Fbp(o) => baseline(
-            murk_baselines::fbp(cap, on_volume()?, o)?,
-            vec![row(
-                "method",
-                "filtered backprojection (−∇²G, 5³ voxels, σ = 1 voxel)".into(),
-            )],
-        ),
-        Method::Lct(p) => baseline(
-            murk_baselines::lct(cap, p)?,
-            vec![
-                row("method", "light-cone transform (Wiener)".into()),
-                row("snr", format!("{}", p.snr)),
-                row("reflectance", format!("{:?}", p.reflectance)),
-            ],
-        ),
-        Method::Fk(p) => baseline(
-            murk_baselines::fk(cap, p)?,
-            vec![row("method", "f-k migration".into())],
-        ),
-        Method::Cdt(p) => {
-            let s = p.slab;
-            baseline(
-                murk_baselines::cdt(cap, p)?,
-                vec![
-                    row(
-                        "method",
-                        "confocal diffuse tomography (slab Wiener + f-k)".into(),
-                    ),
-                    row(
-                        "slab",
-                        format!(
-                            "{} m, μa {} /m, μs′ {} /m, n {}, ze {} m",
-                            s.thickness_m, s.mu_a, s.mu_s_prime, s.n, s.ze_m
-                        ),
-                    ),
-                    row("snr", format!("{}", p.snr)),
-                    row("time grid", format!("{:?}", p.grid)),
-                ],
-            )
-        }
-    })
 }
 
 /// The wall grid's extent and spacing in x and y; depth from 0.1 m to what the time window reaches.
@@ -300,21 +431,11 @@ pub fn default_volume(cap: &Capture) -> Result<Volume> {
     Ok(v)
 }
 
-/// Peak voxel position and value of an intensity volume.
-pub fn peak(vol: &Volume, intensity: &[f32]) -> ([f64; 3], f32) {
-    let (i, &v) = intensity
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .unwrap_or((0, &0.0));
-    let (ix, iy, iz) = vol.unravel(i);
-    (vol.centre(ix, iy, iz).to_array(), v)
-}
-
 /// In a medium the backscatter near the relay is the strongest early signal: a peak on the volume's
 /// nearest plane, with no gate, usually images it rather than the scene.
-fn near_face_warning(vol: &Volume, intensity: &[f32], gated: &GateReport) -> Option<String> {
-    let (p, _) = peak(vol, intensity);
+fn near_face_warning(rec: &Reconstruction, gated: &GateReport) -> Option<String> {
+    let (p, _) = rec.peak();
+    let vol = &rec.volume;
     let near = vol.z.start.min(vol.z.end);
     (gated.open_m.is_none() && vol.z.n > 2 && (p[2] - near).abs() < 1e-9).then(|| {
         format!(

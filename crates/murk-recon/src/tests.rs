@@ -80,6 +80,10 @@ fn run(cap: &Capture, vol: &Volume, method: PfForm) -> Reconstruction {
     reconstruct(cap, vol, &PfParams::default(), method, &NoProgress).unwrap()
 }
 
+fn run_field(cap: &Capture, vol: &Volume, method: PfForm) -> Field {
+    field(cap, vol, &PfParams::default(), method, &NoProgress).unwrap()
+}
+
 /// Relative L2 distance between two intensity volumes, each normalised to its maximum.
 fn rel_l2(a: &[f32], b: &[f32]) -> f64 {
     let (ma, mb) = (
@@ -107,14 +111,12 @@ fn point_found_for_every_capture_kind_fast_and_exact() {
             let cap = capture(kind, start, devices);
             for method in [PfForm::Fast, PfForm::Exact] {
                 let r = run(&cap, &vol, method);
-                assert_eq!(
-                    r.info.evaluated_with,
-                    if method == PfForm::Fast {
-                        "fast"
-                    } else {
-                        "exact"
-                    }
-                );
+                let form = if method == PfForm::Fast {
+                    "fast"
+                } else {
+                    "exact"
+                };
+                assert_eq!(r.rows[0].1, format!("Phasor Fields ({form} form)"));
                 assert_localised(
                     &r,
                     &format!("{kind:?} start {start} devices {devices} {method:?}"),
@@ -235,7 +237,8 @@ fn deep_volumes_split_into_slabs_that_match_the_exact_form() {
     };
     let fast = run(&cap, &vol, PfForm::Fast);
     let exact = run(&cap, &vol, PfForm::Exact);
-    let slabs = &fast.info.slabs;
+    let info = run_field(&cap, &vol, PfForm::Fast).info;
+    let slabs = &info.slabs;
     assert!(slabs.len() > 1, "one slab: {slabs:?}");
     assert_eq!(slabs[0].planes.start, 0);
     assert_eq!(slabs[slabs.len() - 1].planes.end, vol.z.n);
@@ -243,9 +246,9 @@ fn deep_volumes_split_into_slabs_that_match_the_exact_form() {
         .windows(2)
         .all(|p| p[0].planes.end == p[1].planes.start));
     assert!(
-        slabs.iter().all(|s| s.frequencies < fast.info.frequencies),
+        slabs.iter().all(|s| s.frequencies < info.frequencies),
         "{slabs:?} against {} frequencies",
-        fast.info.frequencies
+        info.frequencies
     );
     let e = rel_l2(&fast.intensity, &exact.intensity);
     assert!(e <= 1e-2, "relative L2 {e}");
@@ -312,10 +315,10 @@ fn assert_matches_oracle(cap: &Capture, vol: &Volume, tol: f64) {
             lateral: Lateral::Full,
             ..PfParams::default()
         };
-        let fast = reconstruct(cap, vol, &params, PfForm::Fast, &NoProgress).unwrap();
+        let fast = field(cap, vol, &params, PfForm::Fast, &NoProgress).unwrap();
         let want = oracle(cap, vol, &params);
         let scale = want.iter().map(|w| w.norm()).fold(0.0, f64::max);
-        for (f, w) in fast.field.iter().zip(&want) {
+        for (f, w) in fast.values.iter().zip(&want) {
             let err = (Complex64::new(f.re as f64, f.im as f64) - w).norm() / scale;
             assert!(err < tol, "{falloff:?}, {vol:?}: error {err} of the peak");
         }
@@ -333,7 +336,7 @@ fn fast_matches_frequency_domain_oracle_on_the_lattice() {
     };
     let cap = random_capture();
     assert!(
-        !pf_fast::Plan::new(&cap, &vol, Falloff::None, Lateral::Full)
+        !pf_fast::Plan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
             .unwrap()
             .folds()
     );
@@ -347,9 +350,9 @@ fn lateral_cut_error(cap: &Capture, vol: &Volume) -> f64 {
             lateral,
             ..PfParams::default()
         };
-        reconstruct(cap, vol, &p, PfForm::Fast, &NoProgress)
+        field(cap, vol, &p, PfForm::Fast, &NoProgress)
             .unwrap()
-            .field
+            .values
     };
     let (cut, full) = (field(Lateral::Propagating), field(Lateral::Full));
     let peak = full.iter().map(|u| u.norm()).fold(0.0, f32::max);
@@ -436,9 +439,11 @@ fn fast_matches_frequency_domain_oracle_on_centred_volumes() {
             1e-3,
         ),
     ] {
-        assert!(pf_fast::Plan::new(&cap, &vol, Falloff::None, Lateral::Full)
-            .unwrap()
-            .folds());
+        assert!(
+            pf_fast::Plan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
+                .unwrap()
+                .folds()
+        );
         assert_matches_oracle(&cap, &vol, tol);
     }
 }
@@ -451,10 +456,10 @@ fn reciprocity_and_linearity() {
         y: Axis::new(-0.4, 0.0, 8),
         z: Axis::new(0.45, 0.55, 3),
     };
-    let a = run(&cap, &vol, PfForm::Fast);
-    let b = run(&cap.swapped_roles(), &vol, PfForm::Fast);
-    let peak = a.field.iter().map(|u| u.norm()).fold(0.0, f32::max);
-    for (x, y) in a.field.iter().zip(&b.field) {
+    let a = run_field(&cap, &vol, PfForm::Fast);
+    let b = run_field(&cap.swapped_roles(), &vol, PfForm::Fast);
+    let peak = a.values.iter().map(|u| u.norm()).fold(0.0, f32::max);
+    for (x, y) in a.values.iter().zip(&b.values) {
         assert!((x - y).norm() <= 1e-4 * peak);
     }
     // U(2·H1 + 3·H2) = 2·U(H1) + 3·U(H2).
@@ -469,10 +474,10 @@ fn reciprocity_and_linearity() {
         .iter_mut()
         .zip(&other.h)
         .for_each(|(m, o)| *m = 2.0 * *m + 3.0 * o);
-    let u2 = run(&other, &vol, PfForm::Fast);
-    let um = run(&mix, &vol, PfForm::Fast);
-    let scale = um.field.iter().map(|u| u.norm()).fold(0.0, f32::max);
-    for ((m, x), y) in um.field.iter().zip(&a.field).zip(&u2.field) {
+    let u2 = run_field(&other, &vol, PfForm::Fast);
+    let um = run_field(&mix, &vol, PfForm::Fast);
+    let scale = um.values.iter().map(|u| u.norm()).fold(0.0, f32::max);
+    for ((m, x), y) in um.values.iter().zip(&a.values).zip(&u2.values) {
         assert!((m - (x * 2.0 + y * 3.0)).norm() <= 1e-4 * scale);
     }
 }
@@ -601,11 +606,7 @@ fn truncated_window_is_padded_not_wrapped() {
     cap.h = h;
     cap.time.bins = keep;
     let r = run(&cap, &aligned_volume(), PfForm::Fast);
-    assert!(r
-        .info
-        .warnings
-        .iter()
-        .any(|w| w.contains("part of the paths")));
+    assert!(r.warnings.iter().any(|w| w.contains("part of the paths")));
     let far = Volume {
         z: Axis::new(1.0, 1.2, 3),
         ..aligned_volume()
@@ -693,4 +694,47 @@ fn default_wavelength_follows_the_round_trip() {
         assert_eq!(Wavelength::default_for(k), Wavelength::WallFactor(4.0));
     }
     assert_eq!(crate::nyquist_factor(K::Confocal), 4.0);
+}
+
+/// One plan serves every capture of its geometry, byte for byte as planning for each; a capture of
+/// another geometry is refused.
+#[test]
+fn a_plan_serves_every_capture_of_its_geometry() {
+    use crate::pipeline::{Method, Options, Plan, Request, VolumeSpec};
+    let a = capture(LayoutKind::Confocal, 0.0, false);
+    let b = capture_of(
+        LayoutKind::Confocal,
+        0.0,
+        false,
+        DVec3::new(-0.1, 0.15, 0.45),
+    );
+    for (name, _) in Method::NAMES {
+        let method = Method::from_name(name, a.kind(), &Options::default()).unwrap();
+        let req = Request {
+            volume: VolumeSpec::Given(Volume {
+                z: Axis::new(0.3, 0.7, 9),
+                ..aligned_volume()
+            }),
+            ..Request::new(method)
+        };
+        let plan = Plan::new(&a, &req).unwrap();
+        for cap in [&a, &b] {
+            let reused = plan.run(cap.clone(), &NoProgress).unwrap();
+            let fresh = crate::pipeline::run(cap.clone(), &req, &NoProgress).unwrap();
+            assert_eq!(reused.intensity, fresh.intensity, "{name}");
+            assert_eq!(reused.rows, fresh.rows, "{name}");
+        }
+        assert_eq!(method.name(), name);
+        let mut later = a.clone();
+        later.time.start_m += 0.01;
+        let e = plan.run(later, &NoProgress).unwrap_err().to_string();
+        assert!(
+            e.contains("differ from the ones the plan was made for"),
+            "{name}: {e}"
+        );
+    }
+    let e = Method::from_name("lcd", a.kind(), &Options::default()).unwrap_err();
+    assert!(e
+        .to_string()
+        .contains("unknown method 'lcd'; expected one of pf, pf-exact, bp"));
 }

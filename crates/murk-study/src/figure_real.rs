@@ -4,7 +4,7 @@
 //! (rows CDT, PF, PF; a column per scene) and an index.html with parameters, depths and timings.
 
 use murk_baselines::{CdtParams, CdtPlan, Pulse};
-use murk_core::{Capture, Error, Result, Volume};
+use murk_core::{Capture, Error, Reconstruction, Result, Volume};
 use murk_io::import::{import, ImportOptions, Preset, CDT_SCENES};
 use murk_recon::{Falloff, NoProgress, PfForm, PfParams, Wavelength};
 use murk_view::pictures::{self, Plane};
@@ -30,9 +30,9 @@ fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
 
 /// Depth of the brightest voxel, and the median per-pixel argmax depth over pixels whose
 /// maximum-intensity projection exceeds half of its maximum.
-fn depths(vol: &Volume, intensity: &[f32]) -> (f64, f64) {
-    let (p, _) = murk_recon::pipeline::peak(vol, intensity);
-    let v = pictures::views(vol, intensity);
+fn depths(rec: &Reconstruction) -> (f64, f64) {
+    let (p, _) = rec.peak();
+    let v = pictures::views(&rec.volume, &rec.intensity);
     let max = v.front.values.iter().cloned().fold(f32::MIN, f32::max);
     let mut zs: Vec<f64> = v
         .front
@@ -47,8 +47,7 @@ fn depths(vol: &Volume, intensity: &[f32]) -> (f64, f64) {
 }
 
 struct Cell {
-    volume: Volume,
-    intensity: Vec<f32>,
+    rec: Reconstruction,
     secs: f64,
 }
 
@@ -59,16 +58,12 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> Result<Vec<Cel
         ..Default::default()
     };
     let (secs, r) = timed(runs, || CdtPlan::new(&cap, params)?.run(&cap))?;
-    let cdt = Cell {
-        volume: r.volume,
-        intensity: r.data,
-        secs,
-    };
+    let cdt = Cell { rec: r, secs };
     // PF on CDT's voxels (the scan grid laterally, the same depths) but the first: PF needs z > 0.
-    let z = cdt.volume.z;
+    let z = cdt.rec.volume.z;
     let vol = Volume {
         z: murk_core::Axis::new(z.at(1), z.end, z.n - 1),
-        ..cdt.volume
+        ..cdt.rec.volume
     };
     let mut cells = vec![cdt];
     for pf in pfs {
@@ -82,11 +77,7 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> Result<Vec<Cel
         let (secs, r) = timed(runs, || {
             murk_recon::reconstruct(&shifted, &vol, pf, PfForm::Fast, &NoProgress)
         })?;
-        cells.push(Cell {
-            volume: r.volume,
-            intensity: r.intensity,
-            secs,
-        });
+        cells.push(Cell { rec: r, secs });
     }
     Ok(cells)
 }
@@ -142,7 +133,7 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
         let path = data.join(format!("{name}.mat"));
         let pair = scene(&path, snr, runs, &pfs)?;
         for (label, c) in ["CDT", "PF", "PF (λ on path)"].iter().zip(&pair) {
-            let (peak, median) = depths(&c.volume, &c.intensity);
+            let (peak, median) = depths(&c.rec);
             let line = format!(
                 "peak depth {peak:.3} m, median depth {median:.3} m, {:.1} ms",
                 c.secs * 1e3
@@ -171,7 +162,7 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
 
 /// Front views side by side, each normalised to [0, 1], NaN (black) between cells.
 fn grid_plane(cells: &[Vec<Cell>]) -> Plane {
-    let front = |c: &Cell| pictures::views(&c.volume, &c.intensity).front;
+    let front = |c: &Cell| pictures::views(&c.rec.volume, &c.rec.intensity).front;
     let (cw, ch) = {
         let f = front(&cells[0][0]);
         (f.width * ZOOM, f.height * ZOOM)

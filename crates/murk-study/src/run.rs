@@ -303,7 +303,7 @@ fn pf_field(cap: &Capture, volume: &Volume, lambda_factor: f64) -> Result<Vec<Co
         wavelength: Wavelength::WallFactor(4.0 * lambda_factor),
         ..PfParams::default()
     };
-    Ok(murk_recon::reconstruct(cap, volume, &params, PfForm::Fast, &NoProgress)?.field)
+    Ok(murk_recon::field(cap, volume, &params, PfForm::Fast, &NoProgress)?.values)
 }
 
 /// The largest signal in the last 5 % of bins over the peak, both of the histograms' sum.

@@ -5,15 +5,18 @@
 //! are not on the wall lattice read the convolution through a windowed-sinc resampler.
 
 use crate::cmul;
-use crate::fft2::{kept_lines, kept_spans, transpose_part, Fft2};
+use crate::fft2::{kept_lines, kept_spans, Fft2};
 use crate::resample::Resampler;
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
+use lattice::{mirror, reach, Fold};
 use murk_core::simd::wide;
 use murk_core::{Axis, Capture, CaptureKind, DVec3, RegularGrid, Result, Volume};
 use rayon::prelude::*;
 use rustfft::num_complex::{Complex32, Complex64};
 use std::ops::Range;
+
+mod lattice;
 use std::sync::Mutex;
 
 /// Which histogram feeds grid cell `c` for a given point-side index.
@@ -32,8 +35,9 @@ pub struct Slab {
     pub dft_len: usize,
 }
 
-pub struct Plan<'a> {
-    cap: &'a Capture,
+pub struct Plan {
+    /// The capture's geometry (no histograms).
+    cap: Capture,
     vol: Volume,
     falloff: Falloff,
     grid: RegularGrid,
@@ -49,52 +53,17 @@ pub struct Plan<'a> {
     lateral: Lateral,
 }
 
-/// A kernel K(|dx|, |dy|) whose support is symmetric about its centre (volume columns spanning the
-/// wall lattice symmetrically) has K̂(N − k) = e^{4πi·k·c/N}·K̂(k) along each axis, so only the
-/// non-negative frequencies k ≤ N/2 need transforming: about half the row and column FFTs. The
-/// phases for k > N/2 are folded into the data's spectra once, and the kernel's spectrum is unfolded
-/// by mirroring.
-struct Fold {
-    /// The data's factor per spectrum entry ([ky][kx]): both axes' phases and the inverse FFT's
-    /// 1/(fx·fy), applied in one product per frequency.
-    phases: Vec<Complex32>,
-}
-
-impl Fold {
-    fn new(fx: usize, fy: usize, cx: i64, cy: i64) -> Fold {
-        let axis = |n: usize, c: i64| -> Vec<Complex64> {
-            (0..n)
-                .map(|k| {
-                    if k <= n / 2 {
-                        Complex64::new(1.0, 0.0)
-                    } else {
-                        let turns = 2.0 * ((n - k) as i64 * c) as f64 / n as f64;
-                        Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * turns)
-                    }
-                })
-                .collect()
-        };
-        let (px, py) = (axis(fx, cx), axis(fy, cy));
-        let norm = 1.0 / (fx * fy) as f64;
-        Fold {
-            phases: py
-                .iter()
-                .flat_map(|y| px.iter().map(move |x| c32(x * y * norm)))
-                .collect(),
-        }
-    }
-}
-
-impl<'a> Plan<'a> {
+impl Plan {
     /// Checks the preconditions of the fast form; the error says why it does not apply.
     pub fn new(
-        cap: &'a Capture,
+        cap: &Capture,
+        kind: CaptureKind,
         vol: &Volume,
         falloff: Falloff,
         lateral: Lateral,
-    ) -> Result<Plan<'a>, String> {
+    ) -> Result<Plan, String> {
         let regular = |p: &murk_core::PointSet| p.regular_grid();
-        let (grid, side) = match cap.kind() {
+        let (grid, side) = match kind {
             CaptureKind::Confocal => (regular(&cap.illum), GridSide::Confocal),
             CaptureKind::LaserGridSinglePoint => (regular(&cap.illum), GridSide::Illum),
             CaptureKind::SinglePointSensorGrid => (regular(&cap.sensor), GridSide::Sensor),
@@ -143,7 +112,7 @@ impl<'a> Plan<'a> {
         let fold = (2 * cx + 1 == gx as i64 && 2 * cy + 1 == gy as i64)
             .then(|| Fold::new(fft.fx, fft.fy, cx, cy));
         Ok(Plan {
-            cap,
+            cap: cap.geometry(),
             vol: *vol,
             falloff,
             grid,
@@ -203,9 +172,11 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// The field at every voxel, and the depth slabs it was computed in.
+    /// The field at every voxel from `data` (a capture of this plan's geometry), and the depth slabs
+    /// it was computed in.
     pub fn run(
         &self,
+        data: &Capture,
         sigma_m: f64,
         wavelength_m: f64,
         progress: &dyn Progress,
@@ -215,7 +186,7 @@ impl<'a> Plan<'a> {
         let (slabs, windows) = self.slabs(sigma_m, wavelength_m)?;
         progress.start((sources.len() * nz) as u64);
         let mut field = murk_core::buffer::filled(nx * ny * nz, Complex64::default());
-        let all = crate::spectrum::spectra(self.cap, &windows);
+        let all = crate::spectrum::spectra(data, &windows);
         let mut grid = GridBuffers::default();
         // One workspace per worker thread for the whole run (planes of every slab reuse them).
         let pool: Vec<Mutex<Workspace>> = (0..rayon::current_num_threads().max(1))
@@ -279,7 +250,7 @@ impl<'a> Plan<'a> {
                     z: Axis::new(z, z, 1),
                     ..self.vol
                 };
-                path_range(self.cap, &plane)
+                path_range(&self.cap, &plane)
             })
             .collect();
         let threads = rayon::current_num_threads().max(1);
@@ -303,7 +274,7 @@ impl<'a> Plan<'a> {
             let waves = planes.div_ceil(threads) as f64;
             w.band.len() as f64 * sources * (waves * per_plane + per_freq) + data
         };
-        let window = |lo: f64, hi: f64| Window::new(self.cap, (lo, hi), sigma_m, wavelength_m);
+        let window = |lo: f64, hi: f64| Window::new(&self.cap, (lo, hi), sigma_m, wavelength_m);
         // best[i]: cost of planes 0..i, where its last slab starts, and that slab's window.
         let mut best: Vec<(f64, usize, Option<Window>)> =
             (0..=nz).map(|_| (f64::INFINITY, 0, None)).collect();
@@ -541,215 +512,6 @@ fn legs(src: Option<usize>) -> f64 {
     } else {
         1.0
     }
-}
-
-/// Number of distinct |q − c| for q ∈ [0, len).
-fn reach(c: i64, len: usize) -> usize {
-    c.unsigned_abs().max((len as i64 - 1 - c).unsigned_abs()) as usize + 1
-}
-
-/// `dst[k] = src[k]` for k < src.len(), then `dst[k] = src[dst.len() − k]`: a spectrum over
-/// k ≤ N/2 extended to all k by symmetry.
-#[inline(always)]
-fn unfold(dst: &mut [Complex32], src: &[Complex32]) {
-    let n = dst.len();
-    let (lo, hi) = dst.split_at_mut(src.len());
-    lo.copy_from_slice(src);
-    for (d, s) in hi.iter_mut().rev().zip(&src[1..]) {
-        *d = *s;
-    }
-    debug_assert!(n - src.len() < src.len());
-}
-
-/// `dst[q] = src[|q − c|]`: a reversed run down to |·| = 0, then a forward run.
-#[inline(always)]
-fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
-    let split = c.clamp(0, dst.len() as i64) as usize;
-    let (down, up) = dst.split_at_mut(split);
-    for (d, s) in down.iter_mut().rev().zip(&src[1..]) {
-        *d = *s;
-    }
-    let first = (-c).max(0) as usize;
-    up.copy_from_slice(&src[first..first + up.len()]);
-}
-
-impl Plan<'_> {
-    /// The kernel's spectrum at the current frequency for a symmetric support (see [`Fold`]): transforms
-    /// along y only the distinct rows |dx| ≤ cx, keeps ky ≤ min(fy/2, lines) and transforms those
-    /// columns along x, leaving those lines (kx ≤ fx/2 valid) in `ws.g` for [`Plan::folded_product`] to
-    /// unfold by mirroring (the phases live in the data).
-    fn folded_kernel_spectrum(
-        &self,
-        ws: &mut Workspace,
-        gx: usize,
-        gy: usize,
-        my: usize,
-        lines: usize,
-    ) {
-        let (fx, fy) = (self.fft.fx, self.fft.fy);
-        let hy = (fy / 2).min(lines) + 1;
-        let rows = self.cx as usize + 1;
-        let (cx, cy) = (self.cx, self.cy);
-        let g = &mut ws.g;
-        wide(
-            #[inline(always)]
-            || {
-                for ax in 0..rows {
-                    let row = &mut g[ax * fy..(ax + 1) * fy];
-                    mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
-                    row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
-                }
-            },
-        );
-        self.fft.rows_y(&mut g[..rows * fy], &mut ws.scratch);
-        // Only the hy columns that are read.
-        transpose_part(&g[..rows * fy], fy, 0..rows, 0..hy, &mut ws.cols, rows);
-        wide(
-            #[inline(always)]
-            || {
-                for ky in 0..hy {
-                    let line = &mut g[ky * fx..(ky + 1) * fx];
-                    mirror(&mut line[..gx], &ws.cols[ky * rows..(ky + 1) * rows], cx);
-                    line[gx..]
-                        .iter_mut()
-                        .for_each(|v| *v = Complex32::default());
-                }
-            },
-        );
-        self.fft.rows_x(&mut g[..hy * fx], &mut ws.scratch);
-    }
-
-    /// `ws.t` = the kernel's spectrum × `h` ([ky][kx]) on the `kept` lines, unfolding the quarter that
-    /// [`Plan::folded_kernel_spectrum`] left in `ws.g` line by line as it is multiplied (one pass over
-    /// `ws.t` instead of a copy and a product).
-    fn folded_product(&self, ws: &mut Workspace, h: &[Complex32], kept: [Range<usize>; 2]) {
-        let (fx, fy) = (self.fft.fx, self.fft.fy);
-        let hx = fx / 2 + 1;
-        for ky in kept.into_iter().flatten() {
-            let src = if ky <= fy / 2 { ky } else { fy - ky };
-            let t = &mut ws.t[ky * fx..(ky + 1) * fx];
-            unfold(t, &ws.g[src * fx..src * fx + hx]);
-            cmul::mul_assign(t, &h[ky * fx..(ky + 1) * fx]);
-        }
-    }
-
-    /// The field at the voxels (`ws.field`, y-major) from the convolution's x-transformed lattice
-    /// rows in `ws.g` ([x][ky], rows [gnx−1, gnx−1+vx), kept lines only): along x first, still in ky
-    /// (resampling along x and the inverse FFT along y commute), so only nx rows, not vx, are
-    /// transformed along y; then along y at the voxels. Off the lattice both are windowed sincs; on
-    /// it, one tap of weight 1.
-    fn field_at_voxels(&self, ws: &mut Workspace, lines: usize) {
-        let (nx, fy) = (self.vol.x.n, self.fft.fy);
-        wide(
-            #[inline(always)]
-            || self.resample_x(ws, lines),
-        );
-        self.fft.inverse_y(&mut ws.tmp[..nx * fy], &mut ws.scratch);
-        wide(
-            #[inline(always)]
-            || self.resample_y(ws),
-        );
-    }
-
-    /// `ws.tmp` ([voxel x][ky]) = the taps' weighted sum of lattice rows of `ws.g`: whole rows,
-    /// contiguous, so it vectorises; zeros on the skipped lines.
-    #[inline(always)]
-    fn resample_x(&self, ws: &mut Workspace, lines: usize) {
-        let fy = self.fft.fy;
-        let x0 = self.grid.nx - 1;
-        let [lo, hi] = kept_lines(fy, lines);
-        for (ix, out) in ws.tmp.chunks_exact_mut(fy).enumerate() {
-            let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
-            for r in [lo.clone(), hi.clone()] {
-                let rows = w.iter().enumerate().map(|(k, &wk)| {
-                    let row = (x0 + st + k) * fy;
-                    (&ws.g[row + r.start..row + r.end], wk)
-                });
-                weighted_sum(&mut out[r.clone()], rows);
-            }
-            out[lo.end..hi.start]
-                .iter_mut()
-                .for_each(|v| *v = Complex32::default());
-        }
-    }
-
-    /// `ws.field` ([y][x]) from the rows of `ws.tmp` ([voxel x][lattice y] after the inverse along
-    /// y): a gather on the lattice, else the taps' weighted sum of transposed rows, so each tap is one
-    /// more contiguous row of nx values (short per-voxel dot products measured half the resampling
-    /// time).
-    #[inline(always)]
-    fn resample_y(&self, ws: &mut Workspace) {
-        let (nx, fy) = (self.vol.x.n, self.fft.fy);
-        let y0 = self.grid.ny - 1;
-        if self.ry.taps == 1 {
-            for (ix, row) in ws.tmp.chunks_exact(fy).enumerate() {
-                for (iy, &sy) in self.ry.starts.iter().enumerate() {
-                    ws.field[iy * nx + ix] = row[y0 + sy];
-                }
-            }
-            return;
-        }
-        let vy = self.ry.len;
-        transpose_part(&ws.tmp[y0..], fy, 0..nx, 0..vy, &mut ws.tmp_t, nx);
-        for (iy, f) in ws.field.chunks_exact_mut(nx).enumerate() {
-            let sy = self.ry.starts[iy];
-            let rows = self
-                .ry
-                .weights_of(iy)
-                .iter()
-                .enumerate()
-                .map(|(k, &wk)| (&ws.tmp_t[(sy + k) * nx..(sy + k + 1) * nx], wk));
-            weighted_sum(f, rows);
-        }
-    }
-}
-
-/// `out` = Σ weight·row over `rows`, over the interleaved (re, im) floats: plain f32 loops vectorise
-/// without the shuffles that LLVM puts around a product of complex values by a real one. Blocks of
-/// 32 floats are summed over all rows in registers and stored once (a pass per row, reading and
-/// writing `out` each time, took 1.5× as long).
-#[inline(always)]
-fn weighted_sum<'r>(out: &mut [Complex32], rows: impl Iterator<Item = (&'r [Complex32], f32)>) {
-    const BLOCK: usize = 32;
-    const MAX_ROWS: usize = 2 * crate::resample::HALF_TAPS as usize;
-    let out = floats_mut(out);
-    let n = out.len();
-    let mut taps: [(&[f32], f32); MAX_ROWS] = [(&[], 0.0); MAX_ROWS];
-    let mut count = 0;
-    for (row, w) in rows {
-        taps[count] = (&floats(row)[..n], w);
-        count += 1;
-    }
-    let taps = &taps[..count];
-    let full = n - n % BLOCK;
-    for c in (0..full).step_by(BLOCK) {
-        let mut acc = [0f32; BLOCK];
-        for &(row, w) in taps {
-            let src: &[f32; BLOCK] = row[c..c + BLOCK].try_into().expect("a block of the row");
-            for (a, g) in acc.iter_mut().zip(src) {
-                *a += g * w;
-            }
-        }
-        out[c..c + BLOCK].copy_from_slice(&acc);
-    }
-    let tail = &mut out[full..];
-    tail.iter_mut().for_each(|v| *v = 0.0);
-    for &(row, w) in taps {
-        for (x, g) in tail.iter_mut().zip(&row[full..]) {
-            *x += g * w;
-        }
-    }
-}
-
-/// The interleaved (re, im) floats of complex values.
-fn floats(v: &[Complex32]) -> &[f32] {
-    // SAFETY: num-complex's Complex<f32> is #[repr(C)] {re, im}: n of them are 2n f32, same alignment.
-    unsafe { std::slice::from_raw_parts(v.as_ptr().cast(), 2 * v.len()) }
-}
-
-fn floats_mut(v: &mut [Complex32]) -> &mut [f32] {
-    // SAFETY: as in `floats`; the borrow is exclusive for the returned slice's lifetime.
-    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast(), 2 * v.len()) }
 }
 
 fn amplitude(f: Falloff, d: f64) -> f64 {

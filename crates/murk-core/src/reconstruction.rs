@@ -1,0 +1,94 @@
+//! What every reconstruction method returns.
+
+use crate::{CaptureKind, Volume};
+
+/// A reconstructed volume by any method: `intensity[volume.index(ix, iy, iz)]`, C order [nx, ny, nz],
+/// with the rows that say how it was made and the warnings met on the way.
+#[derive(Clone, Debug)]
+pub struct Reconstruction {
+    pub volume: Volume,
+    pub intensity: Vec<f32>,
+    /// How it was made, as (key, value) rows for summaries and file attributes.
+    pub rows: Vec<(String, String)>,
+    pub warnings: Vec<String>,
+}
+
+impl Reconstruction {
+    /// A reconstruction with its method's description as the first row.
+    pub fn new(volume: Volume, intensity: Vec<f32>, method: &str) -> Reconstruction {
+        Reconstruction {
+            volume,
+            intensity,
+            rows: vec![("method".into(), method.into())],
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Appends a (key, value) row.
+    pub fn row(mut self, key: &str, value: impl ToString) -> Reconstruction {
+        self.rows.push((key.into(), value.to_string()));
+        self
+    }
+
+    /// (ix, iy, iz) of the largest value (the last one on ties; NaN sorts above everything).
+    pub fn argmax(&self) -> [usize; 3] {
+        let i = self
+            .intensity
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(0, |(i, _)| i);
+        let (ix, iy, iz) = self.volume.unravel(i);
+        [ix, iy, iz]
+    }
+
+    /// Position and value of the largest voxel.
+    pub fn peak(&self) -> ([f64; 3], f32) {
+        let [ix, iy, iz] = self.argmax();
+        let v = self
+            .intensity
+            .get(self.volume.index(ix, iy, iz))
+            .copied()
+            .unwrap_or(0.0);
+        (self.volume.centre(ix, iy, iz).to_array(), v)
+    }
+
+    /// Maximum along depth, [nx][ny] row-major.
+    pub fn max_projection(&self) -> Vec<f32> {
+        self.intensity
+            .chunks(self.volume.z.n)
+            .map(|c| c.iter().copied().fold(f32::MIN, f32::max))
+            .collect()
+    }
+
+    /// The capture, the method's rows, the volume, the peak and the time as (key, value) rows: what
+    /// `murk reconstruct` prints and records next to the volume.
+    pub fn summary(&self, capture: &str, kind: CaptureKind, secs: f64) -> Vec<(String, String)> {
+        let (p, val) = self.peak();
+        let v = &self.volume;
+        let mut t = vec![
+            ("capture".into(), capture.to_string()),
+            ("capture kind".into(), kind.to_string()),
+        ];
+        t.extend(self.rows.iter().cloned());
+        t.extend([
+            (
+                "volume".into(),
+                format!(
+                    "x {:.4}:{:.4}:{}, y {:.4}:{:.4}:{}, z {:.4}:{:.4}:{}",
+                    v.x.start, v.x.end, v.x.n, v.y.start, v.y.end, v.y.n, v.z.start, v.z.end, v.z.n
+                ),
+            ),
+            (
+                "peak".into(),
+                format!(
+                    "{val:.4e} at x {:+.4}, y {:+.4}, z {:.4} m",
+                    p[0], p[1], p[2]
+                ),
+            ),
+            ("seconds".into(), format!("{secs:.3}")),
+            ("murk_version".into(), env!("CARGO_PKG_VERSION").into()),
+        ]);
+        t
+    }
+}

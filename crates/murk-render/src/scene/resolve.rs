@@ -1,0 +1,455 @@
+//! From a parsed scene file to what the renderer uses: each part checks its own fields (the errors
+//! name them) and settles its defaults here, once.
+
+use super::file::{
+    CaptureDef, CaptureKindDef, MediumDef, ObjectDef, RelayDef, RelayKind, RenderDef,
+};
+use super::{check_albedo, v3, Bad, CaptureSpec, Relay};
+use crate::geometry::{triangulate, Aabb, Object, Shape};
+use crate::medium::{Medium, Phase};
+use murk_core::{DVec3, Error, Pairing, PointSet, Result, TimeAxis};
+use std::path::Path;
+
+impl RelayDef {
+    pub(super) fn resolve(&self, bad: Bad) -> Result<Relay> {
+        let r = self;
+        let limits = murk_core::Limits::get();
+        if !r.size.iter().all(|s| s.is_finite() && *s > 0.0) {
+            return Err(bad(
+                "relay.size",
+                format!("must be two positive lengths in metres, got {:?}", r.size),
+            ));
+        }
+        for s in r.size {
+            limits
+                .length("a side", s)
+                .map_err(|e| bad("relay.size", e.to_string()))?;
+        }
+        let relay_albedo = r.albedo.unwrap_or(match r.kind {
+            RelayKind::Wall => 1.0,
+            RelayKind::Diffuser => 0.0,
+        });
+        check_albedo(relay_albedo, "relay.albedo", bad)?;
+        let relay = Relay {
+            kind: r.kind,
+            half: [r.size[0] / 2.0, r.size[1] / 2.0],
+            albedo: relay_albedo,
+        };
+        Ok(relay)
+    }
+}
+
+impl CaptureDef {
+    pub(super) fn resolve(&self, relay: &Relay, bad: Bad) -> Result<CaptureSpec> {
+        let c = self;
+        let limits = murk_core::Limits::get();
+        let size = [2.0 * relay.half[0], 2.0 * relay.half[1]];
+        let on_relay = |p: [f64; 2], field: &str| -> Result<()> {
+            let tol = 1e-9;
+            if !(p[0].abs() <= relay.half[0] + tol && p[1].abs() <= relay.half[1] + tol) {
+                return Err(bad(
+                    field,
+                    format!(
+                        "({}, {}) lies outside the {} m × {} m relay surface",
+                        p[0], p[1], size[0], size[1]
+                    ),
+                ));
+            }
+            Ok(())
+        };
+        if c.grid[0] == 0 || c.grid[1] == 0 {
+            return Err(bad(
+                "capture.grid",
+                format!("needs at least one point per axis, got {:?}", c.grid),
+            ));
+        }
+        // H (f32 per bin) is the largest buffer a render allocates; checked before the grid's points.
+        let points = c.grid[0].saturating_mul(c.grid[1]);
+        let hists = match c.kind {
+            CaptureKindDef::Exhaustive => points.saturating_mul(points),
+            _ => points,
+        };
+        limits
+            .elements("H", &[hists, c.bins], std::mem::size_of::<f32>())
+            .map_err(|e| bad("capture.grid/capture.bins", e.to_string()))?;
+        let extent = c.extent.unwrap_or(size);
+        if !extent.iter().all(|e| e.is_finite() && *e > 0.0) {
+            return Err(bad(
+                "capture.extent",
+                format!("must be two positive lengths, got {extent:?}"),
+            ));
+        }
+        for (sx, sy) in [(-1.0, -1.0), (1.0, 1.0)] {
+            on_relay(
+                [
+                    c.center[0] + sx * extent[0] / 2.0,
+                    c.center[1] + sy * extent[1] / 2.0,
+                ],
+                "capture.grid (center ± extent/2)",
+            )?;
+        }
+        let grid = PointSet::wall_grid(
+            DVec3::new(c.center[0], c.center[1], 0.0),
+            extent[0],
+            extent[1],
+            c.grid[0],
+            c.grid[1],
+        );
+        let point = |p: Option<[f64; 2]>, field: &str| -> Result<PointSet> {
+            let p = p.unwrap_or([0.0, 0.0]);
+            on_relay(p, field)?;
+            Ok(PointSet::single(DVec3::new(p[0], p[1], 0.0)))
+        };
+        let (illum, sensor, pairing) = match c.kind {
+            CaptureKindDef::Confocal => (grid.clone(), grid, Pairing::Paired),
+            CaptureKindDef::LaserGrid => (
+                grid,
+                point(c.spad_point, "capture.spad_point")?,
+                Pairing::Product,
+            ),
+            CaptureKindDef::Single => (
+                point(c.laser_point, "capture.laser_point")?,
+                grid,
+                Pairing::Product,
+            ),
+            CaptureKindDef::Exhaustive => (grid.clone(), grid, Pairing::Product),
+        };
+        if c.bins == 0 {
+            return Err(bad("capture.bins", "must be at least 1".into()));
+        }
+        if !(c.bin_width.is_finite() && c.bin_width > 0.0) {
+            return Err(bad(
+                "capture.bin_width",
+                format!(
+                    "must be a positive path length in metres, got {}",
+                    c.bin_width
+                ),
+            ));
+        }
+        if !c.start.is_finite() {
+            return Err(bad(
+                "capture.start",
+                format!("must be finite, got {}", c.start),
+            ));
+        }
+        let time = TimeAxis {
+            start_m: c.start,
+            bin_width_m: c.bin_width,
+            bins: c.bins,
+        };
+        limits
+            .length("the start", time.start_m)
+            .and_then(|_| limits.length("the window's end", time.end_m()))
+            .map_err(|e| bad("capture.start/bins/bin_width", e.to_string()))?;
+        if time.bin_width_m < limits.min_bin_width_m {
+            return Err(bad(
+                "capture.bin_width",
+                format!(
+                    "{} m is below the {} m murk accepts",
+                    murk_core::short(time.bin_width_m),
+                    murk_core::short(limits.min_bin_width_m)
+                ),
+            ));
+        }
+        let device = |p: Option<[f64; 3]>, field: &str| -> Result<Option<DVec3>> {
+            match p {
+                None if c.account_first_and_last_bounces => Err(bad(
+                    field,
+                    "is required when account_first_and_last_bounces = true".into(),
+                )),
+                Some(p) if !p.iter().all(|v| v.is_finite()) => {
+                    Err(bad(field, format!("must be finite, got {p:?}")))
+                }
+                p => Ok(p.map(v3)),
+            }
+        };
+        let capture = CaptureSpec {
+            illum,
+            sensor,
+            pairing,
+            time,
+            account_first_and_last_bounces: c.account_first_and_last_bounces,
+            laser_xyz: device(c.laser_position, "capture.laser_position")?,
+            sensor_xyz: device(c.spad_position, "capture.spad_position")?,
+            device_radiometry: c.device_radiometry,
+        };
+        if c.device_radiometry && (c.laser_position.is_none() || c.spad_position.is_none()) {
+            return Err(bad(
+                "capture.device_radiometry",
+                "needs capture.laser_position and capture.spad_position".into(),
+            ));
+        }
+        Ok(capture)
+    }
+}
+
+impl RenderDef {
+    pub(super) fn check(&self, bad: Bad) -> Result<()> {
+        let s = self;
+        if s.max_depth == 0 {
+            return Err(bad(
+                "render.max_depth",
+                "must be at least 1 (one hidden vertex)".into(),
+            ));
+        }
+        if !(s.time_jitter.is_finite() && s.time_jitter >= 0.0) {
+            return Err(bad(
+                "render.time_jitter",
+                format!("must be ≥ 0, got {}", s.time_jitter),
+            ));
+        }
+        if let Some(p) = s
+            .hidden_geometry_sampling
+            .filter(|p| !(0.0..=1.0).contains(p))
+        {
+            return Err(bad(
+                "render.hidden_geometry_sampling",
+                format!("must be in [0, 1], got {p}"),
+            ));
+        }
+        // Per-segment draw counts: capped so a typo cannot stall a render.
+        for (field, n) in [
+            ("render.time_samples", s.time_samples),
+            (
+                "render.first_time_samples",
+                s.first_time_samples.unwrap_or(0),
+            ),
+            ("render.target_split", s.target_split),
+            ("render.object_draws", s.object_draws),
+        ] {
+            if n > 4096 {
+                return Err(bad(field, format!("must be at most 4096, got {n}")));
+            }
+        }
+        if s.share_tile > 16 {
+            return Err(bad(
+                "render.share_tile",
+                format!("must be at most 16, got {}", s.share_tile),
+            ));
+        }
+        if !(s.target_split_radius.is_finite() && s.target_split_radius >= 0.0) {
+            return Err(bad(
+                "render.target_split_radius",
+                format!("must be ≥ 0 m, got {}", s.target_split_radius),
+            ));
+        }
+        if let Some(p) = s.first_vertex_survival.filter(|p| !(*p > 0.0 && *p <= 1.0)) {
+            return Err(bad(
+                "render.first_vertex_survival",
+                format!("must be in (0, 1], got {p}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl MediumDef {
+    /// The medium, or `None` where it does not attenuate (μt = 0).
+    pub(super) fn resolve(&self, bad: Bad) -> Result<Option<Medium>> {
+        let m = self;
+        if !(m.mu_t.is_finite() && m.mu_t >= 0.0) {
+            return Err(bad(
+                "medium.mu_t",
+                format!("must be ≥ 0 (1/m), got {}", m.mu_t),
+            ));
+        }
+        check_albedo(m.albedo, "medium.albedo", bad)?;
+        // Written so that NaN fails too.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        let bad_g = !(m.g.abs() < 1.0);
+        if bad_g {
+            return Err(bad(
+                "medium.g",
+                format!("must satisfy |g| < 1, got {}", m.g),
+            ));
+        }
+        if !(m.ior.is_finite() && m.ior >= 1.0) {
+            return Err(bad("medium.ior", format!("must be ≥ 1, got {}", m.ior)));
+        }
+        if !(0..3).all(|i| m.min[i].is_finite() && m.max[i].is_finite() && m.min[i] < m.max[i]) {
+            return Err(bad(
+                "medium.min/max",
+                format!("must bound a non-empty box, got {:?}..{:?}", m.min, m.max),
+            ));
+        }
+        if m.min[2] < 0.0 {
+            return Err(bad(
+                "medium.min",
+                format!("z = {} reaches behind the relay surface (z = 0)", m.min[2]),
+            ));
+        }
+        Ok((m.mu_t > 0.0).then(|| Medium {
+            sigma_t: m.mu_t,
+            albedo: m.albedo,
+            phase: Phase::new(m.g),
+            ior: m.ior,
+            region: Aabb {
+                min: v3(m.min),
+                max: v3(m.max),
+            },
+        }))
+    }
+}
+
+impl ObjectDef {
+    /// Object `i` of the file at `path` (relative mesh paths are read from `dir`).
+    pub(super) fn resolve(&self, i: usize, dir: &Path, path: &Path, bad: Bad) -> Result<Object> {
+        let o = self;
+        let field = |name: &str| format!("object[{i}].{name}");
+        let (albedo, prims) = match o {
+            ObjectDef::Quad {
+                center,
+                size,
+                normal,
+                up,
+                albedo,
+                ..
+            } => {
+                let n = v3(*normal).normalize_or_zero();
+                let u = v3(*up);
+                let ex = u.cross(n).normalize_or_zero();
+                if n == DVec3::ZERO || ex == DVec3::ZERO {
+                    return Err(bad(
+                        &field("normal"),
+                        "normal and up must be non-zero and not parallel".into(),
+                    ));
+                }
+                if !size.iter().all(|s| s.is_finite() && *s > 0.0) {
+                    return Err(bad(
+                        &field("size"),
+                        format!("must be positive, got {size:?}"),
+                    ));
+                }
+                let ey = n.cross(ex);
+                let (e1, e2) = (ex * size[0], ey * size[1]);
+                (
+                    *albedo,
+                    vec![Shape::rect(v3(*center) - 0.5 * (e1 + e2), e1, e2)],
+                )
+            }
+            ObjectDef::Box {
+                min,
+                max,
+                omit,
+                albedo,
+                ..
+            } => {
+                let (a, b) = (v3(*min), v3(*max));
+                if !(a.cmplt(b).all()) {
+                    return Err(bad(
+                        &field("min"),
+                        format!("must be below max in every axis, got {min:?}..{max:?}"),
+                    ));
+                }
+                let d = b - a;
+                let faces = [
+                    ("-x", Shape::rect(a, DVec3::Y * d.y, DVec3::Z * d.z)),
+                    (
+                        "+x",
+                        Shape::rect(DVec3::new(b.x, a.y, a.z), DVec3::Y * d.y, DVec3::Z * d.z),
+                    ),
+                    ("-y", Shape::rect(a, DVec3::X * d.x, DVec3::Z * d.z)),
+                    (
+                        "+y",
+                        Shape::rect(DVec3::new(a.x, b.y, a.z), DVec3::X * d.x, DVec3::Z * d.z),
+                    ),
+                    ("-z", Shape::rect(a, DVec3::X * d.x, DVec3::Y * d.y)),
+                    (
+                        "+z",
+                        Shape::rect(DVec3::new(a.x, a.y, b.z), DVec3::X * d.x, DVec3::Y * d.y),
+                    ),
+                ];
+                if let Some(w) = omit.iter().find(|w| !faces.iter().any(|(n, _)| n == w)) {
+                    return Err(bad(
+                        &field("omit"),
+                        format!("unknown face '{w}' (use -x, +x, -y, +y, -z, +z)"),
+                    ));
+                }
+                let prims = faces
+                    .into_iter()
+                    .filter(|(n, _)| !omit.iter().any(|w| w == n))
+                    .map(|(_, s)| s)
+                    .collect();
+                (*albedo, prims)
+            }
+            ObjectDef::ZLetter {
+                center,
+                scale,
+                albedo,
+                ..
+            } => {
+                let outline = murk_synth::z_letter_outline();
+                let c = v3(*center);
+                let p = |k: usize| c + DVec3::new(outline[k][0], outline[k][1], 0.0) * *scale;
+                let prims = triangulate(&outline)
+                    .into_iter()
+                    .map(|t| Shape::Triangle {
+                        p0: p(t[0]),
+                        e1: p(t[1]) - p(t[0]),
+                        e2: p(t[2]) - p(t[0]),
+                    })
+                    .collect();
+                (*albedo, prims)
+            }
+            ObjectDef::Mesh {
+                file,
+                scale,
+                translate,
+                albedo,
+                ..
+            } => {
+                let full = dir.join(file);
+                let opts = tobj::LoadOptions {
+                    triangulate: true,
+                    single_index: true,
+                    ..Default::default()
+                };
+                let (models, _) = tobj::load_obj(&full, &opts).map_err(|e| {
+                    Error::format(
+                        path,
+                        format!("{}: cannot load OBJ {}: {e}", field("file"), full.display()),
+                    )
+                })?;
+                let mut prims = Vec::new();
+                for m in &models {
+                    let pos = &m.mesh.positions;
+                    let p = |k: u32| {
+                        let k = k as usize * 3;
+                        DVec3::new(pos[k] as f64, pos[k + 1] as f64, pos[k + 2] as f64) * *scale
+                            + v3(*translate)
+                    };
+                    for t in m.mesh.indices.chunks_exact(3) {
+                        let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+                        if (b - a).cross(c - a).length_squared() > 0.0 {
+                            prims.push(Shape::Triangle {
+                                p0: a,
+                                e1: b - a,
+                                e2: c - a,
+                            });
+                        }
+                    }
+                }
+                if prims.is_empty() {
+                    return Err(Error::format(
+                        path,
+                        format!("{}: OBJ {} has no triangles", field("file"), full.display()),
+                    ));
+                }
+                (*albedo, prims)
+            }
+        };
+        check_albedo(albedo, &field("albedo"), bad)?;
+        let obj = Object::new(albedo, prims);
+        if obj.bounds.min.z < 0.0 || !obj.bounds.min.is_finite() || !obj.bounds.max.is_finite() {
+            return Err(bad(
+                &field("shape"),
+                format!(
+                    "must lie in the hidden volume z ≥ 0 and be finite, its bounds are {:?}..{:?}",
+                    obj.bounds.min.to_array(),
+                    obj.bounds.max.to_array()
+                ),
+            ));
+        }
+        Ok(obj)
+    }
+}
