@@ -2,11 +2,11 @@
 
 use crate::capture::Source;
 use crate::compute;
-use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams, Reflectance, SlabParams};
+use murk_baselines::{Reflectance, SlabParams};
 use murk_core::window::WindowEnd;
-use murk_core::{Capture, Volume};
-use murk_recon::pipeline::{self, Gate, Method, Request, TOffset, VolumeSpec};
-use murk_recon::{Compensation, Falloff, Lateral, PfParams, Wavelength};
+use murk_core::{Error, Result, Volume};
+use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
+use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 
@@ -15,8 +15,16 @@ type Axes<'py> = [Bound<'py, PyArray1<f64>>; 3];
 /// What `reconstruct` returns: intensity, axes, rows, warnings.
 type Out<'py> = (Bound<'py, PyArrayDyn<f32>>, Axes<'py>, Rows, Vec<String>);
 
-fn bad(msg: String) -> murk_core::Error {
-    murk_core::Error::param(msg)
+/// One of `choices` (the CLI's value names for a flag) by name, or the one-line error naming them.
+fn pick<T: Copy>(what: &str, name: &str, choices: &[(&str, T)]) -> Result<T> {
+    choices
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| {
+            let names: Vec<&str> = choices.iter().map(|(n, _)| *n).collect();
+            Error::param(format!("{what} '{name}': expected {}", names.join(", ")))
+        })
 }
 
 /// The keywords of `murk.reconstruct`, which are `murk reconstruct`'s flags.
@@ -40,122 +48,90 @@ struct Args {
 }
 
 impl Args {
-    /// The library request these keywords make for `cap`, as `murk reconstruct` builds it.
-    fn request(&self, cap: &Capture) -> murk_core::Result<Request> {
-        let (thickness_m, mu_a, mu_s_prime, n) = self.slab;
-        let slab = SlabParams {
-            thickness_m,
-            mu_a,
-            mu_s_prime,
-            n,
-            ..Default::default()
-        };
-        let method = match self.method.as_str() {
-            "pf" => Method::Pf(self.pf(cap)?),
-            "pf-exact" => Method::PfExact(self.pf(cap)?),
-            "bp" => Method::Bp,
-            "fbp" => Method::Fbp(FbpOptions::default()),
-            "lct" => Method::Lct(LctParams {
-                snr: self.snr.unwrap_or(LctParams::default().snr),
-                reflectance: match self.weighting.as_str() {
-                    "diffuse" => Reflectance::Diffuse,
-                    "retroreflective" => Reflectance::Retroreflective,
-                    w => {
-                        return Err(bad(format!(
-                            "weighting '{w}': expected diffuse or retroreflective"
-                        )))
-                    }
-                },
-                ..Default::default()
-            }),
-            "fk" => Method::Fk(FkParams::default()),
-            "cdt" => Method::Cdt(CdtParams {
-                slab,
-                snr: self.snr.unwrap_or(CdtParams::default().snr),
-                ..Default::default()
-            }),
-            m => {
-                return Err(bad(format!(
-                    "unknown method '{m}'; expected one of pf, pf-exact, bp, fbp, lct, fk, cdt"
-                )))
-            }
-        };
+    /// The library request for a capture of `kind`, as `murk reconstruct` builds it from its flags.
+    fn request(&self, kind: murk_core::CaptureKind) -> Result<Request> {
+        let o = self.options()?;
         Ok(Request {
-            method,
+            method: Method::from_name(&self.method, kind, &o)?,
             volume: match &self.volume {
                 Some(spec) => VolumeSpec::Given(Volume::parse(spec)?),
                 None => VolumeSpec::Default,
             },
-            t_offset: match self.t_offset.as_deref() {
-                None => TOffset::None,
-                Some("slab") => TOffset::Slab(slab),
-                Some(s) => match s.parse::<f64>() {
-                    Ok(v) if v.is_finite() => TOffset::Metres(v),
-                    _ => return Err(bad(format!("t_offset '{s}': expected metres or 'slab'"))),
-                },
-            },
-            gate: match self.gate.as_str() {
-                "off" => Gate::Off,
-                "auto" => Gate::Auto,
-                t => match t.parse::<f64>() {
-                    Ok(p) if p.is_finite() => Gate::At(p),
-                    _ => {
-                        return Err(bad(format!(
-                            "gate {t}: expected a path in metres, auto or off"
-                        )))
-                    }
-                },
-            },
-            window_end: match self.window_end.as_str() {
-                "auto" => WindowEnd::Auto,
-                "taper" => WindowEnd::Taper,
-                "keep" => WindowEnd::Keep,
-                w => {
-                    return Err(bad(format!(
-                        "window_end '{w}': expected auto, taper or keep"
-                    )))
-                }
-            },
+            t_offset: TOffset::parse(self.t_offset.as_deref(), o.slab)?,
+            gate: self.gate.parse::<Gate>()?,
+            window_end: pick(
+                "window_end",
+                &self.window_end,
+                &[
+                    ("auto", WindowEnd::Auto),
+                    ("taper", WindowEnd::Taper),
+                    ("keep", WindowEnd::Keep),
+                ],
+            )?,
         })
     }
 
-    fn pf(&self, cap: &Capture) -> murk_core::Result<PfParams> {
-        if self.wavelength.is_some() && self.wavefactor.is_some() {
-            return Err(bad("give wavelength or wavefactor, not both".into()));
-        }
+    fn options(&self) -> Result<Options> {
         let wavelength = match (self.wavelength, self.wavefactor) {
-            (Some(m), _) => Wavelength::Metres(m),
-            (None, Some(f)) => Wavelength::WallFactor(f),
-            (None, None) => Wavelength::default_for(cap.kind()),
+            (Some(_), Some(_)) => {
+                return Err(Error::param("give wavelength or wavefactor, not both"))
+            }
+            (Some(m), None) => Some(Wavelength::Metres(m)),
+            (None, Some(f)) => Some(Wavelength::WallFactor(f)),
+            (None, None) => None,
         };
         let mu = self.mu_t.unwrap_or(0.0);
         let compensation = match (self.compensate.as_deref(), self.mu_t) {
             (None, _) => Compensation::None,
-            (Some(_), None) => return Err(bad("compensate needs mu_t".into())),
-            (Some("paper"), _) => Compensation::Paper {
-                mu_t_per_m: mu,
-                albedo: self.albedo,
-            },
-            (Some("ballistic"), _) => Compensation::Ballistic { mu_t_per_m: mu },
-            (Some(c), _) => {
-                return Err(bad(format!(
-                    "compensate '{c}': expected paper or ballistic"
-                )))
-            }
+            (Some(_), None) => return Err(Error::param("compensate needs mu_t")),
+            (Some(c), Some(_)) => pick(
+                "compensate",
+                c,
+                &[
+                    (
+                        "paper",
+                        Compensation::Paper {
+                            mu_t_per_m: mu,
+                            albedo: self.albedo,
+                        },
+                    ),
+                    ("ballistic", Compensation::Ballistic { mu_t_per_m: mu }),
+                ],
+            )?,
         };
-        Ok(PfParams {
+        let (thickness_m, mu_a, mu_s_prime, n) = self.slab;
+        Ok(Options {
             wavelength,
             cycles: self.cycles,
-            falloff: match self.falloff.as_str() {
-                "none" => Falloff::None,
-                "inv-r" => Falloff::InvR,
-                f => return Err(bad(format!("falloff '{f}': expected none or inv-r"))),
-            },
+            falloff: pick(
+                "falloff",
+                &self.falloff,
+                &[("none", Falloff::None), ("inv-r", Falloff::InvR)],
+            )?,
             compensation,
-            lateral: match self.lateral.as_str() {
-                "propagating" => Lateral::Propagating,
-                "full" => Lateral::Full,
-                l => return Err(bad(format!("lateral '{l}': expected propagating or full"))),
+            lateral: pick(
+                "lateral",
+                &self.lateral,
+                &[
+                    ("propagating", Lateral::Propagating),
+                    ("full", Lateral::Full),
+                ],
+            )?,
+            snr: self.snr,
+            reflectance: pick(
+                "weighting",
+                &self.weighting,
+                &[
+                    ("diffuse", Reflectance::Diffuse),
+                    ("retroreflective", Reflectance::Retroreflective),
+                ],
+            )?,
+            slab: SlabParams {
+                thickness_m,
+                mu_a,
+                mu_s_prime,
+                n,
+                ..Default::default()
             },
         })
     }
@@ -209,7 +185,7 @@ pub fn reconstruct<'py>(
     let source = Source::of(capture)?;
     let out = compute(py, progress, threads, |t| {
         let cap = source.owned()?;
-        let req = args.request(&cap)?;
+        let req = args.request(cap.kind())?;
         pipeline::run(cap, &req, t)
     })?;
     let v = out.volume;
