@@ -11,6 +11,7 @@ use murk_core::{Capture, DVec3, Error, Pairing, PointLayout, Result};
 use rayon::prelude::*;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -209,6 +210,17 @@ impl<'a> Plan<'a> {
         opt: &RenderOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<Capture> {
+        self.render_until(opt, progress, &AtomicBool::new(false))
+    }
+
+    /// As [`Plan::render`], but no unit starts once `stop` is set (the Python module's Ctrl-C): the
+    /// call then returns an error, and the checkpoint keeps what its last write held.
+    pub fn render_until(
+        &self,
+        opt: &RenderOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+        stop: &AtomicBool,
+    ) -> Result<Capture> {
         if opt.spp == 0 {
             return Err(Error::param("spp must be at least 1"));
         }
@@ -256,6 +268,9 @@ impl<'a> Plan<'a> {
             ckpt,
         });
         todo.par_iter().try_for_each(|&u| -> Result<()> {
+            if stop.load(Ordering::Relaxed) {
+                return Err(Error::param("render stopped"));
+            }
             let buf = self.render_unit(u, opt.spp, opt.seed);
             let mut guard = shared.lock().unwrap_or_else(|e| e.into_inner());
             let s = &mut *guard;

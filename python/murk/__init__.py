@@ -1,0 +1,260 @@
+"""murk from Python: NLOS captures, reconstructions (Phasor Fields and baselines) and Monte Carlo
+renders through scattering media. Every function calls murk's Rust library, the same code as the
+``murk`` command line, with the GIL released; Ctrl-C interrupts long calls.
+
+>>> import murk
+>>> cap = murk.synth(["z:2.0"], kind="laser-grid", wall_size=2, grid=32, bins=1024,
+...                  bin_width=0.004, start=3.5, cosines=True)
+>>> rec = murk.reconstruct(cap, method="pf", volume="-0.99:0.99:33,-0.99:0.99:33,1.5:2.5:33")
+>>> rec.intensity.shape
+(33, 33, 33)
+
+See docs/python.md for a worked example, Dask (``murk.dask``) and the study (``murk.experiment``).
+"""
+
+import os
+from dataclasses import dataclass, field
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _murk
+from .errors import (
+    Error,
+    FileError,
+    FormatError,
+    InputError,
+    LimitError,
+    UnsupportedError,
+)
+
+Capture = _murk.Capture
+read_capture = _murk.read_capture
+write_capture = _murk.write_capture
+__version__ = _murk.__version__
+
+__all__ = [
+    "Capture",
+    "Reconstruction",
+    "read_capture",
+    "write_capture",
+    "synth",
+    "render",
+    "merge",
+    "reconstruct",
+    "Error",
+    "InputError",
+    "FileError",
+    "FormatError",
+    "LimitError",
+    "UnsupportedError",
+]
+
+Progress = Union[None, bool, Callable[[int, int], Any]]
+
+
+def _progress(progress: Progress, label: str):
+    """``True``: a tqdm bar; a callable: called as ``progress(done, total)``; None/False: nothing."""
+    if progress is None or progress is False:
+        return None
+    if callable(progress):
+        return progress
+    from tqdm.auto import tqdm
+
+    bar = tqdm(desc=label, total=0)
+
+    def update(done, total):
+        bar.total = total
+        bar.n = done
+        bar.refresh()
+        if done >= total:
+            bar.close()
+
+    return update
+
+
+def synth(
+    targets: Union[str, Sequence[str]],
+    *,
+    kind: str = "laser-grid",
+    wall_size: float = 1.0,
+    grid: int = 32,
+    point: Tuple[float, float] = (0.0, 0.0),
+    bins: int = 2048,
+    bin_width: float = 0.003,
+    start: float = 0.0,
+    laser_xyz: Optional[Tuple[float, float, float]] = None,
+    sensor_xyz: Optional[Tuple[float, float, float]] = None,
+    mu_t: float = 0.0,
+    jitter: float = 0.0,
+    cosines: bool = False,
+) -> Capture:
+    """An analytic capture (first hidden bounce), as ``murk synth``; the keywords are its flags.
+
+    targets: ``point:X,Y,Z``, ``z:DEPTH`` (the paper's Z), ``t:DEPTH`` or ``polygon:DEPTH:x,y;x,y;...``.
+
+    >>> cap = murk.synth("z:2.0", kind="laser-grid", wall_size=2, grid=128, bins=4096,
+    ...                  bin_width=0.0009, start=3.5, cosines=True)   # the paper's Z
+    """
+    if isinstance(targets, str):
+        targets = [targets]
+    return _murk.synth(
+        list(targets), kind, wall_size, grid, tuple(point), bins, bin_width, start,
+        laser_xyz, sensor_xyz, mu_t, jitter, cosines,
+    )
+
+
+def _toml(v) -> str:
+    """A Python value as the TOML value ``murk render --set key=VALUE`` takes."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml(x) for x in v) + "]"
+    return repr(v)
+
+
+def _overrides(set) -> List[str]:
+    if set is None:
+        return []
+    if isinstance(set, dict):
+        return [f"{k}={_toml(v)}" for k, v in set.items()]
+    return list(set)
+
+
+def render(
+    scene: Union[str, os.PathLike],
+    *,
+    spp: Optional[int] = None,
+    seed: int = 0,
+    shard: Optional[Tuple[int, int]] = None,
+    set: Union[None, Dict[str, Any], Sequence[str]] = None,
+    grid: Optional[int] = None,
+    bins: Optional[int] = None,
+    checkpoint: Union[None, str, os.PathLike] = None,
+    checkpoint_every: float = 60.0,
+    out: Union[None, str, os.PathLike] = None,
+    threads: Optional[int] = None,
+    progress: Progress = None,
+) -> Capture:
+    """A Monte Carlo render of a scene, as ``murk render``: identical bytes for any thread count and
+    any sharding.
+
+    scene: a scene file (TOML, see scenes/) or TOML text (relative paths in it are taken from the
+    current folder). set: overrides as ``murk render --set`` takes them, as a dict
+    (``{"medium.albedo": 0.8}``) or ``["medium.albedo=0.8"]``. shard: ``(i, n)`` renders part i of n
+    for ``murk.merge``. checkpoint: a file to append finished work to and to resume from (removed
+    once the render completes). out: also write the capture there (atomically). progress: True for
+    a tqdm bar or a callable ``(done, total)``.
+
+    >>> cap = murk.render("scenes/z-letter.toml", grid=32, spp=64, set={"medium.albedo": 0.83})
+    >>> part = murk.render("scenes/z-letter.toml", grid=32, shard=(0, 4), checkpoint="p0.ckpt")
+    """
+    path, text = os.fspath(scene), None
+    if "\n" in path:
+        path, text = os.path.join(os.getcwd(), "scene.toml"), path
+    return _murk.render(
+        path, text, spp, seed, None if shard is None else tuple(shard), _overrides(set), grid,
+        bins, None if checkpoint is None else os.fspath(checkpoint), checkpoint_every,
+        None if out is None else os.fspath(out), threads, _progress(progress, "render"),
+    )
+
+
+def merge(parts: Sequence[Union[Capture, str, os.PathLike]]) -> Capture:
+    """The capture an unsharded render gives, bit for bit, from all its shards (Captures or files).
+
+    >>> cap = murk.merge([murk.render(scene, shard=(i, 4)) for i in range(4)])
+    """
+    return _murk.merge([p if isinstance(p, Capture) else os.fspath(p) for p in parts])
+
+
+@dataclass
+class Reconstruction:
+    """A reconstructed volume: ``intensity[ix, iy, iz]`` (float32, C order) at voxel centres
+    ``x[ix], y[iy], z[iz]`` (metres; z is the depth in front of the wall), the parameters used
+    (``params``: the rows ``murk reconstruct`` prints) and the library's warnings."""
+
+    intensity: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    params: Dict[str, str] = field(default_factory=dict)
+    warnings: List[str] = field(default_factory=list)
+
+    @property
+    def dims(self) -> Tuple[str, str, str]:
+        return ("x", "y", "z")
+
+    @property
+    def coords(self) -> Dict[str, np.ndarray]:
+        return {"x": self.x, "y": self.y, "z": self.z}
+
+    def to_xarray(self):
+        """The volume as an ``xarray.DataArray`` (needs xarray)."""
+        import xarray
+
+        return xarray.DataArray(self.intensity, coords=self.coords, dims=self.dims,
+                                attrs=dict(self.params))
+
+
+def _text(v) -> Optional[str]:
+    return None if v is None else str(v)
+
+
+def reconstruct(
+    capture: Union[Capture, str, os.PathLike],
+    method: str = "pf",
+    *,
+    volume: Optional[str] = None,
+    wavelength: Optional[float] = None,
+    wavefactor: Optional[float] = None,
+    cycles: float = 4.0,
+    compensate: Optional[str] = None,
+    mu_t: Optional[float] = None,
+    albedo: float = 0.0,
+    falloff: str = "none",
+    lateral: str = "propagating",
+    gate: Union[str, float] = "auto",
+    window_end: str = "auto",
+    t_offset: Union[None, str, float] = None,
+    snr: Optional[float] = None,
+    weighting: str = "diffuse",
+    slab_thickness: float = 0.0254,
+    slab_mua: float = 0.53,
+    slab_musp: float = 262.0,
+    slab_n: float = 1.12,
+    threads: Optional[int] = None,
+    progress: Progress = None,
+) -> Reconstruction:
+    """Reconstructs a capture with any method of ``murk reconstruct`` (pf, pf-exact, bp, fbp, lct,
+    fk, cdt); the keywords are its flags and take the same values, and the volume is the one its
+    ``--out x.npy`` writes, byte for byte.
+
+    capture: a Capture (its H is copied once, since reconstruction gates and tapers its own copy)
+    or a capture file (read straight into the reconstruction: no copy). volume:
+    ``"x0:x1:nx,y0:y1:ny,z0:z1:nz"`` (metres, inclusive; default: the wall grid's extent).
+
+    >>> rec = murk.reconstruct("z.h5", volume="-0.99:0.99:73,-0.99:0.99:59,1.5:2.5:73")
+    >>> rec.params["wavelength_m"], rec.intensity.max()
+    >>> fk = murk.reconstruct(cap, "fk")     # confocal captures: lct, fk, cdt on their own grid
+    """
+    intensity, axes, rows, warnings = _murk.reconstruct(
+        capture if isinstance(capture, Capture) else os.fspath(capture),
+        method, volume, wavelength, wavefactor, cycles, compensate, mu_t, albedo, falloff,
+        lateral, _text(gate), window_end, _text(t_offset), snr, weighting,
+        (slab_thickness, slab_mua, slab_musp, slab_n), threads,
+        _progress(progress, "reconstruct"),
+    )
+    x, y, z = axes
+    return Reconstruction(intensity, x, y, z, dict(rows), list(warnings))
+
+
+def __getattr__(name):
+    # murk.dask and murk.experiment load on first use: dask is optional, and `python -m
+    # murk.experiment` must not find the module already imported by the package.
+    if name in ("dask", "experiment"):
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'murk' has no attribute '{name}'")

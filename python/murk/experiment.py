@@ -1,0 +1,127 @@
+"""The paper's study (``murk experiment paper``) from Python, its render tasks on Dask.
+
+>>> tasks = murk.experiment.plan("study", only=["fig3a"])     # what --list-tasks prints
+>>> tasks[0]["command"]
+'murk render scenes/z-letter.toml --out study/renders/....h5 --spp 512 --seed 0 ... --resume --quiet'
+>>> murk.experiment.run_dask("study", only=["fig3a"])            # renders on a LocalCluster, then
+...                                                              # figures, metrics and report
+
+From a shell, with a scheduler already running (e.g. dask_jobqueue, see docs/python.md)::
+
+    python -m murk.experiment paper --out study --scheduler tcp://head:8786 --only fig3a
+"""
+
+import argparse
+import os
+import sys
+from typing import List, Optional, Sequence
+
+import murk
+from . import _murk
+
+
+def plan(
+    out,
+    *,
+    scale: str = "quick",
+    only: Sequence[str] = (),
+    cells: Sequence[str] = (),
+    seeds: int = 1,
+    shards: int = 1,
+    spp: Optional[int] = None,
+    scenes="scenes",
+) -> List[dict]:
+    """Plans the study in ``out`` (writes plan.json, makes renders/) and returns its render tasks, in
+    the order and with the commands of ``murk experiment paper --list-tasks``: dicts with ``id``,
+    ``scene``, ``out``, ``spp``, ``seed``, ``shard``, ``set``, ``capture``, ``capture_out`` and
+    ``command``."""
+    return _murk.study_plan(os.fspath(out), scale, list(only), list(cells), seeds, shards, spp,
+                            os.fspath(scenes))
+
+
+def run(out, *, scale="quick", only=(), cells=(), seeds=1, shards=1, spp=None, scenes="scenes",
+        threads=None, progress=None) -> str:
+    """``murk experiment paper --out OUT``: renders what is missing (merging finished shards),
+    reconstructs, scores and writes the report; returns the path of index.html."""
+    return os.fspath(_murk.run_study(os.fspath(out), scale, list(only), list(cells), seeds, shards,
+                                     spp, os.fspath(scenes), threads,
+                                     murk._progress(progress, "study")))
+
+
+def pending(tasks: Sequence[dict]) -> List[dict]:
+    """The tasks whose output, and whose capture's merged file, are both missing."""
+    return [t for t in tasks
+            if not os.path.exists(t["out"]) and not os.path.exists(t["capture_out"])]
+
+
+def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, shards=1, spp=None,
+             scenes="scenes", threads=None, finish=True):
+    """Runs the study's pending render tasks on a Dask ``client`` (a LocalCluster when None), each
+    resuming from its checkpoint, then (``finish``) the rest of the study here with :func:`run`.
+    Returns index.html's path, or the list of rendered task outputs when ``finish`` is False."""
+    from dask.distributed import Client, LocalCluster
+
+    from .dask import render_shard
+
+    opts = dict(scale=scale, only=only, cells=cells, seeds=seeds, shards=shards, spp=spp,
+                scenes=os.path.abspath(os.fspath(scenes)))
+    out = os.path.abspath(os.fspath(out))
+    todo = pending(plan(out, **opts))
+    own = client is None
+    if own:
+        cluster = LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        futures = [
+            client.submit(render_shard, t["scene"], t["shard"], t["out"], spp=t["spp"],
+                          seed=t["seed"], set=t["set"], threads=threads, retries=3, pure=False,
+                          key=f"murk-render-{t['id']}")
+            for t in todo
+        ]
+        done = client.gather(futures)
+    finally:
+        if own:
+            client.close()
+            cluster.close()
+    if not finish:
+        return done
+    return run(out, threads=threads, **opts)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(
+        prog="python -m murk.experiment",
+        description="The paper's study with its render tasks on Dask; then figures, metrics and "
+                    "the report as `murk experiment paper --out DIR` makes them.")
+    p.add_argument("study", choices=["paper"])
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler (default: a LocalCluster)")
+    p.add_argument("--scale", default="quick", choices=["quick", "paper"])
+    p.add_argument("--only", default="", help="comma-separated figures: fig3a,fig3b,fig3c,fig4,fig5")
+    p.add_argument("--cell", action="append", default=[], help="only cells whose label contains this")
+    p.add_argument("--seeds", type=int, default=1)
+    p.add_argument("--shards", type=int, default=1, help="render tasks per capture")
+    p.add_argument("--spp", type=int)
+    p.add_argument("--scenes", default="scenes", help="folder with z-letter.toml and shelf.toml")
+    p.add_argument("--threads", type=int, help="renderer threads per task (default: all cores)")
+    p.add_argument("--render-only", action="store_true",
+                   help="only run the render tasks (finish later with `murk experiment paper`)")
+    a = p.parse_args(argv)
+    client = None
+    if a.scheduler:
+        from dask.distributed import Client
+
+        client = Client(a.scheduler)
+    try:
+        r = run_dask(a.out, client, scale=a.scale, only=[s for s in a.only.split(",") if s],
+                     cells=a.cell, seeds=a.seeds, shards=a.shards, spp=a.spp, scenes=a.scenes,
+                     threads=a.threads, finish=not a.render_only)
+    except murk.Error as e:
+        print(f"murk: {e}", file=sys.stderr)
+        return 1
+    print(r if isinstance(r, str) else f"rendered {len(r)} tasks into {a.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

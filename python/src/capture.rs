@@ -1,0 +1,229 @@
+//! `murk.Capture`: a `murk_core::Capture` owned by Python, with numpy views of its arrays.
+
+use crate::{compute, to_py};
+use murk_core::{Pairing, PointLayout, PointSet};
+use numpy::ndarray::{ArrayView, IxDyn};
+use numpy::{PyArray, PyArray1, PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyAny;
+use std::path::PathBuf;
+
+/// A transient NLOS capture (y-tal's fields, murk's layout). Read one with `murk.read_capture`,
+/// make one with `murk.synth` or `murk.render`, or convert y-tal's with `Capture.from_tal`.
+///
+/// `H` is a read-only view of murk's histograms without a copy: time is the *last* axis
+/// (y-tal puts it first), the others are the laser grid's then the sensor grid's (a paired or
+/// confocal capture, or one with a single laser point, has only the sensor grid's).
+///
+/// >>> cap = murk.read_capture("z.h5")
+/// >>> cap.H.shape, cap.kind, cap.bin_width_m
+/// ((128, 128, 1, 1, 4096), 'laser grid + one SPAD point', 0.0009)
+#[pyclass(frozen, name = "Capture", module = "murk")]
+pub struct Capture {
+    pub(crate) cap: murk_core::Capture,
+}
+
+fn dims(p: &PointSet) -> Vec<usize> {
+    match p.layout {
+        PointLayout::Grid { nx, ny } => vec![nx, ny],
+        PointLayout::List => vec![p.len()],
+    }
+}
+
+/// Points or normals as float64 (…, 3) in the set's grid shape.
+fn xyz<'py>(
+    py: Python<'py>,
+    p: &PointSet,
+    v: &[murk_core::DVec3],
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let flat: Vec<f64> = v.iter().flat_map(|q| q.to_array()).collect();
+    let mut shape = dims(p);
+    shape.push(3);
+    PyArray1::from_vec(py, flat).reshape(shape)
+}
+
+#[pymethods]
+impl Capture {
+    /// Histograms, float32, read-only and shared with this capture (no copy).
+    #[getter(H)]
+    fn h<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
+        let c = &slf.get().cap;
+        // y-tal's dimensions in murk's order: a single laser point adds none (its T_Sx_Sy).
+        let mut shape = match c.pairing {
+            Pairing::Product if c.illum.len() > 1 => [dims(&c.illum), dims(&c.sensor)].concat(),
+            _ => dims(&c.sensor),
+        };
+        shape.push(c.time.bins);
+        let view = ArrayView::from_shape(IxDyn(&shape), &c.h)
+            .map_err(|e| crate::error("Error", format!("H does not fit its shape: {e}")))?;
+        // SAFETY: the array borrows `c.h`, which lives as long as `slf` (its base object) and never
+        // changes: the class is frozen and the array is made read-only before it is returned.
+        let arr = unsafe { PyArray::borrow_from_array(&view, slf.clone().into_any()) };
+        let kw = pyo3::types::PyDict::new(slf.py());
+        kw.set_item("write", false)?;
+        arr.call_method("setflags", (), Some(&kw))?;
+        Ok(arr)
+    }
+    /// Illuminated wall points, float64 (…, 3) in the laser grid's shape.
+    #[getter]
+    fn laser_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        xyz(py, &self.cap.illum, &self.cap.illum.points)
+    }
+    #[getter]
+    fn laser_normals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        xyz(py, &self.cap.illum, &self.cap.illum.normals)
+    }
+    /// Sensed wall points, float64 (…, 3) in the sensor grid's shape.
+    #[getter]
+    fn sensor_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        xyz(py, &self.cap.sensor, &self.cap.sensor.points)
+    }
+    #[getter]
+    fn sensor_normals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        xyz(py, &self.cap.sensor, &self.cap.sensor.normals)
+    }
+    /// The laser device's position (x, y, z) in metres, or None.
+    #[getter]
+    fn laser_xyz(&self) -> Option<[f64; 3]> {
+        self.cap.laser_xyz.map(|p| p.to_array())
+    }
+    /// The SPAD device's position (x, y, z) in metres, or None.
+    #[getter]
+    fn sensor_xyz(&self) -> Option<[f64; 3]> {
+        self.cap.sensor_xyz.map(|p| p.to_array())
+    }
+    /// Optical path (m) at the start of bin 0.
+    #[getter]
+    fn start_m(&self) -> f64 {
+        self.cap.time.start_m
+    }
+    /// Bin width as optical path (m).
+    #[getter]
+    fn bin_width_m(&self) -> f64 {
+        self.cap.time.bin_width_m
+    }
+    #[getter]
+    fn bins(&self) -> usize {
+        self.cap.time.bins
+    }
+    /// Optical path (m) at the start of each bin: bin i holds [t[i], t[i] + bin_width_m).
+    #[getter]
+    fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let t = self.cap.time;
+        let v = (0..t.bins)
+            .map(|i| t.start_m + i as f64 * t.bin_width_m)
+            .collect();
+        PyArray1::from_vec(py, v)
+    }
+    /// What was measured, in words (e.g. "confocal", "laser grid + one SPAD point").
+    #[getter]
+    fn kind(&self) -> String {
+        self.cap.kind().to_string()
+    }
+    /// "product" (every laser point × every sensor point) or "paired" (one laser point per sensor point).
+    #[getter]
+    fn pairing(&self) -> &'static str {
+        match self.cap.pairing {
+            Pairing::Product => "product",
+            Pairing::Paired => "paired",
+        }
+    }
+    /// Number of histograms.
+    #[getter]
+    fn n_hist(&self) -> usize {
+        self.cap.n_hist()
+    }
+    #[getter]
+    fn t_accounts_first_and_last_bounces(&self) -> bool {
+        self.cap.t_accounts_first_and_last_bounces
+    }
+    /// y-tal's free-form metadata (YAML text).
+    #[getter]
+    fn scene_info(&self) -> &str {
+        &self.cap.scene_info
+    }
+    /// This capture as a y-tal `NLOSCaptureData` (needs `pip install y-tal`).
+    ///
+    /// >>> tal_data = cap.to_tal()
+    /// >>> tal_data.H.shape   # time first, as y-tal has it
+    fn to_tal<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        slf.py()
+            .import("murk._tal")?
+            .call_method1("to_tal", (slf.clone(),))
+    }
+    /// A capture from a y-tal `NLOSCaptureData` (or any object `tal.io.write_capture` accepts).
+    ///
+    /// >>> cap = murk.Capture.from_tal(tal.io.read_capture("scene.hdf5"))
+    #[staticmethod]
+    fn from_tal<'py>(py: Python<'py>, data: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("murk._tal")?.call_method1("from_tal", (data,))
+    }
+    fn __repr__(&self) -> String {
+        let t = self.cap.time;
+        format!(
+            "<murk.Capture {}: {} histograms × {} bins, t from {} m by {} m>",
+            self.cap.kind(),
+            self.cap.n_hist(),
+            t.bins,
+            t.start_m,
+            t.bin_width_m
+        )
+    }
+}
+
+/// A Capture argument or a path to a y-tal HDF5 capture.
+pub(crate) enum Source<'a> {
+    Object(&'a murk_core::Capture),
+    File(PathBuf),
+}
+
+impl<'a> Source<'a> {
+    pub(crate) fn of(obj: &'a Bound<'_, PyAny>) -> PyResult<Source<'a>> {
+        match obj.cast::<Capture>() {
+            Ok(c) => Ok(Source::Object(&c.get().cap)),
+            Err(_) => Ok(Source::File(obj.extract().map_err(|_| {
+                crate::error(
+                    "InputError",
+                    format!(
+                        "expected a murk.Capture or a path to a capture, got {}",
+                        obj.get_type().name().map_or("?".into(), |n| n.to_string())
+                    ),
+                )
+            })?)),
+        }
+    }
+    /// The capture, owned: a copy of a Capture's arrays (the library consumes it), or the file read.
+    pub(crate) fn owned(&self) -> murk_core::Result<murk_core::Capture> {
+        match self {
+            Source::Object(c) => Ok((*c).clone()),
+            Source::File(p) => murk_io::read_capture(p),
+        }
+    }
+}
+
+/// Reads a y-tal HDF5 capture (any H layout; pure-Rust HDF5, no libhdf5).
+///
+/// >>> cap = murk.read_capture("z.h5")
+#[pyfunction]
+pub fn read_capture(py: Python<'_>, path: PathBuf) -> PyResult<Capture> {
+    let cap = py.detach(|| murk_io::read_capture(&path)).map_err(to_py)?;
+    Ok(Capture { cap })
+}
+
+/// Writes `capture` as a y-tal HDF5 file, atomically; `compression` 1..9 gzips H as y-tal's
+/// `compression_level` does.
+///
+/// >>> murk.write_capture("copy.h5", cap)
+#[pyfunction]
+#[pyo3(signature = (path, capture, compression = 0))]
+pub fn write_capture(
+    py: Python<'_>,
+    path: PathBuf,
+    capture: &Bound<'_, Capture>,
+    compression: u32,
+) -> PyResult<()> {
+    let cap = &capture.get().cap;
+    compute(py, None, None, |_| {
+        murk_io::write_capture_compressed(&path, cap, compression)
+    })
+}

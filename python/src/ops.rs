@@ -1,0 +1,246 @@
+//! Synthesis, rendering, merging and the study's plan: the library calls behind `murk synth`,
+//! `murk render`, `murk merge` and `murk experiment`.
+
+use crate::capture::{Capture, Source};
+use crate::{compute, to_py, Ticker};
+use murk_core::{DVec3, TimeAxis};
+use murk_render::{Overrides, Plan, RenderOptions, Scene};
+use murk_study::plan::{Figure, Scale, StudyOptions};
+use murk_study::run::{Event, Observer};
+use murk_synth::{synthesize, CaptureLayout, SynthOptions, Synthesis};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// An analytic capture (first hidden bounce), as `murk synth` makes it; see `murk.synth`.
+#[pyfunction]
+#[pyo3(signature = (targets, kind, wall_size, grid, point, bins, bin_width, start, laser_xyz, sensor_xyz, mu_t, jitter, cosines))]
+#[allow(clippy::too_many_arguments)]
+pub fn synth(
+    py: Python<'_>,
+    targets: Vec<String>,
+    kind: &str,
+    wall_size: f64,
+    grid: usize,
+    point: [f64; 2],
+    bins: usize,
+    bin_width: f64,
+    start: f64,
+    laser_xyz: Option<[f64; 3]>,
+    sensor_xyz: Option<[f64; 3]>,
+    mu_t: f64,
+    jitter: f64,
+    cosines: bool,
+) -> PyResult<Capture> {
+    let s = Synthesis {
+        layout: CaptureLayout {
+            kind: kind.parse().map_err(to_py)?,
+            wall_size_m: wall_size,
+            grid,
+            point: DVec3::new(point[0], point[1], 0.0),
+            time: TimeAxis {
+                start_m: start,
+                bin_width_m: bin_width,
+                bins,
+            },
+            laser_xyz: laser_xyz.map(DVec3::from_array),
+            sensor_xyz: sensor_xyz.map(DVec3::from_array),
+        },
+        targets,
+        options: SynthOptions {
+            cosines,
+            mu_t_per_m: mu_t,
+            jitter_sigma_m: jitter,
+        },
+    };
+    let cap = compute(py, None, None, |_| synthesize(&s))?;
+    Ok(Capture { cap })
+}
+
+/// A Monte Carlo render of a scene, as `murk render` does it; see `murk.render`.
+#[pyfunction]
+#[pyo3(signature = (scene, text, spp, seed, shard, set, grid, bins, checkpoint, checkpoint_every, out, threads, progress))]
+#[allow(clippy::too_many_arguments)]
+pub fn render(
+    py: Python<'_>,
+    scene: PathBuf,
+    text: Option<String>,
+    spp: Option<u64>,
+    seed: u64,
+    shard: Option<(usize, usize)>,
+    set: Vec<String>,
+    grid: Option<usize>,
+    bins: Option<usize>,
+    checkpoint: Option<PathBuf>,
+    checkpoint_every: f64,
+    out: Option<PathBuf>,
+    threads: Option<usize>,
+    progress: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Capture> {
+    let ov = Overrides { grid, bins, set };
+    let cap = compute(py, progress, threads, |t: &Ticker| {
+        let scene = match &text {
+            Some(text) => Scene::from_str(text, &scene, &ov)?,
+            None => Scene::load(&scene, &ov)?,
+        };
+        let plan = Plan::new(&scene);
+        let opt = RenderOptions {
+            spp: spp.unwrap_or(scene.settings.spp),
+            seed,
+            shard,
+            checkpoint: checkpoint.clone(),
+            checkpoint_every: Duration::from_secs_f64(checkpoint_every.max(0.0)),
+        };
+        let cap = plan.render_until(
+            &opt,
+            &|done, total| t.count(done as u64, total as u64),
+            t.stop(),
+        )?;
+        if let Some(out) = &out {
+            murk_io::write_capture(out, &cap)?;
+        }
+        if let Some(c) = &checkpoint {
+            // The capture is complete; a stale checkpoint would only mislead a later resume.
+            let _ = std::fs::remove_file(c);
+        }
+        Ok(cap)
+    })?;
+    Ok(Capture { cap })
+}
+
+/// The capture an unsharded render gives, from all parts of `murk render --shard i/N` (Capture
+/// objects or paths, any order); see `murk.merge`.
+#[pyfunction]
+pub fn merge(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyResult<Capture> {
+    let sources = parts.iter().map(Source::of).collect::<PyResult<Vec<_>>>()?;
+    let cap = compute(py, None, None, |_| {
+        let owned = sources
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let name = match s {
+                    Source::File(p) => p.clone(),
+                    Source::Object(_) => PathBuf::from(format!("<part {i}>")),
+                };
+                Ok((name, s.owned()?))
+            })
+            .collect::<murk_core::Result<Vec<_>>>()?;
+        murk_render::merge(&owned)
+    })?;
+    Ok(Capture { cap })
+}
+
+fn study_options(
+    scale: &str,
+    only: Vec<String>,
+    cells: Vec<String>,
+    seeds: u64,
+    shards: usize,
+    spp: Option<u64>,
+    scenes: PathBuf,
+) -> PyResult<StudyOptions> {
+    Ok(StudyOptions {
+        scale: match scale {
+            "quick" => Scale::Quick,
+            "paper" => Scale::Paper,
+            s => {
+                return Err(crate::error(
+                    "InputError",
+                    format!("scale '{s}': expected quick or paper"),
+                ))
+            }
+        },
+        only: only
+            .iter()
+            .map(|s| Figure::parse(s))
+            .collect::<murk_core::Result<_>>()
+            .map_err(to_py)?,
+        cells,
+        seeds,
+        shards,
+        spp,
+        scenes_dir: scenes,
+    })
+}
+
+/// Plans the study in `out` (writes `plan.json`, makes `renders/`) and returns its render tasks, one
+/// dict per `murk experiment paper --list-tasks` line; see `murk.experiment.plan`.
+#[pyfunction]
+#[pyo3(signature = (out, scale, only, cells, seeds, shards, spp, scenes))]
+#[allow(clippy::too_many_arguments)]
+pub fn study_plan<'py>(
+    py: Python<'py>,
+    out: PathBuf,
+    scale: &str,
+    only: Vec<String>,
+    cells: Vec<String>,
+    seeds: u64,
+    shards: usize,
+    spp: Option<u64>,
+    scenes: PathBuf,
+) -> PyResult<Bound<'py, PyList>> {
+    let opt = study_options(scale, only, cells, seeds, shards, spp, scenes)?;
+    let plan = py
+        .detach(|| murk_study::prepare(&out, &opt))
+        .map_err(to_py)?;
+    let commands = plan.task_commands(&out);
+    let tasks = PyList::empty(py);
+    let mut k = 0;
+    for c in &plan.captures {
+        for t in &c.tasks {
+            let d = PyDict::new(py);
+            d.set_item("id", &t.id)?;
+            d.set_item("capture", &c.id)?;
+            d.set_item("scene", plan.scenes_dir.join(c.scene.file()))?;
+            d.set_item("out", out.join(&t.out))?;
+            d.set_item("capture_out", out.join(murk_study::run::capture_path(c)))?;
+            d.set_item("spp", c.spp)?;
+            d.set_item("seed", c.seed)?;
+            d.set_item("shard", t.shard)?;
+            d.set_item("set", &c.set)?;
+            d.set_item("command", &commands[k])?;
+            tasks.append(d)?;
+            k += 1;
+        }
+    }
+    Ok(tasks)
+}
+
+/// The study's progress as `(done, total)` render units; the task and step lines are the CLI's.
+struct Units<'a>(&'a Ticker);
+
+impl Observer for Units<'_> {
+    fn event(&self, e: Event) {
+        if let Event::Units { done, total } = e {
+            self.0.set(done as u64, total as u64);
+        } else {
+            self.0.check();
+        }
+    }
+}
+
+/// Runs the study in `out` (reusing finished renders and merging finished shards), writes the figures,
+/// metrics and report, and returns the path of `index.html`; see `murk.experiment.run`.
+#[pyfunction]
+#[pyo3(signature = (out, scale, only, cells, seeds, shards, spp, scenes, threads, progress))]
+#[allow(clippy::too_many_arguments)]
+pub fn run_study(
+    py: Python<'_>,
+    out: PathBuf,
+    scale: &str,
+    only: Vec<String>,
+    cells: Vec<String>,
+    seeds: u64,
+    shards: usize,
+    spp: Option<u64>,
+    scenes: PathBuf,
+    threads: Option<usize>,
+    progress: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PathBuf> {
+    let opt = study_options(scale, only, cells, seeds, shards, spp, scenes)?;
+    let dir: &Path = &out;
+    compute(py, progress, threads, |t| {
+        murk_study::run_study(dir, &opt, &Units(t))
+    })
+}

@@ -1,0 +1,200 @@
+//! `murk.reconstruct`: `murk_recon::pipeline::run`, the call behind `murk reconstruct`.
+
+use crate::capture::Source;
+use crate::compute;
+use murk_baselines::{Reflectance, SlabParams};
+use murk_core::window::WindowEnd;
+use murk_core::{Error, Result, Volume};
+use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
+use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+
+type Rows = Vec<(String, String)>;
+type Axes<'py> = [Bound<'py, PyArray1<f64>>; 3];
+/// What `reconstruct` returns: intensity, axes, rows, warnings.
+type Out<'py> = (Bound<'py, PyArrayDyn<f32>>, Axes<'py>, Rows, Vec<String>);
+
+/// One of `choices` (the CLI's value names for a flag) by name, or the one-line error naming them.
+fn pick<T: Copy>(what: &str, name: &str, choices: &[(&str, T)]) -> Result<T> {
+    choices
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| {
+            let names: Vec<&str> = choices.iter().map(|(n, _)| *n).collect();
+            Error::param(format!("{what} '{name}': expected {}", names.join(", ")))
+        })
+}
+
+/// The keywords of `murk.reconstruct`, which are `murk reconstruct`'s flags.
+struct Args {
+    method: String,
+    volume: Option<String>,
+    wavelength: Option<f64>,
+    wavefactor: Option<f64>,
+    cycles: f64,
+    compensate: Option<String>,
+    mu_t: Option<f64>,
+    albedo: f64,
+    falloff: String,
+    lateral: String,
+    gate: String,
+    window_end: String,
+    t_offset: Option<String>,
+    snr: Option<f64>,
+    weighting: String,
+    slab: (f64, f64, f64, f64),
+}
+
+impl Args {
+    /// The library request for a capture of `kind`, as `murk reconstruct` builds it from its flags.
+    fn request(&self, kind: murk_core::CaptureKind) -> Result<Request> {
+        let o = self.options()?;
+        Ok(Request {
+            method: Method::from_name(&self.method, kind, &o)?,
+            volume: match &self.volume {
+                Some(spec) => VolumeSpec::Given(Volume::parse(spec)?),
+                None => VolumeSpec::Default,
+            },
+            t_offset: TOffset::parse(self.t_offset.as_deref(), o.slab)?,
+            gate: self.gate.parse::<Gate>()?,
+            window_end: pick(
+                "window_end",
+                &self.window_end,
+                &[
+                    ("auto", WindowEnd::Auto),
+                    ("taper", WindowEnd::Taper),
+                    ("keep", WindowEnd::Keep),
+                ],
+            )?,
+        })
+    }
+
+    fn options(&self) -> Result<Options> {
+        let wavelength = match (self.wavelength, self.wavefactor) {
+            (Some(_), Some(_)) => {
+                return Err(Error::param("give wavelength or wavefactor, not both"))
+            }
+            (Some(m), None) => Some(Wavelength::Metres(m)),
+            (None, Some(f)) => Some(Wavelength::WallFactor(f)),
+            (None, None) => None,
+        };
+        let mu = self.mu_t.unwrap_or(0.0);
+        let compensation = match (self.compensate.as_deref(), self.mu_t) {
+            (None, _) => Compensation::None,
+            (Some(_), None) => return Err(Error::param("compensate needs mu_t")),
+            (Some(c), Some(_)) => pick(
+                "compensate",
+                c,
+                &[
+                    (
+                        "paper",
+                        Compensation::Paper {
+                            mu_t_per_m: mu,
+                            albedo: self.albedo,
+                        },
+                    ),
+                    ("ballistic", Compensation::Ballistic { mu_t_per_m: mu }),
+                ],
+            )?,
+        };
+        let (thickness_m, mu_a, mu_s_prime, n) = self.slab;
+        Ok(Options {
+            wavelength,
+            cycles: self.cycles,
+            falloff: pick(
+                "falloff",
+                &self.falloff,
+                &[("none", Falloff::None), ("inv-r", Falloff::InvR)],
+            )?,
+            compensation,
+            lateral: pick(
+                "lateral",
+                &self.lateral,
+                &[
+                    ("propagating", Lateral::Propagating),
+                    ("full", Lateral::Full),
+                ],
+            )?,
+            snr: self.snr,
+            reflectance: pick(
+                "weighting",
+                &self.weighting,
+                &[
+                    ("diffuse", Reflectance::Diffuse),
+                    ("retroreflective", Reflectance::Retroreflective),
+                ],
+            )?,
+            slab: SlabParams {
+                thickness_m,
+                mu_a,
+                mu_s_prime,
+                n,
+                ..Default::default()
+            },
+        })
+    }
+}
+
+/// Runs one reconstruction; returns (intensity [nx, ny, nz] float32 without a copy, (x, y, z), rows,
+/// warnings). See `murk.reconstruct`.
+#[pyfunction]
+#[pyo3(signature = (capture, method, volume, wavelength, wavefactor, cycles, compensate, mu_t, albedo, falloff, lateral, gate, window_end, t_offset, snr, weighting, slab, threads, progress))]
+#[allow(clippy::too_many_arguments)]
+pub fn reconstruct<'py>(
+    py: Python<'py>,
+    capture: &Bound<'py, PyAny>,
+    method: String,
+    volume: Option<String>,
+    wavelength: Option<f64>,
+    wavefactor: Option<f64>,
+    cycles: f64,
+    compensate: Option<String>,
+    mu_t: Option<f64>,
+    albedo: f64,
+    falloff: String,
+    lateral: String,
+    gate: String,
+    window_end: String,
+    t_offset: Option<String>,
+    snr: Option<f64>,
+    weighting: String,
+    slab: (f64, f64, f64, f64),
+    threads: Option<usize>,
+    progress: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Out<'py>> {
+    let args = Args {
+        method,
+        volume,
+        wavelength,
+        wavefactor,
+        cycles,
+        compensate,
+        mu_t,
+        albedo,
+        falloff,
+        lateral,
+        gate,
+        window_end,
+        t_offset,
+        snr,
+        weighting,
+        slab,
+    };
+    let source = Source::of(capture)?;
+    let out = compute(py, progress, threads, |t| {
+        let cap = source.owned()?;
+        let req = args.request(cap.kind())?;
+        pipeline::run(cap, &req, t)
+    })?;
+    let v = out.volume;
+    let intensity = PyArray1::from_vec(py, out.intensity).reshape(v.shape().to_vec())?;
+    let axis = |a: &murk_core::Axis| PyArray1::from_vec(py, a.values());
+    Ok((
+        intensity,
+        [axis(&v.x), axis(&v.y), axis(&v.z)],
+        out.rows,
+        out.warnings,
+    ))
+}

@@ -1,0 +1,77 @@
+import math
+
+import pytest
+
+import murk
+
+VOL = "-0.9:0.9:5,-0.9:0.9:5,1.5:2.5:5"
+
+
+@pytest.fixture(scope="module")
+def cap():
+    return murk.synth("z:2.0", kind="laser-grid", wall_size=2, grid=8, bins=256, bin_width=0.01,
+                      start=3.5)
+
+
+def one_line(e):
+    msg = str(e.value)
+    assert msg and "\n" not in msg and "panicked" not in msg
+    return msg
+
+
+def test_unknown_method(cap):
+    with pytest.raises(murk.InputError) as e:
+        murk.reconstruct(cap, "pff", volume=VOL)
+    assert isinstance(e.value, ValueError)
+    assert one_line(e) == "unknown method 'pff'; expected one of pf, pf-exact, bp, fbp, lct, fk, cdt"
+
+
+def test_bad_volume_string(cap):
+    with pytest.raises(murk.InputError) as e:
+        murk.reconstruct(cap, volume="-1:1:5,oops")
+    assert "oops" in one_line(e) or "volume" in one_line(e)
+
+
+def test_missing_file():
+    with pytest.raises(murk.FileError) as e:
+        murk.read_capture("/nonexistent/capture.h5")
+    assert isinstance(e.value, OSError)
+    assert one_line(e).startswith("/nonexistent/capture.h5: ")
+    with pytest.raises(murk.FileError):
+        murk.reconstruct("/nonexistent/capture.h5")
+
+
+def test_not_a_capture(tmp_path):
+    p = tmp_path / "x.h5"
+    p.write_bytes(b"not hdf5 at all")
+    with pytest.raises(murk.FormatError) as e:
+        murk.read_capture(p)
+    assert one_line(e).startswith(str(p))
+
+
+@pytest.mark.parametrize("kw", [dict(wavelength=math.nan), dict(wavelength=-1.0),
+                                dict(cycles=0.0), dict(gate="soon"), dict(t_offset="later"),
+                                dict(window_end="never"), dict(compensate="paper")])
+def test_bad_parameters(cap, kw):
+    with pytest.raises(murk.InputError) as e:
+        murk.reconstruct(cap, volume=VOL, **kw)
+    one_line(e)
+
+
+def test_confocal_methods_refuse_a_laser_grid(cap):
+    with pytest.raises(murk.Error) as e:
+        murk.reconstruct(cap, "fk")
+    one_line(e)
+
+
+def test_bad_render_arguments(tmp_path):
+    with pytest.raises(murk.FileError):
+        murk.render(tmp_path / "none.toml")
+    with pytest.raises(murk.FormatError) as e:
+        murk.render("[capture]\nkind = 3\n")
+    one_line(e)
+    with pytest.raises(murk.InputError) as e:
+        murk.synth("z:2.0", kind="bogus")
+    assert one_line(e).startswith("unknown capture kind 'bogus'")
+    with pytest.raises(murk.InputError):
+        murk.merge([])

@@ -1,0 +1,42 @@
+import subprocess
+import sys
+
+import pytest
+
+import murk
+from conftest import ROOT, SCENES, cli, needs_cli
+
+pytest.importorskip("distributed", reason="dask[distributed] is not installed")
+
+ARGS = ["--only", "fig3a", "--spp", "4", "--shards", "2"]
+
+
+@needs_cli
+def test_plan_is_the_cli_task_list(tmp_path):
+    lines = cli("experiment", "paper", "--out", tmp_path, *ARGS, "--scenes", SCENES,
+                "--list-tasks").splitlines()
+    tasks = murk.experiment.plan(tmp_path, only=["fig3a"], spp=4, shards=2, scenes=SCENES)
+    assert [t["command"] for t in tasks] == lines and len(tasks) == 2
+    assert [t["shard"] for t in tasks] == [(0, 2), (1, 2)]
+
+
+@needs_cli
+def test_study_on_dask_renders_the_cli_bytes_and_reuses_them(tmp_path):
+    cli("experiment", "paper", "--out", tmp_path / "cli", *ARGS, "--quiet", cwd=ROOT)
+    run = [sys.executable, "-m", "murk.experiment", "paper", "--out", str(tmp_path / "dask"),
+           *ARGS]
+    r = subprocess.run(run, cwd=ROOT, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "dask" / "index.html").exists()
+    [cap] = (tmp_path / "cli" / "renders").glob("*.h5")
+    assert (tmp_path / "dask" / "renders" / cap.name).read_bytes() == cap.read_bytes()
+    tasks = murk.experiment.plan(tmp_path / "dask", only=["fig3a"], spp=4, shards=2,
+                                 scenes=SCENES)
+    assert murk.experiment.pending(tasks) == []
+
+
+def test_bad_study_arguments(tmp_path):
+    with pytest.raises(murk.InputError):
+        murk.experiment.plan(tmp_path, only=["fig9"], scenes=SCENES)
+    with pytest.raises(murk.InputError):
+        murk.experiment.plan(tmp_path, scale="huge", scenes=SCENES)
