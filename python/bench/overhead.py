@@ -7,7 +7,7 @@
    wall time on the same cores.
 
 Run from the repository root after `cargo build --release` and `pip install ./python`:
-    .venv/bin/python python/bench/overhead.py [--runs 3] [--spp 256] [--skip-dask]
+    .venv/bin/python python/bench/overhead.py [--runs 3] [--spp 256] [--shards 2] [--skip-dask] [--skip-recon]
 """
 
 import argparse
@@ -79,19 +79,19 @@ PY_DASK = """
 import sys, time
 import murk.dask
 from dask.distributed import Client, LocalCluster
-spp, out = int(sys.argv[1]), sys.argv[2]
+spp, out, shards = int(sys.argv[1]), sys.argv[2], int(sys.argv[3])
 t0 = time.perf_counter()
 cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
 client = Client(cluster)
 t1 = time.perf_counter()
-murk.dask.render("scenes/z-letter.toml", client, shards=8, grid=64, spp=spp, threads=1, out=out)
+murk.dask.render("scenes/z-letter.toml", client, shards=shards, grid=64, spp=spp, threads=1, out=out)
 t2 = time.perf_counter()
 client.close(); cluster.close()
 print(t2 - t0, t2 - t1)
 """
 
 
-def dask_bench(runs, spp, d):
+def dask_bench(runs, spp, shards, d):
     cli, dask_total, dask_render = [], [], []
     for _ in range(runs):
         a, b = os.path.join(d, "cli.h5"), os.path.join(d, "dask.h5")
@@ -102,14 +102,14 @@ def dask_bench(runs, spp, d):
         subprocess.run([MURK, "render", "scenes/z-letter.toml", "--out", a, "--grid", "64",
                         "--spp", str(spp), "--quiet"], check=True)
         cli.append(time.perf_counter() - t)
-        p = subprocess.run([sys.executable, "-c", PY_DASK, str(spp), b], capture_output=True,
+        p = subprocess.run([sys.executable, "-c", PY_DASK, str(spp), b, str(shards)], capture_output=True,
                            text=True, check=True)
         total, render = map(float, p.stdout.split())
         dask_total.append(total)
         dask_render.append(render)
         assert open(a, "rb").read() == open(b, "rb").read(), "Dask render differs from the CLI's"
     med = statistics.median
-    return {"spp": spp, "cli_wall": cli, "dask_with_cluster_start": dask_total,
+    return {"spp": spp, "shards": shards, "cli_wall": cli, "dask_with_cluster_start": dask_total,
             "dask_render_only": dask_render, "median_cli": med(cli),
             "median_dask_with_cluster_start": med(dask_total),
             "median_dask_render_only": med(dask_render), "bytes_identical": True}
@@ -119,6 +119,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--spp", type=int, default=256)
+    ap.add_argument("--shards", type=int, default=2, help="Dask tasks (default: one per worker)")
     ap.add_argument("--skip-dask", action="store_true")
     ap.add_argument("--skip-recon", action="store_true")
     a = ap.parse_args()
@@ -128,7 +129,7 @@ def main():
             res["reconstruct"] = recon_bench(a.runs, d)
             print(json.dumps(res["reconstruct"], indent=1), flush=True)
         if not a.skip_dask:
-            res["dask"] = dask_bench(a.runs, a.spp, d)
+            res["dask"] = dask_bench(a.runs, a.spp, a.shards, d)
             print(json.dumps(res["dask"], indent=1), flush=True)
     print(json.dumps(res))
 

@@ -30,7 +30,7 @@ def render_shard(
     grid=None,
     bins=None,
     threads=None,
-    checkpoint_every=5.0,
+    checkpoint_every=60.0,
 ) -> str:
     """One Dask task: renders shard ``(i, n)`` of ``scene`` into ``part`` (kept if already there),
     resuming from ``part + ".ckpt"``; returns ``part``."""
@@ -55,7 +55,7 @@ def render(
     workdir: Union[None, str, os.PathLike] = None,
     out: Union[None, str, os.PathLike] = None,
     threads: Optional[int] = None,
-    checkpoint_every: float = 5.0,
+    checkpoint_every: float = 60.0,
     retries: int = 3,
 ) -> "murk.Capture":
     """Renders ``scene`` as ``shards`` Dask tasks on ``client`` and merges them: the same bytes as

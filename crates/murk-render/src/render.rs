@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 pub struct RenderOptions {
     pub spp: u64,
     pub seed: u64,
-    /// `(i, n)`: render only the i-th of n contiguous slices of the work units.
+    /// `(i, n)`: render only shard i of n (see [`Plan::shard_units`]).
     pub shard: Option<(usize, usize)>,
     /// Append finished units to this file every `checkpoint_every`; resume from it when it exists and matches.
     pub checkpoint: Option<PathBuf>,
@@ -175,13 +175,26 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// The units shard `(i, n)` renders.
-    pub fn shard_units(&self, shard: Option<(usize, usize)>) -> std::ops::Range<usize> {
+    /// The units shard `(i, n)` renders. Units are taken in a golden-ratio order (unit j·g mod N
+    /// for g ≈ 0.618·N coprime with N) and dealt to the shards in turn, so that each shard gets a like
+    /// share of every part of the wall (costly and cheap tiles alike) and shards on equal workers end
+    /// together.
+    pub fn shard_units(&self, shard: Option<(usize, usize)>) -> Vec<usize> {
         let n = self.n_units();
-        match shard {
-            None => 0..n,
-            Some((i, k)) => i * n / k..(i + 1) * n / k,
+        let Some((i, k)) = shard else {
+            return (0..n).collect();
+        };
+        let gcd = |mut a: usize, mut b: usize| {
+            while b != 0 {
+                (a, b) = (b, a % b);
+            }
+            a
+        };
+        let mut g = ((n as f64 * 0.618_033_988_75).round() as usize).max(1);
+        while gcd(g, n) != 1 {
+            g += 1;
         }
+        (i..n).step_by(k.max(1)).map(|j| j * g % n).collect()
     }
 
     /// An all-zero capture with this scene's layout.
@@ -241,15 +254,17 @@ impl<'a> Plan<'a> {
             None => None,
         };
         let mut done = vec![false; self.n_units()];
+        let mut mine = vec![false; self.n_units()];
+        units.iter().for_each(|&u| mine[u] = true);
         if let Some(c) = &ckpt {
             for (u, buf) in &c.loaded {
-                if units.contains(u) {
+                if mine.get(*u) == Some(&true) {
                     self.store(&mut cap.h, *u, buf);
                     done[*u] = true;
                 }
             }
         }
-        let todo: Vec<usize> = units.clone().filter(|u| !done[*u]).collect();
+        let todo: Vec<usize> = units.iter().copied().filter(|u| !done[*u]).collect();
         progress(total - todo.len(), total);
         // Each finished unit is stored at once, and the first to finish after the interval appends
         // everything pending to the checkpoint: the interval is honoured to within one unit.

@@ -333,3 +333,34 @@ fn device_radiometry_scales_each_histogram_by_its_legs() {
         "{e}"
     );
 }
+
+/// Shards deal out every unit exactly once, in shares that differ by at most one unit, and each
+/// shard of two or more reaches both halves of the wall (a shard is not one stripe of it).
+#[test]
+fn shards_partition_the_units_evenly() {
+    let text = SCENE
+        .replace("grid = [4, 3]", "grid = [16, 12]")
+        .replace("share_tile = 2", "share_tile = 1");
+    let scene = Scene::from_str(&text, Path::new("det.toml"), &Overrides::default()).unwrap();
+    let plan = Plan::new(&scene);
+    let n = plan.n_units();
+    assert_eq!(plan.shard_units(None), (0..n).collect::<Vec<_>>());
+    for k in 1..=7 {
+        let shards: Vec<Vec<usize>> = (0..k).map(|i| plan.shard_units(Some((i, k)))).collect();
+        let mut all: Vec<usize> = shards.concat();
+        all.sort();
+        assert_eq!(all, (0..n).collect::<Vec<_>>(), "{k} shards");
+        let sizes: Vec<usize> = shards.iter().map(Vec::len).collect();
+        assert!(
+            sizes.iter().max().unwrap() - sizes.iter().min().unwrap() <= 1,
+            "{sizes:?}"
+        );
+        for s in shards.iter().filter(|_| k > 1) {
+            let low = s.iter().filter(|&&u| u < n / 2).count();
+            assert!(
+                low > 0 && low < s.len(),
+                "{k} shards: {s:?} lies in one half"
+            );
+        }
+    }
+}
