@@ -98,10 +98,11 @@ def synth(
     """
     if isinstance(targets, str):
         targets = [targets]
-    return _murk.synth(
-        list(targets), kind, wall_size, grid, tuple(point), bins, bin_width, start,
-        laser_xyz, sensor_xyz, mu_t, jitter, cosines,
-    )
+    return _murk.synth(dict(
+        targets=list(targets), kind=kind, wall_size=wall_size, grid=grid, point=tuple(point),
+        bins=bins, bin_width=bin_width, start=start, laser_xyz=laser_xyz, sensor_xyz=sensor_xyz,
+        mu_t=mu_t, jitter=jitter, cosines=cosines,
+    ))
 
 
 def _toml(v) -> str:
@@ -155,9 +156,12 @@ def render(
     if "\n" in path:
         path, text = os.path.join(os.getcwd(), "scene.toml"), path
     return _murk.render(
-        path, text, spp, seed, None if shard is None else tuple(shard), _overrides(set), grid,
-        bins, None if checkpoint is None else os.fspath(checkpoint), checkpoint_every,
-        None if out is None else os.fspath(out), threads, _progress(progress, "render"),
+        path,
+        dict(text=text, spp=spp, seed=seed, shard=None if shard is None else tuple(shard),
+             set=_overrides(set), grid=grid, bins=bins,
+             checkpoint=None if checkpoint is None else os.fspath(checkpoint),
+             checkpoint_every=checkpoint_every, out=None if out is None else os.fspath(out)),
+        threads, _progress(progress, "render"),
     )
 
 
@@ -241,10 +245,12 @@ def reconstruct(
     """
     intensity, axes, rows, warnings = _murk.reconstruct(
         capture if isinstance(capture, Capture) else os.fspath(capture),
-        method, volume, wavelength, wavefactor, cycles, compensate, mu_t, albedo, falloff,
-        lateral, _text(gate), window_end, _text(t_offset), snr, weighting,
-        (slab_thickness, slab_mua, slab_musp, slab_n), threads,
-        _progress(progress, "reconstruct"),
+        dict(method=method, volume=volume, wavelength=wavelength, wavefactor=wavefactor,
+             cycles=cycles, compensate=compensate, mu_t=mu_t, albedo=albedo, falloff=falloff,
+             lateral=lateral, gate=_text(gate), window_end=window_end, t_offset=_text(t_offset),
+             snr=snr, weighting=weighting,
+             slab=(slab_thickness, slab_mua, slab_musp, slab_n)),
+        threads, _progress(progress, "reconstruct"),
     )
     x, y, z = axes
     return Reconstruction(intensity, x, y, z, dict(rows), list(warnings))

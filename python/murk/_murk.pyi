@@ -1,7 +1,7 @@
 """Type stubs of the extension module; the documented API is the package `murk` (murk/__init__.py)."""
 
 import os
-from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, List, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -50,26 +50,66 @@ class Capture:
 
 def read_capture(path: _Path) -> Capture: ...
 def write_capture(path: _Path, capture: Capture, compression: int = 0) -> None: ...
-def synth(targets: List[str], kind: str, wall_size: float, grid: int, point: Tuple[float, float],
-          bins: int, bin_width: float, start: float,
-          laser_xyz: Optional[Tuple[float, float, float]],
-          sensor_xyz: Optional[Tuple[float, float, float]], mu_t: float, jitter: float,
-          cosines: bool) -> Capture: ...
-def render(scene: str, text: Optional[str], spp: Optional[int], seed: int,
-           shard: Optional[Tuple[int, int]], set: List[str], grid: Optional[int],
-           bins: Optional[int], checkpoint: Optional[str], checkpoint_every: float,
-           out: Optional[str], threads: Optional[int], progress: _Progress) -> Capture: ...
+class _SynthArgs(TypedDict):
+    targets: List[str]
+    kind: str
+    wall_size: float
+    grid: int
+    point: Tuple[float, float]
+    bins: int
+    bin_width: float
+    start: float
+    laser_xyz: Optional[Tuple[float, float, float]]
+    sensor_xyz: Optional[Tuple[float, float, float]]
+    mu_t: float
+    jitter: float
+    cosines: bool
+
+class _RenderArgs(TypedDict):
+    text: Optional[str]
+    spp: Optional[int]
+    seed: int
+    shard: Optional[Tuple[int, int]]
+    set: List[str]
+    grid: Optional[int]
+    bins: Optional[int]
+    checkpoint: Optional[str]
+    checkpoint_every: float
+    out: Optional[str]
+
+class _StudyArgs(TypedDict):
+    scale: str
+    only: List[str]
+    cells: List[str]
+    seeds: int
+    shards: int
+    spp: Optional[int]
+    scenes: str
+
+class _ReconstructArgs(TypedDict):
+    method: str
+    volume: Optional[str]
+    wavelength: Optional[float]
+    wavefactor: Optional[float]
+    cycles: float
+    compensate: Optional[str]
+    mu_t: Optional[float]
+    albedo: float
+    falloff: str
+    lateral: str
+    gate: str
+    window_end: str
+    t_offset: Optional[str]
+    snr: Optional[float]
+    weighting: str
+    slab: Tuple[float, float, float, float]
+
+def synth(args: _SynthArgs) -> Capture: ...
+def render(scene: str, args: _RenderArgs, threads: Optional[int], progress: _Progress) -> Capture: ...
 def merge(parts: Sequence[Union[Capture, str]]) -> Capture: ...
-def study_plan(out: str, scale: str, only: List[str], cells: List[str], seeds: int, shards: int,
-               spp: Optional[int], scenes: str) -> List[dict]: ...
-def run_study(out: str, scale: str, only: List[str], cells: List[str], seeds: int, shards: int,
-              spp: Optional[int], scenes: str, threads: Optional[int],
-              progress: _Progress) -> str: ...
-def reconstruct(capture: Union[Capture, str], method: str, volume: Optional[str],
-                wavelength: Optional[float], wavefactor: Optional[float], cycles: float,
-                compensate: Optional[str], mu_t: Optional[float], albedo: float, falloff: str,
-                lateral: str, gate: str, window_end: str, t_offset: Optional[str],
-                snr: Optional[float], weighting: str, slab: Tuple[float, float, float, float],
-                threads: Optional[int], progress: _Progress,
+def study_plan(out: str, args: _StudyArgs) -> List[dict]: ...
+def run_study(out: str, args: _StudyArgs, threads: Optional[int], progress: _Progress) -> str: ...
+def reconstruct(capture: Union[Capture, str], args: _ReconstructArgs, threads: Optional[int],
+                progress: _Progress,
                 ) -> Tuple[npt.NDArray[np.float32], List[npt.NDArray[np.float64]],
                            List[Tuple[str, str]], List[str]]: ...

@@ -20,6 +20,12 @@ import murk
 from . import _murk
 
 
+def _study(scale, only, cells, seeds, shards, spp, scenes) -> dict:
+    """The study's options as the extension takes them."""
+    return dict(scale=scale, only=list(only), cells=list(cells), seeds=seeds, shards=shards,
+                spp=spp, scenes=os.fspath(scenes))
+
+
 def plan(
     out,
     *,
@@ -35,17 +41,16 @@ def plan(
     the order and with the commands of ``murk experiment paper --list-tasks``: dicts with ``id``,
     ``scene``, ``out``, ``spp``, ``seed``, ``shard``, ``set``, ``capture``, ``capture_out`` and
     ``command``."""
-    return _murk.study_plan(os.fspath(out), scale, list(only), list(cells), seeds, shards, spp,
-                            os.fspath(scenes))
+    return _murk.study_plan(os.fspath(out), _study(scale, only, cells, seeds, shards, spp, scenes))
 
 
 def run(out, *, scale="quick", only=(), cells=(), seeds=1, shards=1, spp=None, scenes="scenes",
         threads=None, progress=None) -> str:
     """``murk experiment paper --out OUT``: renders what is missing (merging finished shards),
     reconstructs, scores and writes the report; returns the path of index.html."""
-    return os.fspath(_murk.run_study(os.fspath(out), scale, list(only), list(cells), seeds, shards,
-                                     spp, os.fspath(scenes), threads,
-                                     murk._progress(progress, "study")))
+    return os.fspath(_murk.run_study(os.fspath(out),
+                                     _study(scale, only, cells, seeds, shards, spp, scenes),
+                                     threads, murk._progress(progress, "study")))
 
 
 def pending(tasks: Sequence[dict]) -> List[dict]:

@@ -13,14 +13,12 @@ use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-/// An analytic capture (first hidden bounce), as `murk synth` makes it; see `murk.synth`.
-#[pyfunction]
-#[pyo3(signature = (targets, kind, wall_size, grid, point, bins, bin_width, start, laser_xyz, sensor_xyz, mu_t, jitter, cosines))]
-#[allow(clippy::too_many_arguments)]
-pub fn synth(
-    py: Python<'_>,
+/// The keywords of `murk.synth`, which are `murk synth`'s flags.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct SynthArgs {
     targets: Vec<String>,
-    kind: &str,
+    kind: String,
     wall_size: f64,
     grid: usize,
     point: [f64; 2],
@@ -32,39 +30,42 @@ pub fn synth(
     mu_t: f64,
     jitter: f64,
     cosines: bool,
-) -> PyResult<Capture> {
+}
+
+/// An analytic capture (first hidden bounce), as `murk synth` makes it; see `murk.synth`.
+#[pyfunction]
+#[pyo3(signature = (args))]
+pub fn synth(py: Python<'_>, args: SynthArgs) -> PyResult<Capture> {
     let s = Synthesis {
         layout: CaptureLayout {
-            kind: kind.parse().map_err(to_py)?,
-            wall_size_m: wall_size,
-            grid,
-            point: DVec3::new(point[0], point[1], 0.0),
+            kind: args.kind.parse().map_err(to_py)?,
+            wall_size_m: args.wall_size,
+            grid: args.grid,
+            point: DVec3::new(args.point[0], args.point[1], 0.0),
             time: TimeAxis {
-                start_m: start,
-                bin_width_m: bin_width,
-                bins,
+                start_m: args.start,
+                bin_width_m: args.bin_width,
+                bins: args.bins,
             },
-            laser_xyz: laser_xyz.map(DVec3::from_array),
-            sensor_xyz: sensor_xyz.map(DVec3::from_array),
+            laser_xyz: args.laser_xyz.map(DVec3::from_array),
+            sensor_xyz: args.sensor_xyz.map(DVec3::from_array),
         },
-        targets,
+        targets: args.targets,
         options: SynthOptions {
-            cosines,
-            mu_t_per_m: mu_t,
-            jitter_sigma_m: jitter,
+            cosines: args.cosines,
+            mu_t_per_m: args.mu_t,
+            jitter_sigma_m: args.jitter,
         },
     };
     let cap = compute(py, None, None, |_| synthesize(&s))?;
     Ok(Capture { cap })
 }
 
-/// A Monte Carlo render of a scene, as `murk render` does it; see `murk.render`.
-#[pyfunction]
-#[pyo3(signature = (scene, text, spp, seed, shard, set, grid, bins, checkpoint, checkpoint_every, out, threads, progress))]
-#[allow(clippy::too_many_arguments)]
-pub fn render(
-    py: Python<'_>,
-    scene: PathBuf,
+/// The keywords of `murk.render` (its scene, threads and progress aside), which are `murk render`'s
+/// flags; `text` is the scene's TOML when it was given as text (read as if from `scene`).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct RenderArgs {
     text: Option<String>,
     spp: Option<u64>,
     seed: u64,
@@ -75,9 +76,30 @@ pub fn render(
     checkpoint: Option<PathBuf>,
     checkpoint_every: f64,
     out: Option<PathBuf>,
+}
+
+/// A Monte Carlo render of a scene, as `murk render` does it; see `murk.render`.
+#[pyfunction]
+#[pyo3(signature = (scene, args, threads, progress))]
+pub fn render(
+    py: Python<'_>,
+    scene: PathBuf,
+    args: RenderArgs,
     threads: Option<usize>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Capture> {
+    let RenderArgs {
+        text,
+        spp,
+        seed,
+        shard,
+        set,
+        grid,
+        bins,
+        checkpoint,
+        checkpoint_every,
+        out,
+    } = args;
     let ov = Overrides { grid, bins, set };
     let cap = compute(py, progress, threads, |t: &Ticker| {
         let scene = match &text {
@@ -131,17 +153,32 @@ pub fn merge(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyResult<Capture> 
     Ok(Capture { cap })
 }
 
-fn study_options(
-    scale: &str,
+/// The keywords of `murk.experiment.plan` and `murk.experiment.run` (their `out`, threads and
+/// progress aside), which are `murk experiment paper`'s flags.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct StudyArgs {
+    scale: String,
     only: Vec<String>,
     cells: Vec<String>,
     seeds: u64,
     shards: usize,
     spp: Option<u64>,
     scenes: PathBuf,
-) -> PyResult<StudyOptions> {
+}
+
+fn study_options(args: StudyArgs) -> PyResult<StudyOptions> {
+    let StudyArgs {
+        scale,
+        only,
+        cells,
+        seeds,
+        shards,
+        spp,
+        scenes,
+    } = args;
     Ok(StudyOptions {
-        scale: match scale {
+        scale: match scale.as_str() {
             "quick" => Scale::Quick,
             "paper" => Scale::Paper,
             s => {
@@ -167,20 +204,13 @@ fn study_options(
 /// Plans the study in `out` (writes `plan.json`, makes `renders/`) and returns its render tasks, one
 /// dict per `murk experiment paper --list-tasks` line; see `murk.experiment.plan`.
 #[pyfunction]
-#[pyo3(signature = (out, scale, only, cells, seeds, shards, spp, scenes))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (out, args))]
 pub fn study_plan<'py>(
     py: Python<'py>,
     out: PathBuf,
-    scale: &str,
-    only: Vec<String>,
-    cells: Vec<String>,
-    seeds: u64,
-    shards: usize,
-    spp: Option<u64>,
-    scenes: PathBuf,
+    args: StudyArgs,
 ) -> PyResult<Bound<'py, PyList>> {
-    let opt = study_options(scale, only, cells, seeds, shards, spp, scenes)?;
+    let opt = study_options(args)?;
     let plan = py
         .detach(|| murk_study::prepare(&out, &opt))
         .map_err(to_py)?;
@@ -223,22 +253,15 @@ impl Observer for Units<'_> {
 /// Runs the study in `out` (reusing finished renders and merging finished shards), writes the figures,
 /// metrics and report, and returns the path of `index.html`; see `murk.experiment.run`.
 #[pyfunction]
-#[pyo3(signature = (out, scale, only, cells, seeds, shards, spp, scenes, threads, progress))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (out, args, threads, progress))]
 pub fn run_study(
     py: Python<'_>,
     out: PathBuf,
-    scale: &str,
-    only: Vec<String>,
-    cells: Vec<String>,
-    seeds: u64,
-    shards: usize,
-    spp: Option<u64>,
-    scenes: PathBuf,
+    args: StudyArgs,
     threads: Option<usize>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PathBuf> {
-    let opt = study_options(scale, only, cells, seeds, shards, spp, scenes)?;
+    let opt = study_options(args)?;
     let dir: &Path = &out;
     compute(py, progress, threads, |t| {
         murk_study::run_study(dir, &opt, &Units(t))

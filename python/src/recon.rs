@@ -27,8 +27,11 @@ fn pick<T: Copy>(what: &str, name: &str, choices: &[(&str, T)]) -> Result<T> {
         })
 }
 
-/// The keywords of `murk.reconstruct`, which are `murk reconstruct`'s flags.
-struct Args {
+/// The keywords of `murk.reconstruct` (its capture, threads and progress aside), which are
+/// `murk reconstruct`'s flags.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct Args {
     method: String,
     volume: Option<String>,
     wavelength: Option<f64>,
@@ -140,48 +143,14 @@ impl Args {
 /// Runs one reconstruction; returns (intensity [nx, ny, nz] float32 without a copy, (x, y, z), rows,
 /// warnings). See `murk.reconstruct`.
 #[pyfunction]
-#[pyo3(signature = (capture, method, volume, wavelength, wavefactor, cycles, compensate, mu_t, albedo, falloff, lateral, gate, window_end, t_offset, snr, weighting, slab, threads, progress))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (capture, args, threads, progress))]
 pub fn reconstruct<'py>(
     py: Python<'py>,
     capture: &Bound<'py, PyAny>,
-    method: String,
-    volume: Option<String>,
-    wavelength: Option<f64>,
-    wavefactor: Option<f64>,
-    cycles: f64,
-    compensate: Option<String>,
-    mu_t: Option<f64>,
-    albedo: f64,
-    falloff: String,
-    lateral: String,
-    gate: String,
-    window_end: String,
-    t_offset: Option<String>,
-    snr: Option<f64>,
-    weighting: String,
-    slab: (f64, f64, f64, f64),
+    args: Args,
     threads: Option<usize>,
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Out<'py>> {
-    let args = Args {
-        method,
-        volume,
-        wavelength,
-        wavefactor,
-        cycles,
-        compensate,
-        mu_t,
-        albedo,
-        falloff,
-        lateral,
-        gate,
-        window_end,
-        t_offset,
-        snr,
-        weighting,
-        slab,
-    };
     let source = Source::of(capture)?;
     let out = compute(py, progress, threads, |t| {
         let cap = source.owned()?;
