@@ -202,6 +202,7 @@ impl<'a> Tracer<'a> {
             w: DVec3::ZERO,
             first: None,
             tail: Vec::new(),
+            shares: Vec::new(),
         };
         let mut legs = Vec::new();
         let g = {

@@ -14,20 +14,20 @@ pub(super) struct Tail {
     pub(super) w: DVec3,
 }
 
-/// Adds `tail` to one traced point's histograms `hist`, scaled, shifted by `shift` bins, each entry times
-/// `ratio` of its direction at the first vertex.
+/// Adds `tail` to one traced point's histograms `hist`, scaled, shifted by `shift` bins, entry e times
+/// `weight(e)`.
 pub(super) fn replay(
     bins: usize,
     hist: &mut [f64],
     tail: &[Tail],
     scale: f64,
     shift: f64,
-    ratio: impl Fn(DVec3) -> f64,
+    weight: impl Fn(usize) -> f64,
 ) {
-    for tl in tail {
+    for (e, tl) in tail.iter().enumerate() {
         let x = tl.bin + shift;
         if x >= 0.0 && x < bins as f64 {
-            hist[tl.k * bins + x as usize] += tl.value * scale * ratio(tl.w);
+            hist[tl.k * bins + x as usize] += tl.value * scale * weight(e);
         }
     }
 }
@@ -64,6 +64,8 @@ pub(super) struct Sink<'o> {
     pub(super) w: DVec3,
     pub(super) first: Option<First>,
     pub(super) tail: Vec<Tail>,
+    /// Per tail entry, each origin's share of it (anisotropic phase functions only; reused buffer).
+    pub(super) shares: Vec<f64>,
 }
 
 impl Tracer<'_> {
@@ -134,6 +136,11 @@ impl Tracer<'_> {
     /// share where a medium scatters (scene validation): each origin's estimate stays unbiased and gets the
     /// tails of the whole tile. Weighting by the full mixture density instead would walk the hidden
     /// geometry along every leg's whole ray; this needs only the nearest hit up to the vertex.
+    ///
+    /// With an anisotropic phase function the weights also cover the direction w that leaves the first
+    /// vertex: each origin k draws it with (or, for a connection, evaluates) its own p(d_k·w), so origin i
+    /// takes f_i·p(d_i·w) / Σ_k f_k·p(d_k·w) of each entry. Swapping the source's phase for origin i's
+    /// instead would multiply entries by p(d_i·w)/p(d_src·w), up to 180× at g = 0.7.
     pub(super) fn share_tail(
         &self,
         origins: &[Endpoint],
@@ -156,20 +163,38 @@ impl Tracer<'_> {
             .medium()
             .map(|m| m.phase)
             .filter(|p| first.normal.is_none() && !matches!(p, crate::medium::Phase::Isotropic));
+        let n = legs.len();
         if let Some(p) = phase {
-            // The source's phase at the first vertex, divided out once; each origin multiplies its own.
-            for tl in &mut sink.tail {
-                tl.value /= p.eval(own.d.dot(tl.w));
+            // Entries after the first one a path adds past its first vertex leave it in the same
+            // direction: their shares are computed once.
+            let shares = &mut sink.shares;
+            shares.clear();
+            let mut last = None;
+            for tl in &sink.tail {
+                if last == Some(tl.w) {
+                    shares.extend_from_within(shares.len() - n..);
+                    continue;
+                }
+                last = Some(tl.w);
+                let row = shares.len();
+                shares.extend(
+                    legs.iter()
+                        .map(|l| l.map_or(0.0, |l| l.f * p.eval(l.d.dot(tl.w)))),
+                );
+                let tile: f64 = shares[row..].iter().sum();
+                shares[row..].iter_mut().for_each(|v| *v /= tile);
             }
         }
         for (i, leg) in legs.iter().enumerate() {
             let Some(leg) = leg else { continue };
-            let scale = leg.f / sum_f;
             let shift = (leg.opl - own.opl) / t.bin_width_m;
             let hist = &mut sink.out[i * unit..(i + 1) * unit];
-            replay(t.bins, hist, &sink.tail, scale, shift, |w| {
-                phase.map_or(1.0, |p| p.eval(leg.d.dot(w)))
-            });
+            match phase {
+                Some(_) => replay(t.bins, hist, &sink.tail, 1.0, shift, |e| {
+                    sink.shares[e * n + i]
+                }),
+                None => replay(t.bins, hist, &sink.tail, leg.f / sum_f, shift, |_| 1.0),
+            }
         }
     }
 }
