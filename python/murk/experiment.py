@@ -64,9 +64,9 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
     """Runs the study's pending render tasks on a Dask ``client`` (a LocalCluster when None), each
     resuming from its checkpoint, then (``finish``) the rest of the study here with :func:`run`.
     Returns index.html's path, or the list of rendered task outputs when ``finish`` is False."""
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client
 
-    from .dask import render_shard
+    from .dask import local_cluster, render_shard
 
     opts = dict(scale=scale, only=only, cells=cells, seeds=seeds, shards=shards, spp=spp,
                 scenes=os.path.abspath(os.fspath(scenes)))
@@ -74,7 +74,7 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
     todo = pending(plan(out, **opts))
     own = client is None
     if own:
-        cluster = LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = local_cluster()
         client = Client(cluster)
     try:
         futures = [
