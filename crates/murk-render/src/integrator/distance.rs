@@ -194,27 +194,53 @@ impl Tracer<'_> {
     }
 
     /// Volume density with which target-side sampling from `tgt` aiming at `x` places a vertex at `y`:
-    /// a cosine-lobe direction from the target, then an equiangular distance toward `x`.
+    /// a direction from the target (`target_dir_pdf`), then an equiangular distance toward `x`.
     pub(super) fn target_pdf(&self, m: &Medium, tgt: &Endpoint, x: DVec3, y: DVec3) -> f64 {
         let v = y - tgt.p;
         let tl2 = v.length_squared();
         let tl = tl2.sqrt();
         let wl = v / tl;
-        let cos = tgt.n.dot(wl);
-        if cos <= 0.0 {
+        let p_dir = self.target_dir_pdf(m, tgt, x, wl);
+        if p_dir <= 0.0 {
             return 0.0;
         }
         let hit = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
         match m.region.clip(tgt.p, wl, hit) {
             Some((a, b)) if tl >= a && tl <= b => {
-                Equiangular::new(tgt.p, wl, x, a, b).map_or(0.0, |e| cos / PI * e.pdf(tl) / tl2)
+                Equiangular::new(tgt.p, wl, x, a, b).map_or(0.0, |e| p_dir * e.pdf(tl) / tl2)
             }
             _ => 0.0,
         }
     }
 
-    /// Target-side sampling: for each target, a medium vertex y drawn from the target's side (direction in
-    /// its cosine lobe, distance equiangular toward the segment start `from.x`) and joined to `from.x`. Its
+    /// The axis of the target-side phase lobe toward `x`, where that lobe is drawn at all.
+    fn lobe_axis(&self, tgt: &Endpoint, x: DVec3) -> Option<DVec3> {
+        let v = x - tgt.p;
+        let len = v.length();
+        (self.target_lobe > 0.0 && len > 1e-9).then(|| v / len)
+    }
+
+    /// Solid-angle density of a target-side direction `wl` from `tgt` aiming at `x`: the target's cosine
+    /// lobe, mixed (`target_lobe`) with the phase function around the direction to `x`. A vertex y on
+    /// that line joins x to the target through a forward scattering angle at y, the peak of
+    /// p(w_xy·w_yt) that neither the cosine lobe nor the path side's phase draw around its arriving
+    /// direction finds (docs/renderer-sampling.md). Directions behind the wall have density 0.
+    pub(super) fn target_dir_pdf(&self, m: &Medium, tgt: &Endpoint, x: DVec3, wl: DVec3) -> f64 {
+        let cos = tgt.n.dot(wl);
+        if cos <= 0.0 {
+            return 0.0;
+        }
+        match self.lobe_axis(tgt, x) {
+            Some(a) => {
+                let q = self.target_lobe;
+                (1.0 - q) * cos / PI + q * m.phase.eval(a.dot(wl))
+            }
+            None => cos / PI,
+        }
+    }
+
+    /// Target-side sampling: for each target, a medium vertex y drawn from the target's side (direction by
+    /// `target_dir_pdf`, distance equiangular toward the segment start `from.x`) and joined to `from.x`. Its
     /// volume density ∝ cos/|y − target|² cancels the 1/r² of the connection to the target, which the
     /// path side can only cancel along its own segment: there, the equiangular weight still grows as 1/d
     /// for segments passing at distance d from the target, the fireflies of multiply scattered fog near the
@@ -264,7 +290,16 @@ impl Tracer<'_> {
         s: &mut Sampler,
         out: &mut Sink,
     ) {
-        let wl = cosine_hemisphere(tgt.n, s.next(), s.next());
+        // The phase lobe's share draws one more number, only where it is on (other scenes keep their
+        // random streams).
+        let wl = match self.lobe_axis(tgt, from.x) {
+            Some(a) if s.next() < self.target_lobe => m.phase.sample(a, s.next(), s.next()),
+            _ => cosine_hemisphere(tgt.n, s.next(), s.next()),
+        };
+        let p_dir = self.target_dir_pdf(m, tgt, from.x, wl);
+        if p_dir <= 0.0 {
+            return;
+        }
         let u = s.next();
         let hit_l = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
         let Some((a, b)) = m.region.clip(tgt.p, wl, hit_l) else {
@@ -304,7 +339,7 @@ impl Tracer<'_> {
                     .pdf(t))
             / t2;
         let cos_l = tgt.n.dot(wl);
-        let p_l = cos_l / PI * peq / (tl * tl);
+        let p_l = p_dir * peq / (tl * tl);
         // Integrand (volume measure) over the sum of densities: the balance-weighted estimate.
         let value = from.beta * f * m.transmittance((t - m0) + (tl - a)) / t2
             * m.sigma_s()

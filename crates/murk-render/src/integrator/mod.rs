@@ -73,6 +73,8 @@ pub struct Tracer<'a> {
     q_first: f64,
     /// Direct object-return draws per path from the traced point (`draw_objects`).
     object_draws: u32,
+    /// Share of target-side directions drawn in the phase function's lobe (`target_dir_pdf`).
+    target_lobe: f64,
     /// The hidden geometry's bounds, grown by a margin: a leg outside them meets nothing.
     hidden_bounds: crate::geometry::Aabb,
     /// The last (spp, lattice generator) pair `trace` used.
@@ -115,6 +117,11 @@ impl<'a> Tracer<'a> {
             .unwrap_or(if scatters { 1.0 } else { 0.1 });
         let rr_depth = set.rr_depth.unwrap_or(if scatters { u32::MAX } else { 5 });
         let medium_objects = set.object_connections && scatters && hidden.total > 0.0;
+        let forward = scene.medium.as_ref().is_some_and(|m| {
+            m.scatters()
+                && matches!(m.phase, crate::medium::Phase::HenyeyGreenstein { g } if g >= 0.3)
+        });
+        let target_lobe = set.target_lobe.unwrap_or(if forward { 0.5 } else { 0.0 });
         let object_draws = if hidden.total > 0.0 {
             set.object_draws
         } else {
@@ -128,6 +135,7 @@ impl<'a> Tracer<'a> {
             q_first,
             rr_depth,
             object_draws,
+            target_lobe,
             hidden_bounds: {
                 let b = scene.geometry.bounds();
                 // Rounding of the leg's end points; none to cover when there is no geometry (empty box).

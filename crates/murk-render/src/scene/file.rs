@@ -128,14 +128,20 @@ pub struct RenderDef {
     /// `time_samples` for the segment leaving the traced point (default: `time_samples`): its medium
     /// vertices are the single scattering of each traced point, which no tile shares.
     pub first_time_samples: Option<u32>,
-    /// Medium vertices also drawn from the wall points' side (cosine lobe, equiangular toward the path
-    /// vertex), MIS-combined with the path side: removes the fireflies of fog paths passing near a wall point.
+    /// Medium vertices also drawn from the wall points' side (cosine lobe, or `target_lobe`; equiangular
+    /// toward the path vertex), MIS-combined with the path side: removes the fireflies of fog paths passing
+    /// near a wall point.
     pub target_sampling: bool,
     /// Segments starting within `target_split_radius` (m) of a target get up to this many target-side
     /// draws toward it (∝ radius/distance; counted as n·pdf in the balance weights). 0 or 1: off.
     pub target_split: u32,
     /// Distance (m) from a target within which `target_split` applies; 0: off.
     pub target_split_radius: f64,
+    /// Probability that a target-side draw leaves the target in the phase function's lobe around the
+    /// direction to the path vertex instead of the target's cosine lobe: in forward-scattering fog the
+    /// connections through a vertex peak where the vertex lies between the target and the path.
+    /// Default: 0.5 where the phase function is Henyey–Greenstein with g ≥ 0.3, else 0.
+    pub target_lobe: Option<f64>,
     /// Side (in grid points) of the tiles of traced points that share their paths past the first hidden
     /// vertex, where a medium scatters and every traced point has the same targets (see the integrator);
     /// at most 16. 0 or 1: off.
@@ -160,6 +166,7 @@ impl Default for RenderDef {
             target_sampling: true,
             target_split: 64,
             target_split_radius: 0.5,
+            target_lobe: None,
             share_tile: 4,
             trace_from: TraceFrom::Auto,
         }

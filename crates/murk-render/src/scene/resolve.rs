@@ -233,6 +233,12 @@ impl RenderDef {
                 format!("must be ≥ 0 m, got {}", s.target_split_radius),
             ));
         }
+        if let Some(p) = s.target_lobe.filter(|p| !(0.0..1.0).contains(p)) {
+            return Err(bad(
+                "render.target_lobe",
+                format!("must be in [0, 1), got {p}"),
+            ));
+        }
         if let Some(p) = s.first_vertex_survival.filter(|p| !(*p > 0.0 && *p <= 1.0)) {
             return Err(bad(
                 "render.first_vertex_survival",
