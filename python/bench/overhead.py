@@ -78,10 +78,10 @@ def recon_bench(runs, d):
 PY_DASK = """
 import sys, time
 import murk.dask
-from dask.distributed import Client, LocalCluster
+from dask.distributed import Client
 spp, out, shards = int(sys.argv[1]), sys.argv[2], int(sys.argv[3])
 t0 = time.perf_counter()
-cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+cluster = murk.dask.local_cluster(n_workers=2)
 client = Client(cluster)
 t1 = time.perf_counter()
 murk.dask.render("scenes/z-letter.toml", client, shards=shards, grid=64, spp=spp, threads=1, out=out)

@@ -11,7 +11,7 @@ use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
 use lattice::{mirror, reach, Fold};
 use murk_core::simd::wide;
-use murk_core::{Axis, Capture, CaptureKind, DVec3, RegularGrid, Result, Volume};
+use murk_core::{Axis, Capture, CaptureKind, DVec3, Error, RegularGrid, Result, Volume};
 use rayon::prelude::*;
 use rustfft::num_complex::{Complex32, Complex64};
 use std::ops::Range;
@@ -61,7 +61,8 @@ impl Plan {
         vol: &Volume,
         falloff: Falloff,
         lateral: Lateral,
-    ) -> Result<Plan, String> {
+    ) -> Result<Plan> {
+        let unsupported = |why: &str| Error::Unsupported(why.into());
         let regular = |p: &murk_core::PointSet| p.regular_grid();
         let (grid, side) = match kind {
             CaptureKind::Confocal => (regular(&cap.illum), GridSide::Confocal),
@@ -71,18 +72,21 @@ impl Plan {
                 Some(g) => (Some(g), GridSide::Sensor),
                 None => (regular(&cap.illum), GridSide::Illum),
             },
-            CaptureKind::Paired => return Err("paired, non-confocal capture".into()),
+            CaptureKind::Paired => return Err(unsupported("paired, non-confocal capture")),
         };
-        let grid = grid.ok_or("the wall points are not a regular planar grid")?;
+        let grid =
+            grid.ok_or_else(|| unsupported("the wall points are not a regular planar grid"))?;
         let along = |v: DVec3, axis: DVec3| {
             v.dot(axis) > 0.0 && (v - axis * v.dot(axis)).length() <= 1e-9 * v.length()
         };
         if !along(grid.step_x, DVec3::X) || !along(grid.step_y, DVec3::Y) {
-            return Err("the wall grid's axes are not world +x and +y".into());
+            return Err(unsupported("the wall grid's axes are not world +x and +y"));
         }
         let wall_z = grid.origin.z;
         if vol.z.start.min(vol.z.end) <= wall_z {
-            return Err("the volume is not entirely in front of the wall plane".into());
+            return Err(unsupported(
+                "the volume is not entirely in front of the wall plane",
+            ));
         }
         let lattice = |axis: &murk_core::Axis, o: f64, d: f64, n: usize| {
             Resampler::new(
@@ -101,10 +105,10 @@ impl Plan {
             next_fast_len(grid.ny + ry.len - 1),
         );
         if fft.fx * fft.fy > 1 << 24 {
-            return Err(format!(
+            return Err(unsupported(&format!(
                 "the convolution would need {}×{} FFTs",
                 fft.fx, fft.fy
-            ));
+            )));
         }
         let cx = grid.nx as i64 - 1 - rx.lo;
         let cy = grid.ny as i64 - 1 - ry.lo;
