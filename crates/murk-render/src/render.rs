@@ -405,11 +405,16 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
 pub fn render_key(scene: &Scene, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> String {
     let shard = shard.map_or_else(|| "none".to_string(), |(i, n)| format!("{i}/{n}"));
     format!(
-        "{}\nrender.spp_used = {spp}\nrender.seed = {seed}\nrender.shard = {shard}\nmurk_version = {}",
+        "{}\nrender.spp_used = {spp}\nrender.seed = {seed}\nrender.shard = {shard}\nrender.estimator = {ESTIMATOR_REVISION}\nmurk_version = {}",
         scene.resolved,
         env!("CARGO_PKG_VERSION")
     )
 }
+
+/// The estimator's revision, raised whenever a scene, spp and seed render other bytes than before (2:
+/// anisotropic fog's shared-tail weights and target lobe), so that checkpoints and the study's finished
+/// renders made before are refused or rendered again rather than mixed in.
+pub const ESTIMATOR_REVISION: u32 = 2;
 
 /// FNV-1a, 64 bits: a short name for a render key.
 pub fn fingerprint(key: &str) -> u64 {
