@@ -28,7 +28,7 @@ type Solve = fn(&Capture) -> murk_core::Result<Reconstruction>;
 /// found (murk's side is still measured).
 pub fn run(
     python: Option<&Path>,
-    tal_bench: &Path,
+    tal_bench: Option<&Path>,
     runs: usize,
     quiet: bool,
 ) -> anyhow::Result<()> {
@@ -42,7 +42,7 @@ pub fn run(
     let tal_repeats = runs.clamp(1, 2); // y-tal fk takes ~10 s and ~3.8 GB a run
     say(quiet, format!(
         "confocal 64×64×512 point capture (y-tal's benchmark case, point at 1 m): murk median of {runs} in-process runs, peak RSS of a `murk reconstruct` process; y-tal best of {tal_repeats} via {}",
-        tal_bench.display()
+        tal_bench.map_or("no --tal-bench".into(), |p| p.display().to_string())
     ));
     let methods: [(&str, Solve); 2] = [
         ("fk", |c| murk_baselines::fk(c, FkParams::default())),
@@ -66,9 +66,10 @@ pub fn run(
                 "{m:.0} MiB"
             ))
         );
-        let tal = match python {
-            Some(py) => y_tal(py, tal_bench, &file, name, tal_repeats),
-            None => Err("no --tal-python and no .venv/bin/python".into()),
+        let tal = match (python, tal_bench) {
+            (Some(py), Some(script)) => y_tal(py, script, &file, name, tal_repeats),
+            (None, _) => Err("no --tal-python and no .venv/bin/python".into()),
+            (_, None) => Err("no --tal-bench SCRIPT (y-tal's tal_bench.py)".into()),
         };
         match tal {
             Ok(t) => {

@@ -24,7 +24,8 @@ use std::time::Instant;
 cargo run --release -p murk-bench                               # PF on the paper's formats (and y-tal with .venv)\n  \
 cargo run --release -p murk-bench -- --runs 9 --skip-z\n  \
 cargo run --release -p murk-bench -- --render --only z-letter   # the renderer on the paper's format\n  \
-cargo run --release -p murk-bench -- --real ../shared/data/real/cdt_lindell2020"
+cargo run --release -p murk-bench -- --real ../shared/data/real/cdt_lindell2020\n  \
+cargo run --release -p murk-bench -- --confocal-vs-tal --tal-bench ../shared/reference/tal_bench.py"
 )]
 pub struct BenchArgs {
     /// Print nothing but errors.
@@ -62,12 +63,13 @@ pub struct BenchArgs {
     /// (about 5 minutes more: 10 000 spp and a 100 000-spp reference per case).
     #[arg(long)]
     pub mitransient_python: Option<PathBuf>,
-    /// mitransient's benchmark script, run with --mitransient-python.
-    #[arg(long, default_value = "../shared/reference/mitransient_bench.py")]
-    pub mitransient_bench: PathBuf,
-    /// y-tal's benchmark script (tal_bench.py), run with the y-tal Python for the confocal case.
-    #[arg(long, default_value = "../shared/reference/tal_bench.py")]
-    pub tal_bench: PathBuf,
+    /// mitransient's benchmark script (mitransient_bench.py), needed with --mitransient-python.
+    #[arg(long, value_name = "SCRIPT")]
+    pub mitransient_bench: Option<PathBuf>,
+    /// y-tal's benchmark script (tal_bench.py), run with the y-tal Python for the confocal case;
+    /// without it that case measures murk alone and says why.
+    #[arg(long, value_name = "SCRIPT")]
+    pub tal_bench: Option<PathBuf>,
 }
 
 pub use murk_render::bench::median;
@@ -167,20 +169,18 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
         return crate::real::run(dir, a.runs, quiet);
     }
     if a.render {
-        if let Some(python) = &a.mitransient_python {
-            for p in [python, &a.mitransient_bench] {
-                if !p.exists() {
-                    bail!("{}: no such file", p.display());
+        let mit = match (&a.mitransient_python, &a.mitransient_bench) {
+            (Some(python), Some(script)) => {
+                for p in [python, script] {
+                    if !p.exists() {
+                        bail!("{}: no such file", p.display());
+                    }
                 }
+                Some(crate::render::Mitransient { python, script })
             }
-        }
-        let mit = a
-            .mitransient_python
-            .as_deref()
-            .map(|python| crate::render::Mitransient {
-                python,
-                script: &a.mitransient_bench,
-            });
+            (Some(_), None) => bail!("--mitransient-python needs --mitransient-bench SCRIPT"),
+            (None, _) => None,
+        };
         return crate::render::run(&a.scenes, a.runs, a.only.as_deref(), mit.as_ref(), quiet);
     }
     let python = a
@@ -188,7 +188,7 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
         .clone()
         .or_else(|| Some(PathBuf::from(".venv/bin/python")).filter(|p| p.exists()));
     if a.confocal_vs_tal {
-        return crate::confocal::run(python.as_deref(), &a.tal_bench, a.runs, quiet);
+        return crate::confocal::run(python.as_deref(), a.tal_bench.as_deref(), a.runs, quiet);
     }
     if !a.skip_z {
         z_letter(a.runs, quiet)?;
@@ -196,7 +196,7 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
     match python {
         Some(py) => {
             versus_tal(&py, a.runs, quiet)?;
-            crate::confocal::run(Some(&py), &a.tal_bench, a.runs, quiet)?;
+            crate::confocal::run(Some(&py), a.tal_bench.as_deref(), a.runs, quiet)?;
         }
         None => say(
             quiet,
