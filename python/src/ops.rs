@@ -178,16 +178,7 @@ fn study_options(args: StudyArgs) -> PyResult<StudyOptions> {
         scenes,
     } = args;
     Ok(StudyOptions {
-        scale: match scale.as_str() {
-            "quick" => Scale::Quick,
-            "paper" => Scale::Paper,
-            s => {
-                return Err(crate::error(
-                    "InputError",
-                    format!("scale '{s}': expected quick or paper"),
-                ))
-            }
-        },
+        scale: Scale::parse(&scale).map_err(to_py)?,
         only: only
             .iter()
             .map(|s| Figure::parse(s))

@@ -405,10 +405,10 @@ fn assert_setting_keeps_the_expectation(
 
 /// Tiles of laser points that share their paths past the first hidden vertex (`share_tile`) keep every
 /// histogram's expectation: a 4 × 4 laser grid in forward-scattering fog (the phase function enters the
-/// tile's weights at the first vertex), with first vertices in the fog and on the T letter and a reflective relay; sums agree
-/// within 5 % (seed noise of one sum: ~1 %; at 60 000 spp, 5 % failed for about one seed in three; at
-/// 480 000 spp every sum agreed within 1.2 %) and the difference stays within the seed noise of
-/// unshared rendering.
+/// tile's weights at the first vertex), with first vertices in the fog and on the T letter and a
+/// reflective relay; sums agree within 5 % (seed noise of one sum: ~1 %; at 60 000 spp, 5 % failed for
+/// about one seed in three; at 480 000 spp every sum agreed within 1.2 %) and the difference stays
+/// within the seed noise of unshared rendering.
 #[test]
 fn shared_tails_keep_the_expectation() {
     assert_setting_keeps_the_expectation(

@@ -16,6 +16,19 @@ pub enum Scale {
     Paper,
 }
 
+impl Scale {
+    /// `quick` or `paper`.
+    pub fn parse(s: &str) -> Result<Scale> {
+        match s.trim() {
+            "quick" => Ok(Scale::Quick),
+            "paper" => Ok(Scale::Paper),
+            _ => Err(Error::param(format!(
+                "scale '{s}': expected quick or paper"
+            ))),
+        }
+    }
+}
+
 /// The paper's figures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]

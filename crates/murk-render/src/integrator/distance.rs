@@ -200,7 +200,7 @@ impl Tracer<'_> {
         let tl2 = v.length_squared();
         let tl = tl2.sqrt();
         let wl = v / tl;
-        let p_dir = self.target_dir_pdf(m, tgt, x, wl);
+        let p_dir = self.target_dir_pdf(m, tgt, self.lobe_axis(tgt, x), wl);
         if p_dir <= 0.0 {
             return 0.0;
         }
@@ -220,17 +220,18 @@ impl Tracer<'_> {
         (self.target_lobe > 0.0 && len > 1e-9).then(|| v / len)
     }
 
-    /// Solid-angle density of a target-side direction `wl` from `tgt` aiming at `x`: the target's cosine
-    /// lobe, mixed (`target_lobe`) with the phase function around the direction to `x`. A vertex y on
+    /// Solid-angle density of a target-side direction `wl` from `tgt`: the target's cosine lobe, mixed
+    /// (`target_lobe`) with the phase function around `axis`, the direction to the path vertex x
+    /// (`lobe_axis`). A vertex y on
     /// that line joins x to the target through a forward scattering angle at y, the peak of
     /// p(w_xy·w_yt) that neither the cosine lobe nor the path side's phase draw around its arriving
     /// direction finds (docs/renderer-sampling.md). Directions behind the wall have density 0.
-    pub(super) fn target_dir_pdf(&self, m: &Medium, tgt: &Endpoint, x: DVec3, wl: DVec3) -> f64 {
+    fn target_dir_pdf(&self, m: &Medium, tgt: &Endpoint, axis: Option<DVec3>, wl: DVec3) -> f64 {
         let cos = tgt.n.dot(wl);
         if cos <= 0.0 {
             return 0.0;
         }
-        match self.lobe_axis(tgt, x) {
+        match axis {
             Some(a) => {
                 let q = self.target_lobe;
                 (1.0 - q) * cos / PI + q * m.phase.eval(a.dot(wl))
@@ -292,11 +293,12 @@ impl Tracer<'_> {
     ) {
         // The phase lobe's share draws one more number, only where it is on (other scenes keep their
         // random streams).
-        let wl = match self.lobe_axis(tgt, from.x) {
+        let axis = self.lobe_axis(tgt, from.x);
+        let wl = match axis {
             Some(a) if s.next() < self.target_lobe => m.phase.sample(a, s.next(), s.next()),
             _ => cosine_hemisphere(tgt.n, s.next(), s.next()),
         };
-        let p_dir = self.target_dir_pdf(m, tgt, from.x, wl);
+        let p_dir = self.target_dir_pdf(m, tgt, axis, wl);
         if p_dir <= 0.0 {
             return;
         }

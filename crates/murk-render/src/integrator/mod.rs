@@ -117,10 +117,9 @@ impl<'a> Tracer<'a> {
             .unwrap_or(if scatters { 1.0 } else { 0.1 });
         let rr_depth = set.rr_depth.unwrap_or(if scatters { u32::MAX } else { 5 });
         let medium_objects = set.object_connections && scatters && hidden.total > 0.0;
-        let forward = scene.medium.as_ref().is_some_and(|m| {
-            m.scatters()
-                && matches!(m.phase, crate::medium::Phase::HenyeyGreenstein { g } if g >= 0.3)
-        });
+        let forward = scatters
+            && matches!(scene.medium.map(|m| m.phase),
+                Some(crate::medium::Phase::HenyeyGreenstein { g }) if g >= 0.3);
         let target_lobe = set.target_lobe.unwrap_or(if forward { 0.5 } else { 0.0 });
         let object_draws = if hidden.total > 0.0 {
             set.object_draws
@@ -210,9 +209,8 @@ impl<'a> Tracer<'a> {
             w: DVec3::ZERO,
             first: None,
             tail: Vec::new(),
-            shares: Vec::new(),
         };
-        let mut legs = Vec::new();
+        let mut scratch = TileScratch::default();
         let g = {
             // Every unit of a render has the same spp: search once.
             let mut last = self.lattice.lock().unwrap_or_else(|e| e.into_inner());
@@ -235,7 +233,7 @@ impl<'a> Tracer<'a> {
                 sink.tail.clear();
                 self.path(origin, targets, u, s, &mut sink, &mut seg);
                 if !sink.tail.is_empty() {
-                    self.share_tail(origins, i, &mut sink, &mut legs);
+                    self.share_tail(origins, i, &mut sink, &mut scratch);
                 }
                 jg += g;
                 if jg >= spp {

@@ -64,8 +64,16 @@ pub(super) struct Sink<'o> {
     pub(super) w: DVec3,
     pub(super) first: Option<First>,
     pub(super) tail: Vec<Tail>,
-    /// Per tail entry, each origin's share of it (anisotropic phase functions only; reused buffer).
-    pub(super) shares: Vec<f64>,
+}
+
+/// `share_tail`'s buffers, reused from path to path: each origin's leg to the first vertex and, with an
+/// anisotropic phase function, one row of the origins' shares per distinct direction leaving that vertex,
+/// with each tail entry's row.
+#[derive(Default)]
+pub(super) struct TileScratch {
+    legs: Vec<Option<Leg>>,
+    shares: Vec<f64>,
+    row: Vec<usize>,
 }
 
 impl Tracer<'_> {
@@ -146,9 +154,10 @@ impl Tracer<'_> {
         origins: &[Endpoint],
         src: usize,
         sink: &mut Sink,
-        legs: &mut Vec<Option<Leg>>,
+        scratch: &mut TileScratch,
     ) {
         let Some(first) = sink.first else { return };
+        let TileScratch { legs, shares, row } = scratch;
         legs.clear();
         legs.extend(origins.iter().map(|o| self.leg(o, &first)));
         let sum_f: f64 = legs.iter().flatten().map(|l| l.f).sum();
@@ -166,23 +175,22 @@ impl Tracer<'_> {
         let n = legs.len();
         if let Some(p) = phase {
             // Entries after the first one a path adds past its first vertex leave it in the same
-            // direction: their shares are computed once.
-            let shares = &mut sink.shares;
+            // direction: they share one row.
             shares.clear();
+            row.clear();
             let mut last = None;
             for tl in &sink.tail {
-                if last == Some(tl.w) {
-                    shares.extend_from_within(shares.len() - n..);
-                    continue;
+                if last != Some(tl.w) {
+                    last = Some(tl.w);
+                    let start = shares.len();
+                    shares.extend(
+                        legs.iter()
+                            .map(|l| l.map_or(0.0, |l| l.f * p.eval(l.d.dot(tl.w)))),
+                    );
+                    let tile: f64 = shares[start..].iter().sum();
+                    shares[start..].iter_mut().for_each(|v| *v /= tile);
                 }
-                last = Some(tl.w);
-                let row = shares.len();
-                shares.extend(
-                    legs.iter()
-                        .map(|l| l.map_or(0.0, |l| l.f * p.eval(l.d.dot(tl.w)))),
-                );
-                let tile: f64 = shares[row..].iter().sum();
-                shares[row..].iter_mut().for_each(|v| *v /= tile);
+                row.push(shares.len() / n - 1);
             }
         }
         for (i, leg) in legs.iter().enumerate() {
@@ -191,7 +199,7 @@ impl Tracer<'_> {
             let hist = &mut sink.out[i * unit..(i + 1) * unit];
             match phase {
                 Some(_) => replay(t.bins, hist, &sink.tail, 1.0, shift, |e| {
-                    sink.shares[e * n + i]
+                    shares[row[e] * n + i]
                 }),
                 None => replay(t.bins, hist, &sink.tail, leg.f / sum_f, shift, |_| 1.0),
             }
