@@ -152,17 +152,22 @@ def render(
     >>> cap = murk.render("scenes/z-letter.toml", grid=32, spp=64, set={"medium.albedo": 0.83})
     >>> part = murk.render("scenes/z-letter.toml", grid=32, shard=(0, 4), checkpoint="p0.ckpt")
     """
+    path, args = _render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
+                              checkpoint=checkpoint, checkpoint_every=checkpoint_every, out=out)
+    return _murk.render(path, args, threads, _progress(progress, "render"))
+
+
+def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, checkpoint_every=60.0,
+                 out=None) -> Tuple[str, dict]:
+    """The scene's path and the keywords ``_murk``'s render calls take; a scene given as TOML text
+    is read as if from ``./scene.toml``."""
     path, text = os.fspath(scene), None
     if "\n" in path:
         path, text = os.path.join(os.getcwd(), "scene.toml"), path
-    return _murk.render(
-        path,
-        dict(text=text, spp=spp, seed=seed, shard=None if shard is None else tuple(shard),
-             set=_overrides(set), grid=grid, bins=bins,
-             checkpoint=None if checkpoint is None else os.fspath(checkpoint),
-             checkpoint_every=checkpoint_every, out=None if out is None else os.fspath(out)),
-        threads, _progress(progress, "render"),
-    )
+    return path, dict(text=text, spp=spp, seed=seed, shard=None if shard is None else tuple(shard),
+                      set=_overrides(set), grid=grid, bins=bins,
+                      checkpoint=None if checkpoint is None else os.fspath(checkpoint),
+                      checkpoint_every=checkpoint_every, out=None if out is None else os.fspath(out))
 
 
 def merge(parts: Sequence[Union[Capture, str, os.PathLike]]) -> Capture:

@@ -1,6 +1,7 @@
-"""Renders spread over a Dask cluster: one task per shard, merged into the bytes an unsharded render
-gives. Each task writes its shard with a checkpoint next to it, so a task retried after its worker
-died resumes where the checkpoint left it.
+"""Renders spread over a Dask cluster: one task per shard, assembled into the bytes an unsharded render
+gives. Each task renders its shard into a checkpoint file that holds only that shard's histograms, so
+a task retried after its worker died resumes where the checkpoint left it, and a finished one is
+reused.
 
 >>> import murk.dask
 >>> cap = murk.dask.render("scenes/z-letter.toml", shards=8, grid=64)          # a LocalCluster
@@ -44,14 +45,22 @@ def render_shard(
     threads=None,
     checkpoint_every=60.0,
 ) -> str:
-    """One Dask task: renders shard ``(i, n)`` of ``scene`` into ``part`` (kept if already there),
-    resuming from ``part + ".ckpt"``; returns ``part``."""
+    """One Dask task: renders shard ``(i, n)`` of ``scene`` into the checkpoint ``part``, which holds
+    every unit of the shard when this returns (at once if it already did); returns ``part``."""
     part = os.fspath(part)
-    if not os.path.exists(part):
-        murk.render(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
-                    checkpoint=part + ".ckpt", checkpoint_every=checkpoint_every, out=part,
-                    threads=threads)
+    path, args = murk._render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid,
+                                   bins=bins, checkpoint=part, checkpoint_every=checkpoint_every)
+    murk._murk.render_part(path, args, threads, None)
     return part
+
+
+def assemble(scene, parts, *, spp=None, seed=0, set=None, grid=None, bins=None) -> "murk.Capture":
+    """The capture an unsharded render gives, bit for bit, from the parts ``render_shard`` completed:
+    ``parts[i]`` holds shard ``(i, len(parts))`` of ``scene`` with the same keywords. A part of another
+    render, or one with units missing, raises ``murk.FormatError`` naming its file."""
+    path, args = murk._render_args(scene, spp=spp, seed=seed, shard=None, set=set, grid=grid,
+                                   bins=bins)
+    return murk._murk.assemble(path, args, [os.fspath(p) for p in parts])
 
 
 def render(
@@ -70,12 +79,13 @@ def render(
     checkpoint_every: float = 60.0,
     retries: int = 3,
 ) -> "murk.Capture":
-    """Renders ``scene`` as ``shards`` Dask tasks on ``client`` and merges them: the same bytes as
+    """Renders ``scene`` as ``shards`` Dask tasks on ``client`` and assembles them: the same bytes as
     ``murk.render(scene, ...)`` unsharded. Without a client a LocalCluster of one single-threaded
-    worker per core runs it (at most ``shards`` workers). ``workdir`` keeps the parts and their
-    checkpoints (default: a temporary folder, removed afterwards); a part already there is reused.
+    worker per core runs it (at most ``shards`` workers). ``workdir`` keeps the parts, one
+    checkpoint file per shard (default: a temporary folder, removed afterwards); a complete part
+    already there is reused, an incomplete one resumed.
     ``threads``: renderer threads per task (default: all cores of the worker, or one per worker on
-    the LocalCluster). ``out``: also write the merged capture there.
+    the LocalCluster). ``out``: also write the assembled capture there.
     """
     from dask.distributed import Client
 
@@ -96,13 +106,13 @@ def render(
     try:
         futures = [
             client.submit(render_shard, scene, (i, shards),
-                          os.path.abspath(os.path.join(workdir, f"part{i}.h5")), spp=spp,
+                          os.path.abspath(os.path.join(workdir, f"part{i}.ckpt")), spp=spp,
                           seed=seed, set=set, grid=grid, bins=bins, threads=threads,
                           checkpoint_every=checkpoint_every, retries=retries, pure=False)
             for i in range(shards)
         ]
         parts = client.gather(futures)
-        cap = murk.merge(parts)
+        cap = assemble(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins)
         if out is not None:
             murk.write_capture(out, cap)
         return cap

@@ -59,6 +59,17 @@ def pending(tasks: Sequence[dict]) -> List[dict]:
             if not os.path.exists(t["out"]) and not os.path.exists(t["capture_out"])]
 
 
+def render_task(task: dict, threads=None) -> str:
+    """One Dask task: the study's render ``task`` as its ``murk render`` command runs it, into the
+    capture file ``task["out"]`` (kept if already there), resuming from ``out + ".ckpt"``; returns
+    ``task["out"]``."""
+    out = os.fspath(task["out"])
+    if not os.path.exists(out):
+        murk.render(task["scene"], spp=task["spp"], seed=task["seed"], shard=task["shard"],
+                    set=task["set"], checkpoint=out + ".ckpt", out=out, threads=threads)
+    return out
+
+
 def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, shards=1, spp=None,
              scenes="scenes", threads=None, finish=True):
     """Runs the study's pending render tasks on a Dask ``client`` (a LocalCluster when None), each
@@ -66,7 +77,7 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
     Returns index.html's path, or the list of rendered task outputs when ``finish`` is False."""
     from dask.distributed import Client
 
-    from .dask import local_cluster, render_shard
+    from .dask import local_cluster
 
     opts = dict(scale=scale, only=only, cells=cells, seeds=seeds, shards=shards, spp=spp,
                 scenes=os.path.abspath(os.fspath(scenes)))
@@ -78,8 +89,7 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
         client = Client(cluster)
     try:
         futures = [
-            client.submit(render_shard, t["scene"], t["shard"], t["out"], spp=t["spp"],
-                          seed=t["seed"], set=t["set"], threads=threads, retries=3, pure=False,
+            client.submit(render_task, t, threads=threads, retries=3, pure=False,
                           key=f"murk-render-{t['id']}")
             for t in todo
         ]

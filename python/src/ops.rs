@@ -102,10 +102,7 @@ pub fn render(
     } = args;
     let ov = Overrides { grid, bins, set };
     let cap = compute(py, progress, threads, |t: &Ticker| {
-        let scene = match &text {
-            Some(text) => Scene::from_str(text, &scene, &ov)?,
-            None => Scene::load(&scene, &ov)?,
-        };
+        let scene = load_scene(&scene, &text, &ov)?;
         let plan = Plan::new(&scene);
         let opt = RenderOptions {
             spp: spp.unwrap_or(scene.settings.spp),
@@ -127,6 +124,68 @@ pub fn render(
             let _ = std::fs::remove_file(c);
         }
         Ok(cap)
+    })?;
+    Ok(Capture { cap })
+}
+
+fn load_scene(path: &Path, text: &Option<String>, ov: &Overrides) -> murk_core::Result<Scene> {
+    match text {
+        Some(text) => Scene::from_str(text, path, ov),
+        None => Scene::load(path, ov),
+    }
+}
+
+/// Shard `args.shard` of a scene rendered into its checkpoint `args.checkpoint` alone, which then
+/// holds every unit of the shard (returns at once when it already does): a part for `assemble`.
+#[pyfunction]
+#[pyo3(signature = (scene, args, threads, progress))]
+pub fn render_part(
+    py: Python<'_>,
+    scene: PathBuf,
+    args: RenderArgs,
+    threads: Option<usize>,
+    progress: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    let ov = Overrides {
+        grid: args.grid,
+        bins: args.bins,
+        set: args.set,
+    };
+    compute(py, progress, threads, |t: &Ticker| {
+        let scene = load_scene(&scene, &args.text, &ov)?;
+        let opt = RenderOptions {
+            spp: args.spp.unwrap_or(scene.settings.spp),
+            seed: args.seed,
+            shard: args.shard,
+            checkpoint: args.checkpoint.clone(),
+            checkpoint_every: Duration::from_secs_f64(args.checkpoint_every.max(0.0)),
+        };
+        Plan::new(&scene).render_part(
+            &opt,
+            &|done, total| t.count(done as u64, total as u64),
+            t.stop(),
+        )
+    })
+}
+
+/// The capture an unsharded render gives, bit for bit, from the parts `render_part` completed
+/// (`parts[i]` holds shard i of `len(parts)`), for the same scene, overrides, spp and seed.
+#[pyfunction]
+#[pyo3(signature = (scene, args, parts))]
+pub fn assemble(
+    py: Python<'_>,
+    scene: PathBuf,
+    args: RenderArgs,
+    parts: Vec<PathBuf>,
+) -> PyResult<Capture> {
+    let ov = Overrides {
+        grid: args.grid,
+        bins: args.bins,
+        set: args.set,
+    };
+    let cap = compute(py, None, None, |_| {
+        let scene = load_scene(&scene, &args.text, &ov)?;
+        Plan::new(&scene).assemble(args.spp.unwrap_or(scene.settings.spp), args.seed, &parts)
     })?;
     Ok(Capture { cap })
 }

@@ -46,27 +46,34 @@ def test_two_worker_render_equals_the_unsharded_cli_render(client, want, tmp_pat
 
 def test_a_killed_worker_is_retried_and_resumes(client, want, tmp_path):
     work = tmp_path / "parts"
-    futures = [client.submit(murk.dask.render_shard, str(Z), (i, 2), str(work / f"part{i}.h5"),
+    os.makedirs(work, exist_ok=True)
+    part0 = work / "part0.ckpt"
+    futures = [client.submit(murk.dask.render_shard, str(Z), (i, 2), str(work / f"part{i}.ckpt"),
                              threads=1, checkpoint_every=0.0, retries=3, pure=False, **KW)
                for i in range(2)]
-    os.makedirs(work, exist_ok=True)
-    ckpt = work / "part0.h5.ckpt"
     deadline = time.time() + 60
-    while not (ckpt.exists() and ckpt.stat().st_size > 4096):
+    while not (part0.exists() and part0.stat().st_size > 4096):
         assert time.time() < deadline, "shard 0 never wrote a checkpoint"
         time.sleep(0.05)
     # The worker running shard 0 is the one whose task is processing it.
     processing = client.processing()
     addr = next(a for a, keys in processing.items() if futures[0].key in keys)
     pid = client.run(os.getpid, workers=[addr])[addr]
-    units_at_kill = ckpt.stat().st_size
-    unfinished = not (work / "part0.h5").exists()
+    at_kill = part0.read_bytes()
     os.kill(pid, signal.SIGKILL)
-    assert unfinished, "shard 0 finished before the kill; the test proved nothing"
 
     parts = client.gather(futures)
-    merged = murk.merge(parts)
-    murk.write_capture(tmp_path / "z.h5", merged)
+    assert parts == [str(work / "part0.ckpt"), str(work / "part1.ckpt")]
+    assert len(at_kill) < part0.stat().st_size, "shard 0 finished before the kill; the test proved nothing"
+    cap = murk.dask.assemble(Z, parts, **KW)
+    murk.write_capture(tmp_path / "z.h5", cap)
     assert (tmp_path / "z.h5").read_bytes() == want
-    assert units_at_kill > 0 and not ckpt.exists()
-    assert (work / "part0.h5").exists()
+
+
+def test_a_part_of_another_render_is_refused(client, tmp_path):
+    part = murk.dask.render_shard(str(Z), (0, 1), tmp_path / "p.ckpt", threads=1, grid=4, spp=8)
+    cap = murk.dask.assemble(Z, [part], grid=4, spp=8)
+    one = murk.render(Z, grid=4, spp=8, threads=1)
+    assert cap.H.any() and cap.H.tobytes() == one.H.tobytes()
+    with pytest.raises(murk.FormatError, match=r"p\.ckpt.*render\.seed"):
+        murk.dask.assemble(Z, [part], grid=4, spp=8, seed=3)

@@ -1,4 +1,4 @@
-//! Work units, parallel rendering, checkpoints, shards and merging.
+//! Work units, parallel rendering, checkpoints, shards, merging and assembling checkpoint parts.
 //!
 //! A work unit is a tile of traced wall points (laser points when tracing from lasers; one point unless
 //! they share path tails, `share_tile`) with its own PCG stream (seed, unit index), rendered by one
@@ -227,13 +227,90 @@ impl<'a> Plan<'a> {
     }
 
     /// As [`Plan::render`], but no unit starts once `stop` is set (the Python module's Ctrl-C): the
-    /// call then returns an error, and the checkpoint keeps what its last write held.
+    /// call then returns an error, and the checkpoint keeps every unit finished before it.
     pub fn render_until(
         &self,
         opt: &RenderOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
         stop: &AtomicBool,
     ) -> Result<Capture> {
+        let mut cap = self.empty_capture(scene_info(self.scene, opt.spp, opt.seed, opt.shard));
+        self.run(opt, progress, stop, Some(&mut cap.h))?;
+        self.finish(&mut cap);
+        Ok(cap)
+    }
+
+    /// Renders shard `opt.shard` into its checkpoint alone, which holds every unit of the shard when
+    /// this returns: a part for [`Plan::assemble`]. Unlike a part of [`Plan::render`] it holds only its
+    /// own histograms, and nothing is written twice. A complete checkpoint returns at once.
+    pub fn render_part(
+        &self,
+        opt: &RenderOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+        stop: &AtomicBool,
+    ) -> Result<()> {
+        if opt.checkpoint.is_none() || opt.shard.is_none() {
+            return Err(Error::param(
+                "a part render needs a shard and a checkpoint file to hold it",
+            ));
+        }
+        self.run(opt, progress, stop, None)
+    }
+
+    /// The capture an unsharded render of `spp` and `seed` gives, bit for bit, from the checkpoints
+    /// that [`Plan::render_part`] completed: `parts[i]` holds shard (i, parts.len()). A part of another
+    /// render, or one with units missing, is refused naming its file.
+    pub fn assemble(&self, spp: u64, seed: u64, parts: &[PathBuf]) -> Result<Capture> {
+        let n = parts.len();
+        if n == 0 {
+            return Err(Error::param("assembling needs at least one part"));
+        }
+        let mut cap = self.empty_capture(scene_info(self.scene, spp, seed, None));
+        let mut mine = vec![false; self.n_units()];
+        for (i, path) in parts.iter().enumerate() {
+            let shard = Some((i, n));
+            let units = self.shard_units(shard);
+            units.iter().for_each(|&u| mine[u] = true);
+            let mut found = 0;
+            let key = render_key(self.scene, spp, seed, shard);
+            read_checkpoint(path, &key, self.unit_len(), self.n_units(), |u, buf| {
+                // Each unit once: a unit of another shard or a repeat is not stored again.
+                if std::mem::replace(&mut mine[u], false) {
+                    self.store(&mut cap.h, u, buf);
+                    found += 1;
+                }
+            })?
+            .ok_or_else(|| {
+                Error::io(
+                    path,
+                    std::io::Error::new(std::io::ErrorKind::NotFound, "no such part"),
+                )
+            })?;
+            if found != units.len() {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "part {i}/{n} is incomplete: {found} of its {} units",
+                        units.len()
+                    ),
+                ));
+            }
+        }
+        self.finish(&mut cap);
+        Ok(cap)
+    }
+
+    /// Renders the units of `opt.shard` that its checkpoint does not hold yet, into `h` when given.
+    /// A capture's checkpoint is deleted by its caller once the capture is written, so the units
+    /// left pending by the interval are appended only when the render stops early (to resume from) or
+    /// when there is no `h` (the checkpoint is then the result).
+    fn run(
+        &self,
+        opt: &RenderOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+        stop: &AtomicBool,
+        mut h: Option<&mut [f32]>,
+    ) -> Result<()> {
         if opt.spp == 0 {
             return Err(Error::param("spp must be at least 1"));
         }
@@ -242,7 +319,6 @@ impl<'a> Plan<'a> {
                 return Err(Error::param(format!("shard {i}/{n}: need 0 ≤ i < N")));
             }
         }
-        let mut cap = self.empty_capture(scene_info(self.scene, opt.spp, opt.seed, opt.shard));
         let units = self.shard_units(opt.shard);
         let total = units.len();
         let ckpt = match &opt.checkpoint {
@@ -250,6 +326,7 @@ impl<'a> Plan<'a> {
                 p,
                 &render_key(self.scene, opt.spp, opt.seed, opt.shard),
                 self.unit_len(),
+                self.n_units(),
             )?),
             None => None,
         };
@@ -258,38 +335,43 @@ impl<'a> Plan<'a> {
         units.iter().for_each(|&u| mine[u] = true);
         if let Some(c) = &ckpt {
             for (u, buf) in &c.loaded {
-                if mine.get(*u) == Some(&true) {
-                    self.store(&mut cap.h, *u, buf);
+                if mine[*u] {
+                    if let Some(h) = h.as_deref_mut() {
+                        self.store(h, *u, buf);
+                    }
                     done[*u] = true;
                 }
             }
         }
         let todo: Vec<usize> = units.iter().copied().filter(|u| !done[*u]).collect();
         progress(total - todo.len(), total);
+        let part = h.is_none();
         // Each finished unit is stored at once, and the first to finish after the interval appends
         // everything pending to the checkpoint: the interval is honoured to within one unit.
         struct Shared<'c> {
-            h: &'c mut [f32],
+            h: Option<&'c mut [f32]>,
             done: usize,
             pending: Vec<(usize, Vec<f32>)>,
             last: Instant,
             ckpt: Option<Checkpoint>,
         }
         let shared = Mutex::new(Shared {
-            h: &mut cap.h,
+            h,
             done: total - todo.len(),
             pending: Vec::new(),
             last: Instant::now(),
             ckpt,
         });
-        todo.par_iter().try_for_each(|&u| -> Result<()> {
+        let result = todo.par_iter().try_for_each(|&u| -> Result<()> {
             if stop.load(Ordering::Relaxed) {
                 return Err(Error::param("render stopped"));
             }
             let buf = self.render_unit(u, opt.spp, opt.seed);
             let mut guard = shared.lock().unwrap_or_else(|e| e.into_inner());
             let s = &mut *guard;
-            self.store(s.h, u, &buf);
+            if let Some(h) = s.h.as_deref_mut() {
+                self.store(h, u, &buf);
+            }
             s.done += 1;
             progress(s.done, total);
             if let Some(c) = s.ckpt.as_mut() {
@@ -301,18 +383,25 @@ impl<'a> Plan<'a> {
                 }
             }
             Ok(())
-        })?;
+        });
         let s = shared.into_inner().unwrap_or_else(|e| e.into_inner());
-        if let Some(mut c) = s.ckpt {
-            c.append(&s.pending)?;
+        if let (true, Some(mut c)) = (result.is_err() || part, s.ckpt) {
+            let flushed = c.append(&s.pending);
+            // A stop's own error says more than a failed flush after it.
+            result.and(flushed)
+        } else {
+            result
         }
+    }
+
+    /// What a capture gets once all its units are in: the devices' radiometry, if the scene asks.
+    fn finish(&self, cap: &mut Capture) {
         let spec = &self.scene.capture;
         if let (true, Some(laser), Some(spad)) =
             (spec.device_radiometry, spec.laser_xyz, spec.sensor_xyz)
         {
             cap.apply_device_radiometry(laser, spad);
         }
-        Ok(cap)
     }
 
     fn unit_len(&self) -> usize {
@@ -435,39 +524,73 @@ struct Checkpoint {
 
 const MAGIC: &[u8; 8] = b"MURKCKP2";
 
-impl Checkpoint {
-    fn open(path: &Path, key: &str, unit_len: usize) -> Result<Self> {
-        let io = |e| Error::io(path, e);
-        let mut header = Vec::with_capacity(32 + key.len());
-        header.extend_from_slice(MAGIC);
-        header.extend_from_slice(&fingerprint(key).to_le_bytes());
-        header.extend_from_slice(&(unit_len as u64).to_le_bytes());
-        header.extend_from_slice(&(key.len() as u64).to_le_bytes());
-        header.extend_from_slice(key.as_bytes());
-        let mut loaded = Vec::new();
-        let mut valid_len = 0u64;
-        if let Ok(mut f) = std::fs::File::open(path) {
-            let mut bytes = Vec::new();
-            f.read_to_end(&mut bytes).map_err(io)?;
-            if !bytes.is_empty() && !bytes.starts_with(&header) {
-                return Err(Error::format(path, refusal(&bytes, key)));
-            }
-            if !bytes.is_empty() {
-                let rec = 8 + 4 * unit_len;
-                let mut off = header.len();
-                while off + rec <= bytes.len() {
-                    let u = u64::from_le_bytes(bytes[off..off + 8].try_into().expect("8 bytes"))
-                        as usize;
-                    let vals = bytes[off + 8..off + rec]
-                        .chunks_exact(4)
-                        .map(|b| f32::from_le_bytes(b.try_into().expect("4 bytes")))
-                        .collect();
-                    loaded.push((u, vals));
-                    off += rec;
-                }
-                valid_len = off as u64;
-            }
+/// A checkpoint's header: magic, fingerprint, unit length, key length and the render key.
+fn header(key: &str, unit_len: usize) -> Vec<u8> {
+    let mut header = Vec::with_capacity(32 + key.len());
+    header.extend_from_slice(MAGIC);
+    header.extend_from_slice(&fingerprint(key).to_le_bytes());
+    header.extend_from_slice(&(unit_len as u64).to_le_bytes());
+    header.extend_from_slice(&(key.len() as u64).to_le_bytes());
+    header.extend_from_slice(key.as_bytes());
+    header
+}
+
+/// Calls `unit(u, values)` for each whole record of the checkpoint at `path`, after checking that its
+/// header is this render's; returns the length of the valid prefix, or `None` when there is no file.
+/// A unit index beyond `units` is a format error.
+fn read_checkpoint(
+    path: &Path,
+    key: &str,
+    unit_len: usize,
+    units: usize,
+    mut unit: impl FnMut(usize, &[f32]),
+) -> Result<Option<u64>> {
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return Ok(None);
+    };
+    let mut bytes = Vec::new();
+    f.read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+    if bytes.is_empty() {
+        return Ok(Some(0));
+    }
+    let header = header(key, unit_len);
+    if !bytes.starts_with(&header) {
+        return Err(Error::format(path, refusal(&bytes, key)));
+    }
+    let rec = 8 + 4 * unit_len;
+    let mut vals = vec![0f32; unit_len];
+    let mut off = header.len();
+    while off + rec <= bytes.len() {
+        let u = u64::from_le_bytes(bytes[off..off + 8].try_into().expect("8 bytes"));
+        let u = usize::try_from(u)
+            .ok()
+            .filter(|&u| u < units)
+            .ok_or_else(|| {
+                Error::format(
+                    path,
+                    format!("unit {u} recorded, but the render has {units}"),
+                )
+            })?;
+        for (v, b) in vals
+            .iter_mut()
+            .zip(bytes[off + 8..off + rec].chunks_exact(4))
+        {
+            *v = f32::from_le_bytes(b.try_into().expect("4 bytes"));
         }
+        unit(u, &vals);
+        off += rec;
+    }
+    Ok(Some(off as u64))
+}
+
+impl Checkpoint {
+    fn open(path: &Path, key: &str, unit_len: usize, units: usize) -> Result<Self> {
+        let io = |e| Error::io(path, e);
+        let mut loaded = Vec::new();
+        let valid_len = read_checkpoint(path, key, unit_len, units, |u, vals| {
+            loaded.push((u, vals.to_vec()))
+        })?
+        .unwrap_or(0);
         let mut file = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
@@ -475,7 +598,7 @@ impl Checkpoint {
             .map_err(io)?;
         if valid_len == 0 {
             file.set_len(0).map_err(io)?;
-            file.write_all(&header).map_err(io)?;
+            file.write_all(&header(key, unit_len)).map_err(io)?;
         } else {
             // Drop a torn trailing record so appends stay aligned.
             file.set_len(valid_len).map_err(io)?;

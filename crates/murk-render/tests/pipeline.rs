@@ -103,6 +103,110 @@ fn seeded_render_is_bitwise_reproducible() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Parts that hold only their checkpoint assemble into the unsharded render's bytes; an incomplete
+/// part, a part of another seed and a missing part are refused naming the file; a stopped render keeps
+/// every unit it finished, whatever the interval.
+#[test]
+fn checkpoint_parts_assemble_bitwise() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let s = scene();
+    let plan = Plan::new(&s);
+    let one = plan.render(&opts(None, None), &|_, _| {}).unwrap();
+    let dir = std::env::temp_dir().join(format!("murk-render-parts-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let never = AtomicBool::new(false);
+    let part = |i: usize, n: usize| {
+        let mut o = opts(Some((i, n)), Some(dir.join(format!("p{i}of{n}.ckpt"))));
+        // A long interval: the part must still hold every unit when it returns.
+        o.checkpoint_every = Duration::from_secs(3600);
+        o
+    };
+    let paths: Vec<PathBuf> = (0..3)
+        .map(|i| {
+            let o = part(i, 3);
+            plan.render_part(&o, &|_, _| {}, &never).unwrap();
+            o.checkpoint.unwrap()
+        })
+        .collect();
+    let cap = plan.assemble(64, 42, &paths).unwrap();
+    assert_eq!(cap.h, one.h);
+    assert_eq!(cap.scene_info, one.scene_info);
+    // A complete part renders nothing more: no progress beyond its total.
+    let calls = std::sync::Mutex::new(Vec::new());
+    plan.render_part(
+        &part(0, 3),
+        &|d, t| calls.lock().unwrap().push((d, t)),
+        &never,
+    )
+    .unwrap();
+    assert_eq!(*calls.lock().unwrap(), vec![(2, 2)]);
+
+    // A part stopped after one unit resumes from it.
+    let o = part(1, 2);
+    let stop = AtomicBool::new(false);
+    let r = with_threads(1, || {
+        plan.render_part(&o, &|d, _| stop.store(d >= 1, Ordering::Relaxed), &stop)
+    });
+    assert!(r.is_err());
+    let calls = std::sync::Mutex::new(Vec::new());
+    plan.render_part(&o, &|d, t| calls.lock().unwrap().push((d, t)), &never)
+        .unwrap();
+    assert_eq!(calls.lock().unwrap()[0], (1, 3));
+
+    // Another seed's parts are refused, naming the key.
+    let e = plan.assemble(64, 7, &paths).unwrap_err().to_string();
+    assert!(e.contains("p0of3.ckpt") && e.contains("render.seed"), "{e}");
+    // A part cut short (a kill mid-record) is incomplete.
+    let len = std::fs::metadata(&paths[1]).unwrap().len();
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(&paths[1])
+        .unwrap();
+    f.set_len(len - 3).unwrap();
+    drop(f);
+    let e = plan.assemble(64, 42, &paths).unwrap_err().to_string();
+    assert!(
+        e.contains("p1of3.ckpt") && e.contains("incomplete: 1 of its 2 units"),
+        "{e}"
+    );
+    let e = plan
+        .assemble(64, 42, &[dir.join("absent.ckpt")])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("absent.ckpt"), "{e}");
+    // A part needs its checkpoint.
+    assert!(plan
+        .render_part(&opts(Some((0, 3)), None), &|_, _| {}, &never)
+        .is_err());
+
+    // A finished render leaves the interval's pending units unwritten (its caller deletes the file):
+    // the checkpoint holds its header alone.
+    let long = |ck: &Path| RenderOptions {
+        checkpoint_every: Duration::from_secs(3600),
+        ..opts(None, Some(ck.to_path_buf()))
+    };
+    let ck = dir.join("finished.ckpt");
+    assert_eq!(plan.render(&long(&ck), &|_, _| {}).unwrap().h, one.h);
+    let header = std::fs::metadata(&ck).unwrap().len();
+    // Stopped after its second unit, a render with the same interval keeps both.
+    let ck = dir.join("stopped.ckpt");
+    let stop = AtomicBool::new(false);
+    let r = with_threads(1, || {
+        plan.render_until(
+            &long(&ck),
+            &|done, _| stop.store(done >= 2, Ordering::Relaxed),
+            &stop,
+        )
+    });
+    assert!(r.unwrap_err().to_string().contains("stopped"));
+    let unit_bytes = 8 + 4 * 2 * 64; // index, then 2 laser points × 1 sensor × 64 bins
+    assert_eq!(
+        std::fs::metadata(&ck).unwrap().len(),
+        header + 2 * unit_bytes
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Each bad input gives one line that names the file and the field.
 #[test]
 fn bad_scenes_name_file_and_field() {
