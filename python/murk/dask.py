@@ -44,13 +44,15 @@ def render_shard(
     bins=None,
     threads=None,
     checkpoint_every=60.0,
+    progress=None,
 ) -> str:
     """One Dask task: renders shard ``(i, n)`` of ``scene`` into the checkpoint ``part``, which holds
-    every unit of the shard when this returns (at once if it already did); returns ``part``."""
+    every unit of the shard when this returns (at once if it already did; an interrupted task's part
+    resumes); returns ``part``. ``progress`` as for ``murk.render``."""
     part = os.fspath(part)
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid,
                                    bins=bins, checkpoint=part, checkpoint_every=checkpoint_every)
-    murk._murk.render_part(path, args, threads, None)
+    murk._murk.render_part(path, args, threads, murk._progress(progress, "shard"))
     return part
 
 

@@ -44,7 +44,7 @@ def test_two_worker_render_equals_the_unsharded_cli_render(client, want, tmp_pat
     assert (tmp_path / "z.h5").read_bytes() == want
 
 
-def test_a_killed_worker_is_retried_and_resumes(client, want, tmp_path):
+def test_a_killed_worker_is_retried_with_the_same_bytes(client, want, tmp_path):
     work = tmp_path / "parts"
     os.makedirs(work, exist_ok=True)
     part0 = work / "part0.ckpt"
@@ -68,6 +68,29 @@ def test_a_killed_worker_is_retried_and_resumes(client, want, tmp_path):
     cap = murk.dask.assemble(Z, parts, **KW)
     murk.write_capture(tmp_path / "z.h5", cap)
     assert (tmp_path / "z.h5").read_bytes() == want
+
+
+def test_an_interrupted_shard_task_resumes_its_part(tmp_path):
+    part = tmp_path / "p.ckpt"
+    kw = dict(threads=1, checkpoint_every=3600.0, **KW)
+
+    class Stop(Exception):
+        pass
+
+    def stop_after_one(done, total):
+        if done >= 1:
+            raise Stop()
+
+    # What a Ctrl-C or a task cancelled mid-way leaves: the units it finished, whatever the interval.
+    with pytest.raises(Stop):
+        murk.dask.render_shard(str(Z), (0, 2), part, progress=stop_after_one, **kw)
+    calls = []
+    murk.dask.render_shard(str(Z), (0, 2), part, progress=lambda d, t: calls.append((d, t)), **kw)
+    assert calls[0][0] >= 1 and calls[-1][0] == calls[-1][1], calls
+    # A complete part is not rendered again.
+    again = []
+    murk.dask.render_shard(str(Z), (0, 2), part, progress=lambda d, t: again.append((d, t)), **kw)
+    assert again == [calls[-1]]
 
 
 def test_a_part_of_another_render_is_refused(client, tmp_path):
