@@ -78,6 +78,31 @@ pub struct RenderArgs {
     out: Option<PathBuf>,
 }
 
+impl RenderArgs {
+    /// The scene (from `text` when given, read as if from `path`) with these overrides applied.
+    fn scene(&self, path: &Path) -> murk_core::Result<Scene> {
+        let ov = Overrides {
+            grid: self.grid,
+            bins: self.bins,
+            set: self.set.clone(),
+        };
+        match &self.text {
+            Some(text) => Scene::from_str(text, path, &ov),
+            None => Scene::load(path, &ov),
+        }
+    }
+
+    fn options(&self, scene: &Scene) -> RenderOptions {
+        RenderOptions {
+            spp: self.spp.unwrap_or(scene.settings.spp),
+            seed: self.seed,
+            shard: self.shard,
+            checkpoint: self.checkpoint.clone(),
+            checkpoint_every: Duration::from_secs_f64(self.checkpoint_every.max(0.0)),
+        }
+    }
+}
+
 /// A Monte Carlo render of a scene, as `murk render` does it; see `murk.render`.
 #[pyfunction]
 #[pyo3(signature = (scene, args, threads, progress))]
@@ -88,51 +113,23 @@ pub fn render(
     threads: Option<usize>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Capture> {
-    let RenderArgs {
-        text,
-        spp,
-        seed,
-        shard,
-        set,
-        grid,
-        bins,
-        checkpoint,
-        checkpoint_every,
-        out,
-    } = args;
-    let ov = Overrides { grid, bins, set };
     let cap = compute(py, progress, threads, |t: &Ticker| {
-        let scene = load_scene(&scene, &text, &ov)?;
-        let plan = Plan::new(&scene);
-        let opt = RenderOptions {
-            spp: spp.unwrap_or(scene.settings.spp),
-            seed,
-            shard,
-            checkpoint: checkpoint.clone(),
-            checkpoint_every: Duration::from_secs_f64(checkpoint_every.max(0.0)),
-        };
-        let cap = plan.render_until(
-            &opt,
+        let scene = args.scene(&scene)?;
+        let cap = Plan::new(&scene).render_until(
+            &args.options(&scene),
             &|done, total| t.count(done as u64, total as u64),
             t.stop(),
         )?;
-        if let Some(out) = &out {
+        if let Some(out) = &args.out {
             murk_io::write_capture(out, &cap)?;
         }
-        if let Some(c) = &checkpoint {
+        if let Some(c) = &args.checkpoint {
             // The capture is complete; a stale checkpoint would only mislead a later resume.
             let _ = std::fs::remove_file(c);
         }
         Ok(cap)
     })?;
     Ok(Capture { cap })
-}
-
-fn load_scene(path: &Path, text: &Option<String>, ov: &Overrides) -> murk_core::Result<Scene> {
-    match text {
-        Some(text) => Scene::from_str(text, path, ov),
-        None => Scene::load(path, ov),
-    }
 }
 
 /// Shard `args.shard` of a scene rendered into its checkpoint `args.checkpoint` alone, which then
@@ -146,22 +143,10 @@ pub fn render_part(
     threads: Option<usize>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
-    let ov = Overrides {
-        grid: args.grid,
-        bins: args.bins,
-        set: args.set,
-    };
     compute(py, progress, threads, |t: &Ticker| {
-        let scene = load_scene(&scene, &args.text, &ov)?;
-        let opt = RenderOptions {
-            spp: args.spp.unwrap_or(scene.settings.spp),
-            seed: args.seed,
-            shard: args.shard,
-            checkpoint: args.checkpoint.clone(),
-            checkpoint_every: Duration::from_secs_f64(args.checkpoint_every.max(0.0)),
-        };
+        let scene = args.scene(&scene)?;
         Plan::new(&scene).render_part(
-            &opt,
+            &args.options(&scene),
             &|done, total| t.count(done as u64, total as u64),
             t.stop(),
         )
@@ -178,14 +163,9 @@ pub fn assemble(
     args: RenderArgs,
     parts: Vec<PathBuf>,
 ) -> PyResult<Capture> {
-    let ov = Overrides {
-        grid: args.grid,
-        bins: args.bins,
-        set: args.set,
-    };
     let cap = compute(py, None, None, |_| {
-        let scene = load_scene(&scene, &args.text, &ov)?;
-        Plan::new(&scene).assemble(args.spp.unwrap_or(scene.settings.spp), args.seed, &parts)
+        let scene = args.scene(&scene)?;
+        Plan::new(&scene).assemble(args.options(&scene).spp, args.seed, &parts)
     })?;
     Ok(Capture { cap })
 }
