@@ -68,8 +68,9 @@ impl Ticker {
         &self.cancel
     }
     /// Where a library call takes no stop flag, its progress calls are the cancellation points:
-    /// unwinding from one drops the computation's buffers. Work that rayon already split still
-    /// runs to its end, so this stops sequential steps only.
+    /// unwinding from one drops the computation's buffers. Parallel loops that ask
+    /// `Progress::cancelled` skip their remaining pieces; elsewhere work that rayon already split
+    /// runs to its end.
     pub(crate) fn check(&self) {
         if self.cancel.load(Relaxed) {
             std::panic::resume_unwind(Box::new(Cancelled));
@@ -84,6 +85,9 @@ impl murk_recon::Progress for Ticker {
     fn advance(&self, n: u64) {
         self.done.fetch_add(n, Relaxed);
         self.check();
+    }
+    fn cancelled(&self) -> bool {
+        self.cancel.load(Relaxed)
     }
 }
 

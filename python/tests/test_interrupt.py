@@ -32,3 +32,35 @@ def test_ctrl_c_interrupts_a_long_render():
     finally:
         p.kill()  # a render that ignored Ctrl-C must not outlive the test
         p.wait()
+
+
+LONG_BP = """
+import signal, sys, murk
+signal.signal(signal.SIGINT, signal.default_int_handler)
+cap = murk.synth("z:1.0", kind="laser-grid", wall_size=2.0, grid=128, bins=2048, bin_width=0.002,
+                 start=1.0)
+print("started", flush=True)
+try:
+    # About 15 s on two cores: 16 384 histograms read at 64³ voxels off the wall's lattice.
+    murk.reconstruct(cap, "bp", volume="-0.9:0.9:64,-0.9:0.9:64,0.5:1.5:64")
+    print("finished", flush=True)
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+    sys.exit(3)
+"""
+
+
+def test_ctrl_c_interrupts_a_long_backprojection():
+    p = subprocess.Popen([sys.executable, "-c", LONG_BP], stdout=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().strip() == "started"
+        time.sleep(1.0)
+        t0 = time.time()
+        p.send_signal(signal.SIGINT)
+        out, _ = p.communicate(timeout=60)
+        assert p.returncode == 3 and "interrupted" in out, out
+        # The tiles in flight finish; the rest are skipped.
+        assert time.time() - t0 < 3
+    finally:
+        p.kill()
+        p.wait()

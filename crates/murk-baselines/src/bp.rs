@@ -8,7 +8,9 @@
 
 use crate::Reconstruction;
 use murk_core::simd::wide;
-use murk_core::{Capture, CaptureKind, DVec3, Error, RegularGrid, Result, Volume};
+use murk_core::{
+    Capture, CaptureKind, DVec3, Error, NoProgress, Progress, RegularGrid, Result, Volume,
+};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -20,6 +22,16 @@ pub struct BpOptions {
 
 /// Backprojects `capture` into `volume`; output in the volume's C order [nx, ny, nz].
 pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Result<Reconstruction> {
+    backproject_with(capture, volume, opts, &NoProgress)
+}
+
+/// [`backproject`], reporting to `progress` and stopping with an error once it is cancelled.
+pub fn backproject_with(
+    capture: &Capture,
+    volume: &Volume,
+    opts: BpOptions,
+    progress: &dyn Progress,
+) -> Result<Reconstruction> {
     capture.validate()?;
     if volume.is_empty() {
         return Err(Error::param("the volume has no voxels"));
@@ -47,11 +59,8 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
         // One wall-leg offset for every scan point keeps the sum shift-invariant.
         let first = read_of(0);
         if (0..capture.n_hist()).all(|h| read_of(h).offset == first.offset) {
-            return Ok(Reconstruction::new(
-                *volume,
-                lattice.backproject(capture, volume, &first),
-                DESCRIPTION,
-            ));
+            let data = lattice.backproject(capture, volume, &first, progress);
+            return finished(progress, *volume, data);
         }
     }
     let confocal = capture.kind() == CaptureKind::Confocal;
@@ -60,11 +69,15 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
         .collect();
     let ncols = volume.x.n * volume.y.n;
     let mut data = vec![0.0f32; volume.len()];
+    progress.start(ncols.div_ceil(TILE) as u64);
     // Histogram-outer over a tile of voxel columns: each histogram is read once per tile while the
     // tile's accumulators stay in cache (column-outer re-read every histogram for every column).
     data.par_chunks_mut(nz * TILE).enumerate().for_each_init(
         || ColumnScratch::new(nz, capture.time.bins),
         |sc, (tile, out)| {
+            if progress.cancelled() {
+                return;
+            }
             let cols = tile * TILE..((tile + 1) * TILE).min(ncols);
             sc.acc.clear();
             sc.acc.resize(cols.len() * nz, 0.0);
@@ -93,9 +106,18 @@ pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Resul
             for (o, a) in out.iter_mut().zip(&sc.acc) {
                 *o = *a as f32;
             }
+            progress.advance(1);
         },
     );
-    Ok(Reconstruction::new(*volume, data, DESCRIPTION))
+    finished(progress, *volume, data)
+}
+
+/// The reconstruction, unless the work was cancelled part-way (its skipped pieces left zeros).
+fn finished(progress: &dyn Progress, volume: Volume, data: Vec<f32>) -> Result<Reconstruction> {
+    if progress.cancelled() {
+        return Err(Error::param("backprojection stopped"));
+    }
+    Ok(Reconstruction::new(volume, data, DESCRIPTION))
 }
 
 /// The method row of every backprojection.
@@ -144,7 +166,13 @@ impl Lattice {
         })
     }
 
-    fn backproject(&self, capture: &Capture, volume: &Volume, read: &Read) -> Vec<f32> {
+    fn backproject(
+        &self,
+        capture: &Capture,
+        volume: &Volume,
+        read: &Read,
+        progress: &dyn Progress,
+    ) -> Vec<f32> {
         let (gnx, gny) = (self.grid.nx, self.grid.ny);
         let bins = capture.time.bins;
         // Time planes of H with a zero plane before and after (reads fade out past the window).
@@ -161,12 +189,16 @@ impl Lattice {
             }
         }
         let (sx, sy) = (self.grid.step_x.x, self.grid.step_y.y);
+        progress.start(volume.z.n as u64);
         let per_depth: Vec<Vec<f32>> = (0..volume.z.n)
             .into_par_iter()
             .map(|iz| {
                 let dz = volume.z.at(iz) - self.grid.origin.z;
                 // Output rows use the same stride w; columns ≥ gny collect garbage and are dropped.
                 let mut out = vec![0.0f32; gnx * w];
+                if progress.cancelled() {
+                    return out;
+                }
                 for ax in 0..gnx {
                     for ay in 0..gny {
                         let d =
@@ -202,6 +234,7 @@ impl Lattice {
                         }
                     }
                 }
+                progress.advance(1);
                 out
             })
             .collect();
@@ -286,6 +319,56 @@ mod tests {
     use crate::testutil::{add_point, axis, confocal};
     use murk_core::Pairing;
     use murk_core::{Axis, DVec3, PointSet};
+
+    /// Cancelled after its first piece of work, a backprojection (lattice and general paths) skips
+    /// the rest and returns an error instead of a partial volume.
+    #[test]
+    fn cancelled_backprojection_stops_early_with_an_error() {
+        use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+        #[derive(Default)]
+        struct StopAfterOne {
+            total: AtomicU64,
+            done: AtomicU64,
+        }
+        impl Progress for StopAfterOne {
+            fn start(&self, total: u64) {
+                self.total.store(total, Relaxed);
+            }
+            fn advance(&self, n: u64) {
+                self.done.fetch_add(n, Relaxed);
+            }
+            fn cancelled(&self) -> bool {
+                self.done.load(Relaxed) >= 1
+            }
+        }
+        let mut c = confocal(16, 0.6, axis(0.0137, 0.01, 160));
+        add_point(&mut c, DVec3::new(0.06, -0.04, 0.45));
+        let g = c.illum.regular_grid().unwrap();
+        let on_grid = Volume {
+            x: Axis::new(g.origin.x, g.origin.x + 15.0 * g.step_x.x, 16),
+            y: Axis::new(g.origin.y, g.origin.y + 15.0 * g.step_y.y, 16),
+            z: Axis::new(0.3, 0.6, 31),
+        };
+        let off_grid = Volume {
+            x: Axis::new(-0.3, 0.3, 70),
+            ..on_grid
+        };
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        // The lattice path reports depth planes (31), the general one tiles of 16 columns (70).
+        for (vol, pieces) in [(on_grid, 31), (off_grid, 70)] {
+            assert!(backproject(&c, &vol, BpOptions::default()).is_ok());
+            let p = StopAfterOne::default();
+            let e = one
+                .install(|| backproject_with(&c, &vol, BpOptions::default(), &p))
+                .unwrap_err();
+            assert!(e.to_string().contains("stopped"), "{e}");
+            assert_eq!(p.done.load(Relaxed), 1);
+            assert_eq!(p.total.load(Relaxed), pieces);
+        }
+    }
 
     #[test]
     fn point_lands_on_its_voxel_for_confocal_and_laser_grid_captures() {

@@ -5,10 +5,10 @@
 //! a point scatterer (and its maximum a few voxels away in depth). The filter is therefore −∇²G
 //! (docs/reconstruction.md: the sign).
 
-use crate::bp::{backproject, BpOptions};
+use crate::bp::{backproject_with, BpOptions};
 use crate::Reconstruction;
 use murk_core::simd::wide;
-use murk_core::{Capture, Result, Volume};
+use murk_core::{Capture, NoProgress, Progress, Result, Volume};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -27,7 +27,18 @@ pub struct FbpOptions {
 }
 
 pub fn fbp(capture: &Capture, volume: &Volume, opts: FbpOptions) -> Result<Reconstruction> {
-    let mut r = backproject(capture, volume, opts.bp)?;
+    fbp_with(capture, volume, opts, &NoProgress)
+}
+
+/// [`fbp`], reporting the backprojection to `progress` and stopping with an error once it is
+/// cancelled.
+pub fn fbp_with(
+    capture: &Capture,
+    volume: &Volume,
+    opts: FbpOptions,
+    progress: &dyn Progress,
+) -> Result<Reconstruction> {
+    let mut r = backproject_with(capture, volume, opts.bp, progress)?;
     let filtered = match opts.filter {
         FbpFilter::LaplacianOfGaussian => {
             let mut k = laplacian_of_gaussian_kernel();
@@ -115,6 +126,7 @@ pub fn convolve_same(data: &[f32], shape: [usize; 3], kernel: &[f32], ks: [usize
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bp::backproject;
     use crate::testutil::{add_point, axis, confocal};
     use murk_core::{Axis, DVec3};
 

@@ -20,10 +20,10 @@ pub mod lct;
 #[cfg(test)]
 mod testutil;
 
-pub use bp::{backproject, BpOptions};
+pub use bp::{backproject, backproject_with, BpOptions};
 pub use cdt::{cdt, through_slab, CdtParams, CdtPlan, Pulse, SlabParams};
 pub use confocal::TimeGrid;
-pub use fbp::{fbp, FbpFilter, FbpOptions};
+pub use fbp::{fbp, fbp_with, FbpFilter, FbpOptions};
 pub use fk::{fk, FkParams, FkPlan};
 pub use lct::{lct, LctParams, LctPlan, Reflectance};
 

@@ -134,15 +134,7 @@ impl PfParams {
     }
 }
 
-/// Reports work done, for progress bars. Called from worker threads.
-pub trait Progress: Sync {
-    fn start(&self, _total: u64) {}
-    fn advance(&self, _n: u64) {}
-}
-
-/// A progress sink that ignores everything.
-pub struct NoProgress;
-impl Progress for NoProgress {}
+pub use murk_core::{NoProgress, Progress};
 
 /// What was computed and how, for logs and file attributes.
 #[derive(Clone, Debug)]

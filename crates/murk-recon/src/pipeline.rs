@@ -291,8 +291,8 @@ impl Engine {
     fn run(&self, cap: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
         match self {
             Engine::Pf(plan) => plan.run(cap, progress),
-            Engine::Bp(v, o) => murk_baselines::backproject(cap, v, *o),
-            Engine::Fbp(v, o) => murk_baselines::fbp(cap, v, *o),
+            Engine::Bp(v, o) => murk_baselines::backproject_with(cap, v, *o, progress),
+            Engine::Fbp(v, o) => murk_baselines::fbp_with(cap, v, *o, progress),
             Engine::Lct(plan) => plan.run(cap),
             Engine::Fk(plan) => plan.run(cap),
             Engine::Cdt(plan) => plan.run(cap),
