@@ -545,8 +545,10 @@ fn read_checkpoint(
     units: usize,
     mut unit: impl FnMut(usize, &[f32]),
 ) -> Result<Option<u64>> {
-    let Ok(mut f) = std::fs::File::open(path) else {
-        return Ok(None);
+    let mut f = match std::fs::File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(path, e)),
     };
     let mut bytes = Vec::new();
     f.read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
