@@ -11,6 +11,7 @@ use murk_synth::{synthesize, CaptureLayout, SynthOptions, Synthesis};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 /// The keywords of `murk.synth`, which are `murk synth`'s flags.
@@ -272,11 +273,15 @@ struct Units<'a>(&'a Ticker);
 
 impl Observer for Units<'_> {
     fn event(&self, e: Event) {
-        if let Event::Units { done, total } = e {
-            self.0.set(done as u64, total as u64);
-        } else {
-            self.0.check();
+        match e {
+            // A render stops through its flag, which keeps its checkpoint whole; unwinding from
+            // inside it would lose the units since the last append.
+            Event::Units { done, total } => self.0.count(done as u64, total as u64),
+            _ => self.0.check(),
         }
+    }
+    fn stop(&self) -> Option<&AtomicBool> {
+        Some(self.0.stop())
     }
 }
 

@@ -40,3 +40,24 @@ def test_bad_study_arguments(tmp_path):
         murk.experiment.plan(tmp_path, only=["fig9"], scenes=SCENES)
     with pytest.raises(murk.InputError):
         murk.experiment.plan(tmp_path, scale="huge", scenes=SCENES)
+
+
+def test_an_interrupted_study_keeps_its_finished_units(tmp_path):
+    # What Ctrl-C does: the progress poll raises, the render stops at its next unit and appends what
+    # it finished to its checkpoint (whatever its 30 s interval), and the next run resumes from it.
+    class Stop(Exception):
+        pass
+
+    def stop_early(done, total):
+        if done >= 5:
+            raise Stop()
+
+    kw = dict(only=["fig3a"], spp=4096, scenes=SCENES, threads=1)
+    with pytest.raises(Stop):
+        murk.experiment.run(tmp_path, progress=stop_early, **kw)
+    [ckpt] = (tmp_path / "renders").glob("*.h5.ckpt")
+    assert ckpt.stat().st_size > 4096
+    resumed = []
+    murk.experiment.run(tmp_path, progress=lambda d, t: resumed.append(d), **kw)
+    assert resumed[0] >= 5, resumed[:3]
+    assert not list((tmp_path / "renders").glob("*.ckpt"))

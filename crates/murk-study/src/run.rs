@@ -10,6 +10,7 @@ use murk_view::{views, Plane};
 use rustfft::num_complex::Complex32;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// What the executor reports as it goes.
@@ -30,6 +31,11 @@ pub enum Event<'a> {
 /// Receives [`Event`]s (a progress bar, a log, nothing).
 pub trait Observer: Sync {
     fn event(&self, e: Event);
+    /// A flag that stops the running render once set: no unit starts after it, the checkpoint keeps
+    /// every finished one for the next run, and the study returns an error.
+    fn stop(&self) -> Option<&AtomicBool> {
+        None
+    }
 }
 
 pub struct Silent;
@@ -124,8 +130,12 @@ fn run_task(plan: &Plan, dir: &Path, job: &CaptureJob, t: usize, obs: &dyn Obser
         checkpoint: Some(PathBuf::from(&ckpt)),
         checkpoint_every: Duration::from_secs(30),
     };
-    let cap = murk_render::Plan::new(&scene)
-        .render(&opt, &|done, total| obs.event(Event::Units { done, total }))?;
+    let never = AtomicBool::new(false);
+    let cap = murk_render::Plan::new(&scene).render_until(
+        &opt,
+        &|done, total| obs.event(Event::Units { done, total }),
+        obs.stop().unwrap_or(&never),
+    )?;
     murk_io::write_capture(&out, &cap)?;
     let _ = std::fs::remove_file(&ckpt);
     Ok(())
