@@ -20,15 +20,29 @@ from typing import Any, Dict, Optional, Sequence, Union
 import murk
 
 
+# Dask's monitors (stack profiler every 10 ms, event-loop ticks every 20 ms, memory and system
+# sampling) kept an idle 2-worker LocalCluster at 0.14 cores, 7 % of a 2-core machine that the renders
+# need; with these values it idles at 0.02. They feed the dashboard, which murk's LocalCluster does not
+# start.
+QUIET_MONITORS = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "1s",
+}
+
+
 def local_cluster(**kwargs):
-    """A LocalCluster of single-threaded worker processes for murk's tasks. Dask's nannies set
-    ``MALLOC_TRIM_THRESHOLD_`` in their workers to hand freed Python memory back to the system; any
-    fixed threshold also turns off glibc's adaptive mmap threshold, so the renderer's large buffers
-    are mapped and unmapped on every use, which cost it 4-8 % here. Its workers run without it."""
+    """A LocalCluster of single-threaded worker processes for murk's tasks, with Dask's monitors
+    slowed down (``QUIET_MONITORS``). Dask's nannies set ``MALLOC_TRIM_THRESHOLD_`` in their
+    workers to hand freed Python memory back to the system; any fixed threshold also turns off
+    glibc's adaptive mmap threshold, so the renderer's large buffers are mapped and unmapped on
+    every use, which cost it 4-8 % here. Its workers run without it."""
     import dask
     from dask.distributed import LocalCluster
 
-    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+    config = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None, **QUIET_MONITORS}
+    with dask.config.set(config):
         return LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None, **kwargs)
 
 

@@ -39,6 +39,17 @@ def test_local_workers_keep_glibcs_adaptive_malloc(client):
     assert len(env) == 2 and set(env.values()) == {None}, env
 
 
+def test_local_workers_run_with_dasks_monitors_slowed(client):
+    # At their defaults the monitors kept the idle cluster at 0.14 of the 2 cores (docs/python.md).
+    def config():
+        import dask
+
+        return {k: dask.config.get(k) for k in murk.dask.QUIET_MONITORS}
+
+    seen = client.run(config)
+    assert len(seen) == 2 and all(c == murk.dask.QUIET_MONITORS for c in seen.values()), seen
+
+
 def test_two_worker_render_equals_the_unsharded_cli_render(client, want, tmp_path):
     murk.dask.render(Z, client, shards=4, out=tmp_path / "z.h5", threads=1, **KW)
     assert (tmp_path / "z.h5").read_bytes() == want
