@@ -321,28 +321,27 @@ impl<'a> Plan<'a> {
         }
         let units = self.shard_units(opt.shard);
         let total = units.len();
+        let mut done = vec![false; self.n_units()];
+        let mut mine = vec![false; self.n_units()];
+        units.iter().for_each(|&u| mine[u] = true);
+        // The units the checkpoint already holds are done; a capture's are stored as they are read.
         let ckpt = match &opt.checkpoint {
             Some(p) => Some(Checkpoint::open(
                 p,
                 &render_key(self.scene, opt.spp, opt.seed, opt.shard),
                 self.unit_len(),
                 self.n_units(),
+                |u, buf| {
+                    if mine[u] {
+                        if let Some(h) = h.as_deref_mut() {
+                            self.store(h, u, buf);
+                        }
+                        done[u] = true;
+                    }
+                },
             )?),
             None => None,
         };
-        let mut done = vec![false; self.n_units()];
-        let mut mine = vec![false; self.n_units()];
-        units.iter().for_each(|&u| mine[u] = true);
-        if let Some(c) = &ckpt {
-            for (u, buf) in &c.loaded {
-                if mine[*u] {
-                    if let Some(h) = h.as_deref_mut() {
-                        self.store(h, *u, buf);
-                    }
-                    done[*u] = true;
-                }
-            }
-        }
         let todo: Vec<usize> = units.iter().copied().filter(|u| !done[*u]).collect();
         progress(total - todo.len(), total);
         let part = h.is_none();
@@ -519,7 +518,6 @@ struct Checkpoint {
     file: std::fs::File,
     path: PathBuf,
     unit_len: usize,
-    loaded: Vec<(usize, Vec<f32>)>,
 }
 
 const MAGIC: &[u8; 8] = b"MURKCKP2";
@@ -586,13 +584,16 @@ fn read_checkpoint(
 }
 
 impl Checkpoint {
-    fn open(path: &Path, key: &str, unit_len: usize, units: usize) -> Result<Self> {
+    /// Opens (or starts) the checkpoint at `path` for appending, passing each unit it holds to `unit`.
+    fn open(
+        path: &Path,
+        key: &str,
+        unit_len: usize,
+        units: usize,
+        unit: impl FnMut(usize, &[f32]),
+    ) -> Result<Self> {
         let io = |e| Error::io(path, e);
-        let mut loaded = Vec::new();
-        let valid_len = read_checkpoint(path, key, unit_len, units, |u, vals| {
-            loaded.push((u, vals.to_vec()))
-        })?
-        .unwrap_or(0);
+        let valid_len = read_checkpoint(path, key, unit_len, units, unit)?.unwrap_or(0);
         let mut file = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
@@ -609,7 +610,6 @@ impl Checkpoint {
             file,
             path: path.to_path_buf(),
             unit_len,
-            loaded,
         })
     }
 
