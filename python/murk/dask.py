@@ -22,8 +22,9 @@ import murk
 
 # Dask's monitors (stack profiler every 10 ms, event-loop ticks every 20 ms, memory and system
 # sampling) kept an idle 2-worker LocalCluster at 0.14 cores, 7 % of a 2-core machine that the renders
-# need; with these values it idles at 0.02. They feed the dashboard, which murk's LocalCluster does not
-# start.
+# need; with these values it idles at 0.02. The profiler and system samples feed the dashboard, which
+# murk's LocalCluster does not start; the ticks only warn of a blocked event loop; the memory monitor's
+# spill, pause and terminate checks run every second instead of ten times a second.
 QUIET_MONITORS = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
