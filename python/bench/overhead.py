@@ -4,10 +4,10 @@
    compute time `murk reconstruct` prints (`seconds`): median of alternating runs, each in a fresh
    process, with the process's peak RSS.
 2. murk.dask.render of scenes/z-letter.toml --grid 64 on a 2-worker LocalCluster vs `murk render`'s
-   wall time on the same cores.
+   wall time on the same cores, with murk's quiet Dask monitors, Dask's defaults, or both in turn.
 
 Run from the repository root after `cargo build --release` and `pip install ./python`:
-    .venv/bin/python python/bench/overhead.py [--runs 3] [--spp 256] [--shards 2] [--skip-dask] [--skip-recon]
+    .venv/bin/python python/bench/overhead.py [--runs 3] [--spp 256] [--shards 2] [--monitors quiet|default|both] [--skip-dask] [--skip-recon]
 """
 
 import argparse
@@ -79,9 +79,9 @@ PY_DASK = """
 import sys, time
 import murk.dask
 from dask.distributed import Client
-spp, out, shards = int(sys.argv[1]), sys.argv[2], int(sys.argv[3])
+spp, out, shards, monitors = int(sys.argv[1]), sys.argv[2], int(sys.argv[3]), sys.argv[4]
 t0 = time.perf_counter()
-cluster = murk.dask.local_cluster(n_workers=2)
+cluster = murk.dask.local_cluster(n_workers=2, monitors=murk.dask.QUIET_MONITORS if monitors == "quiet" else {})
 client = Client(cluster)
 t1 = time.perf_counter()
 murk.dask.render("scenes/z-letter.toml", client, shards=shards, grid=64, spp=spp, threads=1, out=out)
@@ -91,28 +91,38 @@ print(t2 - t0, t2 - t1)
 """
 
 
-def dask_bench(runs, spp, shards, d):
-    cli, dask_total, dask_render = [], [], []
-    for _ in range(runs):
-        a, b = os.path.join(d, "cli.h5"), os.path.join(d, "dask.h5")
-        for f in (a, b):
-            if os.path.exists(f):
-                os.remove(f)
+def dask_bench(runs, spp, shards, monitors, d):
+    """Each run: the CLI, then a Dask render per monitor setting (their order alternating from run to
+    run); the pair ratio is a Dask render's time over the CLI run just before it."""
+    cli = []
+    dask = {m: ([], []) for m in monitors}
+    a = os.path.join(d, "cli.h5")
+    for r in range(runs):
+        if os.path.exists(a):
+            os.remove(a)
         t = time.perf_counter()
         subprocess.run([MURK, "render", "scenes/z-letter.toml", "--out", a, "--grid", "64",
                         "--spp", str(spp), "--quiet"], check=True)
         cli.append(time.perf_counter() - t)
-        p = subprocess.run([sys.executable, "-c", PY_DASK, str(spp), b, str(shards)], capture_output=True,
-                           text=True, check=True)
-        total, render = map(float, p.stdout.split())
-        dask_total.append(total)
-        dask_render.append(render)
-        assert open(a, "rb").read() == open(b, "rb").read(), "Dask render differs from the CLI's"
+        for m in monitors if r % 2 == 0 else monitors[::-1]:
+            b = os.path.join(d, f"dask-{m}.h5")
+            p = subprocess.run([sys.executable, "-c", PY_DASK, str(spp), b, str(shards), m],
+                               capture_output=True, text=True, check=True)
+            total, render = map(float, p.stdout.split())
+            dask[m][0].append(total)
+            dask[m][1].append(render)
+            with open(a, "rb") as x, open(b, "rb") as y:
+                assert x.read() == y.read(), f"Dask render ({m} monitors) differs from the CLI's"
+            os.remove(b)
     med = statistics.median
-    return {"spp": spp, "shards": shards, "cli_wall": cli, "dask_with_cluster_start": dask_total,
-            "dask_render_only": dask_render, "median_cli": med(cli),
-            "median_dask_with_cluster_start": med(dask_total),
-            "median_dask_render_only": med(dask_render), "bytes_identical": True}
+    res = {"spp": spp, "shards": shards, "cli_wall": cli, "median_cli": med(cli), "bytes_identical": True}
+    for m, (total, render) in dask.items():
+        res[m + "_monitors"] = {
+            "dask_with_cluster_start": total, "dask_render_only": render,
+            "median_dask_with_cluster_start": med(total), "median_dask_render_only": med(render),
+            "median_pair_ratio": med([y / x for x, y in zip(cli, render)]),
+        }
+    return res
 
 
 def main():
@@ -120,6 +130,8 @@ def main():
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--spp", type=int, default=256)
     ap.add_argument("--shards", type=int, default=2, help="Dask tasks (default: one per worker)")
+    ap.add_argument("--monitors", choices=["quiet", "default", "both"], default="quiet",
+                    help="Dask's monitors: murk.dask.QUIET_MONITORS, Dask's defaults, or both in turn")
     ap.add_argument("--skip-dask", action="store_true")
     ap.add_argument("--skip-recon", action="store_true")
     a = ap.parse_args()
@@ -129,7 +141,8 @@ def main():
             res["reconstruct"] = recon_bench(a.runs, d)
             print(json.dumps(res["reconstruct"], indent=1), flush=True)
         if not a.skip_dask:
-            res["dask"] = dask_bench(a.runs, a.spp, a.shards, d)
+            monitors = ["quiet", "default"] if a.monitors == "both" else [a.monitors]
+            res["dask"] = dask_bench(a.runs, a.spp, a.shards, monitors, d)
             print(json.dumps(res["dask"], indent=1), flush=True)
     print(json.dumps(res))
 

@@ -33,16 +33,16 @@ QUIET_MONITORS = {
 }
 
 
-def local_cluster(**kwargs):
+def local_cluster(monitors=QUIET_MONITORS, **kwargs):
     """A LocalCluster of single-threaded worker processes for murk's tasks, with Dask's monitors
-    slowed down (``QUIET_MONITORS``). Dask's nannies set ``MALLOC_TRIM_THRESHOLD_`` in their
+    set by ``monitors`` (slowed down by default; ``{}`` keeps Dask's own settings). Dask's nannies set ``MALLOC_TRIM_THRESHOLD_`` in their
     workers to hand freed Python memory back to the system; any fixed threshold also turns off
     glibc's adaptive mmap threshold, so the renderer's large buffers are mapped and unmapped on
     every use, which cost it 4-8 % here. Its workers run without it."""
     import dask
     from dask.distributed import LocalCluster
 
-    config = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None, **QUIET_MONITORS}
+    config = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None, **monitors}
     with dask.config.set(config):
         return LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None, **kwargs)
 
