@@ -253,7 +253,7 @@ impl<'a> Tracer<'a> {
         };
         if out.recording {
             out.tail.push(Tail {
-                k,
+                hist0: k * t.bins,
                 bin: (opl - t.start_m) / t.bin_width_m,
                 value,
                 w: out.w,

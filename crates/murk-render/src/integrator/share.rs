@@ -3,31 +3,35 @@
 
 use super::*;
 
-/// What a path adds past its first hidden vertex, kept to be shared by the traced points of a tile: target
-/// index, optical path (jitter included) in bins from the capture's start (a replay then shifts it
-/// without a division per entry), value, and the direction that left the first vertex on the way to it
-/// (for the phase function's ratio there).
+/// What a path adds past its first hidden vertex, kept to be shared by the traced points of a tile: where
+/// its target's histogram starts in a traced point's histograms, optical path (jitter included) in bins
+/// from the capture's start (a replay then shifts it without a division per entry), value, and the
+/// direction that left the first vertex on the way to it (for the phase function's ratio there).
 pub(super) struct Tail {
-    pub(super) k: usize,
+    pub(super) hist0: usize,
     pub(super) bin: f64,
     pub(super) value: f64,
     pub(super) w: DVec3,
 }
 
-/// Adds `tail` to one traced point's histograms `hist`, scaled, shifted by `shift` bins, entry e times
-/// `weight(e)`.
+/// Adds `tail` to one traced point's histograms `hists` (of `bins` each), scaled, shifted by `shift`
+/// bins, entry e times `weight(e)`. Every entry of every path is replayed once per point of its tile,
+/// so this loop is a third of a fog render's time: it keeps to one conversion and one bounds check.
 pub(super) fn replay(
     bins: usize,
-    hist: &mut [f64],
+    hists: &mut [f64],
     tail: &[Tail],
     scale: f64,
     shift: f64,
     weight: impl Fn(usize) -> f64,
 ) {
+    let end = bins as f64;
     for (e, tl) in tail.iter().enumerate() {
         let x = tl.bin + shift;
-        if x >= 0.0 && x < bins as f64 {
-            hist[tl.k * bins + x as usize] += tl.value * scale * weight(e);
+        if x >= 0.0 && x < end {
+            // SAFETY: 0 ≤ x < bins (NaN fails the test), so truncation to usize is exact.
+            let bin: usize = unsafe { x.to_int_unchecked() };
+            hists[tl.hist0 + bin] += tl.value * scale * weight(e);
         }
     }
 }
