@@ -196,7 +196,7 @@ impl<'a> Tracer<'a> {
         targets: &[Endpoint],
         spp: u64,
         s: &mut Sampler,
-        out: &mut [f64],
+        out: &mut [f32],
     ) {
         let mut seg = Vec::new();
         let mut sink = Sink {
@@ -262,7 +262,7 @@ impl<'a> Tracer<'a> {
         }
         let x = (opl - t.start_m) / t.bin_width_m;
         if x >= 0.0 && x < t.bins as f64 {
-            out.out[out.origin * out.unit + k * t.bins + x as usize] += value;
+            out.out[out.origin * out.unit + k * t.bins + x as usize] += value as f32;
         }
     }
 

@@ -19,7 +19,7 @@ pub(super) struct Tail {
 /// so this loop is a third of a fog render's time: it keeps to one conversion and one bounds check.
 pub(super) fn replay(
     bins: usize,
-    hists: &mut [f64],
+    hists: &mut [f32],
     tail: &[Tail],
     scale: f64,
     shift: f64,
@@ -31,7 +31,7 @@ pub(super) fn replay(
         if x >= 0.0 && x < end {
             // SAFETY: 0 ≤ x < bins (NaN fails the test), so truncation to usize is exact.
             let bin: usize = unsafe { x.to_int_unchecked() };
-            hists[tl.hist0 + bin] += tl.value * scale * weight(e);
+            hists[tl.hist0 + bin] += (tl.value * scale * weight(e)) as f32;
         }
     }
 }
@@ -56,7 +56,7 @@ pub(super) struct First {
 /// Where a path's contributions go: the traced point's histograms (`unit` values at `origin · unit`
 /// in the work unit's buffer), or, while `recording`, the tail list shared with the rest of the tile.
 pub(super) struct Sink<'o> {
-    pub(super) out: &'o mut [f64],
+    pub(super) out: &'o mut [f32],
     /// Length of one traced point's histograms, and the point now traced.
     pub(super) unit: usize,
     pub(super) origin: usize,
