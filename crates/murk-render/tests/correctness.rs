@@ -5,7 +5,7 @@ mod common;
 
 use common::{gauss_legendre, render, scene};
 use murk_core::DVec3;
-use murk_render::Scene;
+use murk_render::{Overrides, Scene};
 use std::f64::consts::PI;
 
 /// A 5 cm Lambertian patch 1 m in front of a confocal point: H = ∫ ρ z⁴ / (π³ r⁸) dA, all of it arriving
@@ -267,7 +267,11 @@ fn object_connections_keep_the_expectation() {
 /// The T letter 1 m behind a 1 m × 1 m relay wall of `relay_albedo`, in fog filling the box of
 /// docs/benchmarks.md; a laser grid with one SPAD point, 30 bins from 0. The other keys are TOML lines.
 fn fog_t_scene(relay_albedo: f64, capture: &str, render: &str, medium: &str) -> Scene {
-    scene(&format!(
+    scene(&fog_t_text(relay_albedo, capture, render, medium))
+}
+
+fn fog_t_text(relay_albedo: f64, capture: &str, render: &str, medium: &str) -> String {
+    format!(
         r#"
         [relay]
         kind = "wall"
@@ -286,7 +290,7 @@ fn fog_t_scene(relay_albedo: f64, capture: &str, render: &str, medium: &str) -> 
         {medium}
         {T_LETTER}
         "#
-    ))
+    )
 }
 
 /// Two estimators of one H: every histogram's sum agrees within `tol`, and the squared difference
@@ -419,6 +423,52 @@ fn shared_tails_keep_the_expectation() {
         (240_000, 31),
         0.05,
         ("unshared", "shared"),
+    );
+}
+
+/// A path stops once everything it can still add lands past the capture window, shared tails included
+/// (their replay moves entries earlier by up to the tile's spread): on the fog T (4 × 4 laser grid in
+/// tiles of 4 × 4, g = 0.6, reflective relay), a window ending at 2.5 m, which cuts most fog paths
+/// after their first vertices, gives its last metre the expectation of the same bins of a window ending
+/// at 9 m, where paths end only by their depth (every histogram's sum over those bins within 5 %, the
+/// difference within the seed noise, as for `shared_tails_keep_the_expectation`).
+#[test]
+fn paths_past_the_window_stop_without_bias() {
+    let text = fog_t_text(
+        1.0,
+        "grid = [4, 4]\nextent = [0.4, 0.4]\nspad_point = [0.0, 0.0]\nbin_width = 0.1",
+        "max_depth = 4\nshare_tile = 4",
+        &format!("{FOG}\ng = 0.6"),
+    );
+    let with_bins = |bins: usize| {
+        let ov = Overrides {
+            bins: Some(bins),
+            ..Overrides::default()
+        };
+        Scene::from_str(&text, std::path::Path::new("window.toml"), &ov).expect("valid scene")
+    };
+    // The window's last metre (bins 15–24), where a cut made too early would show first.
+    let late = |s: &Scene, bins: usize, seed: u64| -> Vec<f32> {
+        render(s, 240_000, seed)
+            .h
+            .chunks(bins)
+            .flat_map(|h| h[15..25].to_vec())
+            .collect()
+    };
+    let (short, long) = (with_bins(25), with_bins(90));
+    let (a, a2, b) = (
+        late(&short, 25, 61),
+        late(&short, 25, 62),
+        late(&long, 90, 63),
+    );
+    assert_same_expectation(
+        &a,
+        &a2,
+        &b,
+        10,
+        0.05,
+        2.0,
+        ("window to 2.5 m", "window to 9 m"),
     );
 }
 

@@ -219,6 +219,7 @@ impl<'a> Tracer<'a> {
             }
             last.1
         };
+        let reach = self.window_reach(origins);
         let n = spp as f64;
         for (i, origin) in origins.iter().enumerate() {
             sink.origin = i;
@@ -231,7 +232,7 @@ impl<'a> Tracer<'a> {
                 sink.first = None;
                 sink.recording = false;
                 sink.tail.clear();
-                self.path(origin, targets, u, s, &mut sink, &mut seg);
+                self.path(origin, (targets, reach), u, s, &mut sink, &mut seg);
                 if !sink.tail.is_empty() {
                     self.share_tail(origins, i, &mut sink, &mut scratch);
                 }
@@ -320,10 +321,48 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// The latest optical path (m) at which a path traced from any of `origins` can still add to the
+    /// capture: the window's end, plus what a shared tail's replay can take off (the origins' spread in
+    /// position and device leg bounds it by the triangle inequality where the medium's ior is 1). None
+    /// with timing jitter, which can move any contribution into the window.
+    fn window_reach(&self, origins: &[Endpoint]) -> Option<f64> {
+        if self.scene.settings.time_jitter > 0.0 {
+            return None;
+        }
+        let end_m = self.scene.capture.time.end_m();
+        if origins.len() < 2 {
+            return Some(end_m);
+        }
+        if self.medium().is_some_and(|m| m.ior != 1.0) {
+            return None;
+        }
+        let bounds = origins
+            .iter()
+            .fold(crate::geometry::Aabb::empty(), |b, o| b.grow(o.p));
+        let (lo, hi) = origins
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), o| {
+                (lo.min(o.extra_m), hi.max(o.extra_m))
+            });
+        Some(end_m + (bounds.max - bounds.min).length() + (hi - lo))
+    }
+
+    /// Whether everything a path at `pos`, having travelled `opl`, can still add lands past `reach`:
+    /// each of its connections travels at least the straight line to a target and that target's device
+    /// leg (a medium's ior ≥ 1 only lengthens paths).
+    fn past_window(&self, pos: DVec3, opl: f64, targets: &[Endpoint], reach: Option<f64>) -> bool {
+        let Some(reach) = reach else { return false };
+        let nearest = targets
+            .iter()
+            .map(|t| (pos - t.p).length() + t.extra_m)
+            .fold(f64::INFINITY, f64::min);
+        opl + nearest > reach * (1.0 + 1e-12) + 1e-9
+    }
+
     fn path(
         &self,
         origin: &Endpoint,
-        targets: &[Endpoint],
+        (targets, reach): (&[Endpoint], Option<f64>),
         (u, v): (f64, f64),
         s: &mut Sampler,
         out: &mut Sink,
@@ -365,6 +404,11 @@ impl<'a> Tracer<'a> {
         let mut opl = origin.extra_m;
         let mut depth = 0u32;
         loop {
+            // Fog paths wander on long after the window has closed for them: in a 1/m medium each
+            // vertex adds about a metre of path.
+            if depth > 0 && self.past_window(pos, opl, targets, reach) {
+                return;
+            }
             // Past the first vertex, everything goes to the tail the tile shares.
             out.recording = out.share && !from.origin;
             out.at_first = out.recording && depth == 1;
