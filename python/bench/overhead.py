@@ -95,7 +95,7 @@ def dask_bench(runs, spp, shards, monitors, d):
     """Each run: the CLI, then a Dask render per monitor setting (their order alternating from run to
     run); the pair ratio is a Dask render's time over the CLI run just before it."""
     cli = []
-    dask = {m: ([], []) for m in monitors}
+    dask = {m: {"total": [], "render": []} for m in monitors}
     a = os.path.join(d, "cli.h5")
     for r in range(runs):
         if os.path.exists(a):
@@ -109,14 +109,15 @@ def dask_bench(runs, spp, shards, monitors, d):
             p = subprocess.run([sys.executable, "-c", PY_DASK, str(spp), b, str(shards), m],
                                capture_output=True, text=True, check=True)
             total, render = map(float, p.stdout.split())
-            dask[m][0].append(total)
-            dask[m][1].append(render)
+            dask[m]["total"].append(total)
+            dask[m]["render"].append(render)
             with open(a, "rb") as x, open(b, "rb") as y:
                 assert x.read() == y.read(), f"Dask render ({m} monitors) differs from the CLI's"
             os.remove(b)
     med = statistics.median
     res = {"spp": spp, "shards": shards, "cli_wall": cli, "median_cli": med(cli), "bytes_identical": True}
-    for m, (total, render) in dask.items():
+    for m, t in dask.items():
+        total, render = t["total"], t["render"]
         res[m + "_monitors"] = {
             "dask_with_cluster_start": total, "dask_render_only": render,
             "median_dask_with_cluster_start": med(total), "median_dask_render_only": med(render),

@@ -35,10 +35,12 @@ QUIET_MONITORS = {
 
 def local_cluster(monitors=QUIET_MONITORS, **kwargs):
     """A LocalCluster of single-threaded worker processes for murk's tasks, with Dask's monitors
-    set by ``monitors`` (slowed down by default; ``{}`` keeps Dask's own settings). Dask's nannies set ``MALLOC_TRIM_THRESHOLD_`` in their
-    workers to hand freed Python memory back to the system; any fixed threshold also turns off
-    glibc's adaptive mmap threshold, so the renderer's large buffers are mapped and unmapped on
-    every use, which cost it 4-8 % here. Its workers run without it."""
+    set by ``monitors`` (slowed down by default; ``{}`` keeps Dask's own settings).
+
+    Dask's nannies set ``MALLOC_TRIM_THRESHOLD_`` in their workers to hand freed Python memory back
+    to the system; any fixed threshold also turns off glibc's adaptive mmap threshold, so the
+    renderer's large buffers are mapped and unmapped on every use, which cost it 4-8 % here. Its
+    workers run without it."""
     import dask
     from dask.distributed import LocalCluster
 
