@@ -23,6 +23,7 @@ use std::time::Instant;
     after_help = "Examples:\n  \
 cargo run --release -p murk-bench                               # PF on the paper's formats (and y-tal with .venv)\n  \
 cargo run --release -p murk-bench -- --runs 9 --skip-z\n  \
+cargo run --release -p murk-bench -- --paper-only shelf          # the shelf's 142³ volume alone\n  \
 cargo run --release -p murk-bench -- --render --only z-letter   # the renderer on the paper's format\n  \
 cargo run --release -p murk-bench -- --real ../shared/data/real/cdt_lindell2020\n  \
 cargo run --release -p murk-bench -- --confocal-vs-tal --tal-bench ../shared/reference/tal_bench.py"
@@ -37,9 +38,13 @@ pub struct BenchArgs {
     /// Python interpreter with y-tal installed, for the side-by-side case (default: .venv/bin/python if present).
     #[arg(long)]
     pub tal_python: Option<PathBuf>,
-    /// Skip the paper-format Z-letter case.
+    /// Skip the paper-format Z-letter and shelf cases.
     #[arg(long)]
     pub skip_z: bool,
+    /// Only the paper formats: the Z letter and the shelf, or the one whose name is given.
+    #[arg(long, value_name = "CASE", num_args = 0..=1, default_missing_value = "all",
+          value_parser = ["all", "z", "shelf"])]
+    pub paper_only: Option<String>,
     /// Benchmark the renderer instead: the T-letter scenes next to mitransient, and the paper format.
     #[arg(long)]
     pub render: bool,
@@ -190,8 +195,11 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
     if a.confocal_vs_tal {
         return crate::confocal::run(python.as_deref(), a.tal_bench.as_deref(), a.runs, quiet);
     }
+    if let Some(case) = &a.paper_only {
+        return z_letter(case, a.runs, quiet);
+    }
     if !a.skip_z {
-        z_letter(a.runs, quiet)?;
+        z_letter("all", a.runs, quiet)?;
     }
     match python {
         Some(py) => {
@@ -209,8 +217,11 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
 /// The paper's synthetic setups: 128 × 128 laser grid on a 2 m wall, one SPAD point at the centre, a
 /// planar Z 2 m away (the content does not change the time); the Z's 73 × 59 × 73 voxels from 4096 bins of
 /// 0.9 mm from 3.5 m, and the shelf's 142³ voxels from the study's 4096 bins of 1.5 mm from 2.0 m.
-fn z_letter(runs: usize, quiet: bool) -> anyhow::Result<()> {
+fn z_letter(case: &str, runs: usize, quiet: bool) -> anyhow::Result<()> {
     let c = 1.0 - 1.0 / 128.0;
+    if case == "shelf" {
+        return shelf(runs, quiet);
+    }
     paper_case(
         "Z letter, 128² laser grid × 4096 bins → 73×59×73 voxels",
         TimeAxis {
@@ -226,6 +237,13 @@ fn z_letter(runs: usize, quiet: bool) -> anyhow::Result<()> {
         runs,
         quiet,
     )?;
+    if case == "z" {
+        return Ok(());
+    }
+    shelf(runs, quiet)
+}
+
+fn shelf(runs: usize, quiet: bool) -> anyhow::Result<()> {
     paper_case(
         "shelf format, 128² laser grid × 4096 bins → 142³ voxels",
         TimeAxis {

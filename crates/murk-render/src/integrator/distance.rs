@@ -144,6 +144,9 @@ impl TimeWindow {
 pub(super) struct Toward {
     pub(super) equi: Option<Equiangular>,
     pub(super) time: Option<TimeWindow>,
+    /// Target-side draws from the segment's start toward this target (`target_draws`), for the
+    /// target-side density of each vertex drawn on the segment.
+    pub(super) target_draws: f64,
 }
 
 impl Toward {
@@ -173,6 +176,7 @@ impl Tracer<'_> {
         let tw = &self.scene.capture.time;
         let base = opl + tgt.extra_m;
         Toward {
+            target_draws: self.target_draws(x, first, tgt) as f64,
             equi: set
                 .equiangular
                 .then(|| Equiangular::new(x, d, tgt.p, m01.0, m01.1))
@@ -258,22 +262,23 @@ impl Tracer<'_> {
         out: &mut Sink,
     ) {
         for (k, tgt) in targets.iter().enumerate() {
-            let n = self.target_draws(from, tgt);
+            let n = self.target_draws(from.x, from.origin, tgt);
             for _ in 0..n {
                 self.draw_from_target(m, from, (k, tgt), n, s, out);
             }
         }
     }
 
-    /// How many target-side draws a segment starting at `from` gets toward `tgt`: 1, or up to
-    /// `target_split` when `from` lies within `target_split_radius` of the target (∝ radius/distance).
-    pub(super) fn target_draws(&self, from: &Start, tgt: &Endpoint) -> u32 {
+    /// How many target-side draws a segment starting at `x` (the traced point when `origin`) gets
+    /// toward `tgt`: 1, or up to `target_split` when `x` lies within `target_split_radius` of the
+    /// target (∝ radius/distance).
+    pub(super) fn target_draws(&self, x: DVec3, origin: bool, tgt: &Endpoint) -> u32 {
         let set = &self.scene.settings;
         let r = set.target_split_radius;
-        if from.origin || r <= 0.0 {
+        if origin || r <= 0.0 {
             return 1;
         }
-        let d = (from.x - tgt.p).length();
+        let d = (x - tgt.p).length();
         if d >= r {
             1
         } else {

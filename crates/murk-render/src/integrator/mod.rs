@@ -428,14 +428,9 @@ impl<'a> Tracer<'a> {
             } else {
                 0.0
             };
-            let target_pdf = |m: &Medium, k: usize, y: DVec3, t: f64| {
+            let target_pdf = |m: &Medium, seg: &Toward, k: usize, y: DVec3, t: f64| {
                 if scattering.is_some() && pd > 0.0 {
-                    let tgt = &targets[k];
-                    self.target_draws(&from, tgt) as f64
-                        * self.target_pdf(m, tgt, from.x, y)
-                        * t
-                        * t
-                        / pd
+                    seg.target_draws * self.target_pdf(m, &targets[k], from.x, y) * t * t / pd
                 } else {
                     0.0
                 }
@@ -476,8 +471,12 @@ impl<'a> Tracer<'a> {
                                     continue;
                                 }
                                 let y = pos + d * t;
-                                let b = beta * sigma_s * m.transmittance(t - m0) / pdf;
-                                let w = pdf / (seg[k].pdf(t) + pdf_ff(t) + target_pdf(m, k, y, t));
+                                // One exponential for the transmittance and the free-flight density.
+                                let tr = m.transmittance(t - m0);
+                                let b = beta * sigma_s * tr / pdf;
+                                let pff = m.sigma_t * tr;
+                                let w =
+                                    pdf / (seg[k].pdf(t) + pff + target_pdf(m, &seg[k], k, y, t));
                                 let o = opl + t + m.extra_path_m(t - m0);
                                 let v = Vertex::Medium { dir: d };
                                 let at = At {
@@ -507,8 +506,9 @@ impl<'a> Tracer<'a> {
                             out.at_first = false;
                             let y = pos + d * t;
                             let pff = pdf_ff(t);
-                            let mis =
-                                |k: usize| pff / (pff + seg[k].pdf(t) + target_pdf(m, k, y, t));
+                            let mis = |k: usize| {
+                                pff / (pff + seg[k].pdf(t) + target_pdf(m, &seg[k], k, y, t))
+                            };
                             pos = y;
                             opl += t + m.extra_path_m(t - m0);
                             beta *= m.albedo;
