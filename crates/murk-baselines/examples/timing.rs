@@ -53,7 +53,7 @@ fn main() {
             "lct (M = 512)",
             runs,
             || LctPlan::new(&c, LctParams::default()).unwrap(),
-            |p| p.run(&c).unwrap(),
+            |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });
     time("fk", &|| {
@@ -61,7 +61,7 @@ fn main() {
             "fk (M = 512)",
             runs,
             || FkPlan::new(&c, FkParams::default()).unwrap(),
-            |p| p.run(&c).unwrap(),
+            |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });
     time("cdt", &|| {
@@ -69,7 +69,7 @@ fn main() {
             "cdt (reference grid, 128 samples)",
             runs,
             || CdtPlan::new(&c, CdtParams::default()).unwrap(),
-            |p| p.run(&c).unwrap(),
+            |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });
     let native = CdtParams {
@@ -81,7 +81,7 @@ fn main() {
             "cdt (native, 512 samples)",
             runs,
             || CdtPlan::new(&c, native).unwrap(),
-            |p| p.run(&c).unwrap(),
+            |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });
 }

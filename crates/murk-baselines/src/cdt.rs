@@ -9,10 +9,10 @@
 //! Depth is measured behind the slab.
 
 use crate::confocal::{ConfocalGeometry, TimeGrid};
-use crate::fft3::{Fft3, C32};
+use crate::fft3::{Fft3, Steps, C32};
 use crate::fk::Stolt;
 use crate::Reconstruction;
-use murk_core::{Capture, Error, Result, SPEED_OF_LIGHT_M_PER_S};
+use murk_core::{Capture, Error, NoProgress, Progress, Result, SPEED_OF_LIGHT_M_PER_S};
 use rayon::prelude::*;
 
 /// Optical parameters of the slab (defaults: the 2.54 cm polyurethane foam fitted in the paper).
@@ -206,21 +206,29 @@ impl CdtPlan {
     }
 
     /// Reconstructs on the scan grid: [nx, ny, nt], depth k·Δs′/2 behind the slab.
-    pub fn run(&self, capture: &Capture) -> Result<Reconstruction> {
+    pub fn run(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
         self.geom.check_same(capture, self.params.grid)?;
         let g = &self.geom;
-        let mut spec = self.stolt.transform(&g.sample(capture), |_, v| v);
+        let steps = Steps::start(
+            progress,
+            Fft3::FORWARD_PASSES + Fft3::MAP_REAL_PASSES + Stolt::MIGRATE_PASSES,
+        );
+        let mut spec = self.stolt.transform(&g.sample(capture), |_, v| v, &steps);
         spec.par_iter_mut()
             .zip(&self.filter)
             .for_each(|(b, f)| *b *= f);
         // The deconvolved transient spills out of the first octant (the kernel is acausal after
         // regularisation), so the whole padded volume is kept and migrated, as the reference does.
         // Wavefield amplitude √τ. No t² scaling: the reference CDT omits it.
-        self.stolt.fft.map_real(&mut spec, |v| v.max(0.0).sqrt());
+        self.stolt
+            .fft
+            .map_real(&mut spec, |v| v.max(0.0).sqrt(), &steps);
+        let volume = self.stolt.migrate_and_crop(spec, &steps);
+        steps.finish("confocal diffuse tomography")?;
         let (p, s) = (&self.params, &self.params.slab);
         Ok(g.reconstruction(
             g.nt,
-            self.stolt.migrate_and_crop(spec),
+            volume,
             "confocal diffuse tomography (slab Wiener + f-k)",
         )
         .row(
@@ -237,7 +245,7 @@ impl CdtPlan {
 
 /// One-shot CDT (plans and runs).
 pub fn cdt(capture: &Capture, params: CdtParams) -> Result<Reconstruction> {
-    CdtPlan::new(capture, params)?.run(capture)
+    CdtPlan::new(capture, params)?.run(capture, &NoProgress)
 }
 
 /// The CDT forward model: a free-space confocal capture as seen through `slab`, i.e. convolved in
@@ -254,10 +262,12 @@ pub fn through_slab(capture: &Capture, slab: &SlabParams) -> Result<Capture> {
     }
     let stolt = Stolt::new(&g);
     let h = round_trip_spectrum(&g, slab, &stolt.fft);
-    let mut spec = stolt.transform(&g.sample(&c), |_, v| v);
+    let mut spec = stolt.transform(&g.sample(&c), |_, v| v, &Steps::none());
     spec.par_iter_mut().zip(&h).for_each(|(b, h)| *b *= h);
     // The histograms are [nx][ny][nt] in scan order, the shape of the kept octant.
-    stolt.fft.inverse(&mut spec, [g.nx, g.ny], &mut c.h);
+    stolt
+        .fft
+        .inverse(&mut spec, [g.nx, g.ny], &mut c.h, &Steps::none());
     Ok(c)
 }
 
@@ -265,12 +275,13 @@ pub fn through_slab(capture: &Capture, slab: &SlabParams) -> Result<Capture> {
 fn round_trip_spectrum(g: &ConfocalGeometry, slab: &SlabParams, fft: &Fft3) -> Vec<C32> {
     let [nx2, ny2, m2] = fft.dims;
     let k = slab_kernel(g, slab, fft.dims);
-    let mut h = fft.forward([nx2, ny2], |ix, iy, line| {
+    let fill = |ix: usize, iy: usize, line: &mut [f32]| {
         line.copy_from_slice(&k[(ix * ny2 + iy) * m2..][..m2])
-    });
+    };
+    let mut h = fft.forward([nx2, ny2], fill, &Steps::none());
     h.par_iter_mut().for_each(|v| *v = *v * *v);
     // |·| as the reference: removes the rounding noise's sign.
-    fft.map_real(&mut h, f32::abs);
+    fft.map_real(&mut h, f32::abs, &Steps::none());
     h
 }
 

@@ -7,10 +7,12 @@
 //! With symmetry: a convolution with a kernel that is even in x and y (the LCT's light cone) needs
 //! only a quarter of the kernel's spectrum, and goes one temporal frequency plane at a time.
 
+use murk_core::{Error, NoProgress, Progress, Result};
 use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex32;
 use rustfft::{Fft, FftPlanner};
+use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::sync::Arc;
 
 pub(crate) type C32 = Complex32;
@@ -25,6 +27,84 @@ const T_BLOCK: usize = 32;
 const GROUP: usize = 8;
 const PLANE_BLOCK: usize = 8;
 
+/// A method's passes through its data, for the progress bar and for stopping part-way: each pass
+/// counts [`Steps::UNITS`] of the bar whatever its number of pieces, and each piece first asks
+/// whether the caller wants to stop (a stopped method skips its remaining pieces and returns an
+/// error, not a partial result).
+pub(crate) struct Steps<'p> {
+    progress: &'p dyn Progress,
+    declared: usize,
+    started: AtomicUsize,
+}
+
+impl<'p> Steps<'p> {
+    const UNITS: usize = 1000;
+
+    /// Starts the bar for `passes` passes.
+    pub fn start(progress: &'p dyn Progress, passes: usize) -> Self {
+        progress.start((passes * Self::UNITS) as u64);
+        Steps {
+            progress,
+            declared: passes,
+            started: AtomicUsize::new(0),
+        }
+    }
+
+    /// For work inside a plan, which has no bar and is not stopped.
+    pub fn none() -> Steps<'static> {
+        Steps::start(&NoProgress, 0)
+    }
+
+    /// The next pass, of `pieces` pieces of parallel work.
+    pub fn pass(&self, pieces: usize) -> Pass<'_> {
+        self.started.fetch_add(1, Relaxed);
+        if pieces == 0 {
+            self.progress.advance(Self::UNITS as u64);
+        }
+        Pass {
+            progress: self.progress,
+            pieces,
+            done: AtomicUsize::new(0),
+        }
+    }
+
+    /// An error naming `method` where the caller asked to stop part-way.
+    pub fn finish(&self, method: &str) -> Result<()> {
+        if self.progress.cancelled() {
+            return Err(Error::param(format!("{method} stopped")));
+        }
+        // A method that declares fewer passes than it runs would overrun its bar.
+        debug_assert!(
+            self.declared == 0 || self.started.load(Relaxed) == self.declared,
+            "{method}: {} passes run, {} declared",
+            self.started.load(Relaxed),
+            self.declared
+        );
+        Ok(())
+    }
+}
+
+/// One pass of [`Steps`].
+pub(crate) struct Pass<'s> {
+    progress: &'s dyn Progress,
+    pieces: usize,
+    done: AtomicUsize,
+}
+
+impl Pass<'_> {
+    /// Called before each piece: counts it, and says whether to do it (not once the caller has
+    /// asked to stop).
+    pub fn piece(&self) -> bool {
+        if self.progress.cancelled() {
+            return false;
+        }
+        let c = self.done.fetch_add(1, Relaxed) + 1;
+        let units = |c: usize| c * Steps::UNITS / self.pieces;
+        self.progress.advance((units(c) - units(c - 1)) as u64);
+        true
+    }
+}
+
 pub(crate) struct Fft3 {
     /// Real-domain shape.
     pub dims: [usize; 3],
@@ -38,6 +118,13 @@ pub(crate) struct Fft3 {
 }
 
 impl Fft3 {
+    /// Passes through the data of [`Fft3::forward`], [`Fft3::convolve_even`], [`Fft3::map_real`],
+    /// and of [`Fft3::inverse`] and [`Fft3::inverse_power_one_sided`], for [`Steps::start`].
+    pub const FORWARD_PASSES: usize = 3;
+    pub const CONVOLVE_PASSES: usize = 3;
+    pub const MAP_REAL_PASSES: usize = 5;
+    pub const INVERSE_PASSES: usize = 3;
+
     pub fn new(dims: [usize; 3]) -> Self {
         let mut planner = FftPlanner::new();
         let mut real = RealFftPlanner::new();
@@ -63,16 +150,21 @@ impl Fft3 {
         &self,
         support: [usize; 2],
         fill: impl Fn(usize, usize, &mut [f32]) + Sync,
+        steps: &Steps,
     ) -> Vec<C32> {
         let [nx, ny, nt] = self.dims;
         let nh = self.half();
         let mut spec = vec![C32::default(); nx * ny * nh];
+        let pass = steps.pass(support[0]);
         spec.par_chunks_mut(ny * nh)
             .take(support[0])
             .enumerate()
             .for_each_init(
                 || (vec![0.0f32; nt], self.r2c.make_scratch_vec()),
                 |(line, scratch), (ix, slab)| {
+                    if !pass.piece() {
+                        return;
+                    }
                     for (iy, out) in slab.chunks_mut(nh).take(support[1]).enumerate() {
                         line.fill(0.0);
                         fill(ix, iy, line);
@@ -82,8 +174,8 @@ impl Fft3 {
                     }
                 },
             );
-        self.along_y(&mut spec, &self.fwd[1], support[0]);
-        self.along_x(&mut spec, &self.fwd[0]);
+        self.along_y(&mut spec, &self.fwd[1], support[0], steps);
+        self.along_x(&mut spec, &self.fwd[0], steps);
         spec
     }
 
@@ -133,6 +225,7 @@ impl Fft3 {
         kernel: &[C32],
         out: &mut [f32],
         emit: impl Fn(&[f32], &mut [f32]) + Sync,
+        steps: &Steps,
     ) {
         let [nx, ny, nt] = self.dims;
         let [sx, sy] = support;
@@ -144,6 +237,7 @@ impl Fft3 {
         // [group][f][line in group], f padded to whole blocks.
         let group_len = nh.next_multiple_of(PLANE_BLOCK) * GROUP;
         let mut spec = vec![C32::default(); (sx * sy).div_ceil(GROUP) * group_len];
+        let pass = steps.pass(spec.len() / group_len);
         spec.par_chunks_mut(group_len).enumerate().for_each_init(
             || {
                 (
@@ -153,6 +247,9 @@ impl Fft3 {
                 )
             },
             |(line, freq, scratch), (g, group)| {
+                if !pass.piece() {
+                    return;
+                }
                 for l in 0..GROUP.min(sx * sy - g * GROUP) {
                     let i = g * GROUP + l;
                     line.fill(0.0);
@@ -176,9 +273,13 @@ impl Fft3 {
                 blocks[b].push(block);
             }
         }
+        let pass = steps.pass(blocks.len());
         blocks.into_par_iter().enumerate().for_each_init(
             || self.plane(),
             |p, (b, mut groups)| {
+                if !pass.piece() {
+                    return;
+                }
                 for j in 0..PLANE_BLOCK.min(nh - b * PLANE_BLOCK) {
                     // Sample (j, l) of the block of group g is line g·GROUP + l at f.
                     let at = |x: usize, y: usize| {
@@ -221,6 +322,7 @@ impl Fft3 {
             },
         );
         let s = 1.0 / self.len() as f32;
+        let pass = steps.pass(spec.len() / group_len);
         spec.par_chunks_mut(group_len)
             .zip(out.par_chunks_mut(GROUP * n))
             .for_each_init(
@@ -232,6 +334,9 @@ impl Fft3 {
                     )
                 },
                 |(freq, line, scratch), (group, o)| {
+                    if !pass.piece() {
+                        return;
+                    }
                     for (l, o) in o.chunks_mut(n).enumerate() {
                         // Scaled here: half as many samples as after the transform.
                         for (f, v) in freq.iter_mut().enumerate() {
@@ -247,13 +352,12 @@ impl Fft3 {
     /// Inverse transform of a Hermitian spectrum (that of real data), scaled by 1/len, into `out`
     /// = `[keep[0]][keep[1]][n]`: the first n ≤ nt samples of the lines x < `keep[0]`,
     /// y < `keep[1]`. `spec` is used as scratch.
-    pub fn inverse(&self, spec: &mut [C32], keep: [usize; 2], out: &mut [f32]) {
+    pub fn inverse(&self, spec: &mut [C32], keep: [usize; 2], out: &mut [f32], steps: &Steps) {
         let nt = self.dims[2];
         let s = 1.0 / self.len() as f32;
         self.inverse_lines(
-            spec,
-            keep,
-            out,
+            (spec, keep, out),
+            steps,
             || (vec![0.0f32; nt], self.c2r.make_scratch_vec()),
             |(line, scratch), freq, o| {
                 self.to_real(freq, line, scratch);
@@ -264,37 +368,48 @@ impl Fft3 {
 
     /// Replaces the Hermitian spectrum `spec` by that of f(x), x its inverse transform (scaled by
     /// 1/len), on the whole grid: the inverse and forward transforms without a real volume between.
-    pub fn map_real(&self, spec: &mut [C32], f: impl Fn(f32) -> f32 + Sync) {
-        let [nx, _, nt] = self.dims;
+    pub fn map_real(&self, spec: &mut [C32], f: impl Fn(f32) -> f32 + Sync, steps: &Steps) {
+        let [nx, ny, nt] = self.dims;
         let s = 1.0 / self.len() as f32;
-        self.along_x(spec, &self.inv[0]);
-        self.along_y(spec, &self.inv[1], nx);
+        self.along_x(spec, &self.inv[0], steps);
+        self.along_y(spec, &self.inv[1], nx, steps);
         let scratch_len = self.c2r.get_scratch_len().max(self.r2c.get_scratch_len());
-        spec.par_chunks_mut(self.half()).for_each_init(
+        let pass = steps.pass(nx);
+        spec.par_chunks_mut(ny * self.half()).for_each_init(
             || (vec![0.0f32; nt], vec![C32::default(); scratch_len]),
-            |(line, scratch), freq| {
-                self.to_real(freq, line, scratch);
-                line.iter_mut().for_each(|v| *v = f(*v * s));
-                self.r2c
-                    .process_with_scratch(line, freq, scratch)
-                    .expect("realfft lengths match their plan");
+            |(line, scratch), slab| {
+                if !pass.piece() {
+                    return;
+                }
+                for freq in slab.chunks_mut(self.half()) {
+                    self.to_real(freq, line, scratch);
+                    line.iter_mut().for_each(|v| *v = f(*v * s));
+                    self.r2c
+                        .process_with_scratch(line, freq, scratch)
+                        .expect("realfft lengths match their plan");
+                }
             },
         );
-        self.along_y(spec, &self.fwd[1], nx);
-        self.along_x(spec, &self.fwd[0]);
+        self.along_y(spec, &self.fwd[1], nx, steps);
+        self.along_x(spec, &self.fwd[0], steps);
     }
 
     /// |inverse transform|², scaled by 1/len², of a spectrum that is zero at negative temporal
     /// frequencies (an analytic signal: `spec` holds its non-negative half); output and scratch as
     /// in [`Fft3::inverse`].
-    pub fn inverse_power_one_sided(&self, spec: &mut [C32], keep: [usize; 2], out: &mut [f32]) {
+    pub fn inverse_power_one_sided(
+        &self,
+        spec: &mut [C32],
+        keep: [usize; 2],
+        out: &mut [f32],
+        steps: &Steps,
+    ) {
         let nt = self.dims[2];
         let nh = self.half();
         let s2 = (1.0 / self.len() as f32).powi(2);
         self.inverse_lines(
-            spec,
-            keep,
-            out,
+            (spec, keep, out),
+            steps,
             || {
                 let scratch = vec![C32::default(); self.inv_t.get_inplace_scratch_len()];
                 (vec![C32::default(); nt], scratch)
@@ -344,9 +459,8 @@ impl Fft3 {
     /// output line)` on every kept line.
     fn inverse_lines<S>(
         &self,
-        spec: &mut [C32],
-        keep: [usize; 2],
-        out: &mut [f32],
+        (spec, keep, out): (&mut [C32], [usize; 2], &mut [f32]),
+        steps: &Steps,
         scratch: impl Fn() -> S + Sync + Send,
         along_t: impl Fn(&mut S, &mut [C32], &mut [f32]) + Sync + Send,
     ) {
@@ -354,27 +468,36 @@ impl Fft3 {
         let nh = self.half();
         let n = out.len() / (keep[0] * keep[1]);
         assert!(n <= nt && n * keep[0] * keep[1] == out.len());
-        self.along_x(spec, &self.inv[0]);
-        self.along_y(spec, &self.inv[1], keep[0]);
+        self.along_x(spec, &self.inv[0], steps);
+        self.along_y(spec, &self.inv[1], keep[0], steps);
+        let pass = steps.pass(keep[0]);
         spec.par_chunks_mut(ny * nh)
             .zip(out.par_chunks_mut(keep[1] * n))
             .for_each_init(scratch, |s, (slab, o)| {
+                if !pass.piece() {
+                    return;
+                }
                 slab.chunks_mut(nh)
                     .zip(o.chunks_mut(n))
                     .for_each(|(freq, o)| along_t(s, freq, o))
             });
     }
 
-    fn along_y(&self, spec: &mut [C32], fft: &Arc<dyn Fft<f32>>, x_lines: usize) {
+    fn along_y(&self, spec: &mut [C32], fft: &Arc<dyn Fft<f32>>, x_lines: usize, steps: &Steps) {
         let ny = self.dims[1];
         let nh = self.half();
+        let pass = steps.pass(x_lines);
         spec.par_chunks_mut(ny * nh).take(x_lines).for_each_init(
             || Scratch::new(fft, ny),
-            |s, slab| s.across_rows(fft, slab.chunks_mut(nh).collect()),
+            |s, slab| {
+                if pass.piece() {
+                    s.across_rows(fft, slab.chunks_mut(nh).collect())
+                }
+            },
         );
     }
 
-    fn along_x(&self, spec: &mut [C32], fft: &Arc<dyn Fft<f32>>) {
+    fn along_x(&self, spec: &mut [C32], fft: &Arc<dyn Fft<f32>>, steps: &Steps) {
         let [nx, ny, _] = self.dims;
         let nh = self.half();
         // rows[y][x] borrows the spectrum line at (x, y): groups of rows with equal y are disjoint
@@ -385,9 +508,14 @@ impl Fft3 {
                 rows[y].push(line);
             }
         }
+        let pass = steps.pass(ny);
         rows.into_par_iter().for_each_init(
             || Scratch::new(fft, nx),
-            |s, group| s.across_rows(fft, group),
+            |s, group| {
+                if pass.piece() {
+                    s.across_rows(fft, group)
+                }
+            },
         );
     }
 }
@@ -553,14 +681,14 @@ mod tests {
         let nh = plan.half();
         let x = dense(SUPPORT, value);
         let want = dft(&x, D, -1.0, 0..3);
-        let spec = plan.forward(SUPPORT, lines(value));
+        let spec = plan.forward(SUPPORT, lines(value), &Steps::none());
         let scale = peak_norm(&want);
         for (i, a) in spec.iter().enumerate() {
             let b = want[i / nh * nt + i % nh];
             assert!((a - b).norm() < 1e-5 * scale, "{a} vs {b}");
         }
         let mut out = vec![0.0f32; SUPPORT[0] * SUPPORT[1] * N_OUT];
-        plan.inverse(&mut spec.clone(), SUPPORT, &mut out);
+        plan.inverse(&mut spec.clone(), SUPPORT, &mut out, &Steps::none());
         assert_kept(&out, value, 1e-5 * peak_norm(&x));
         // The analytic signal: the direct inverse of the spectrum without negative frequencies.
         let mut one_sided = want.clone();
@@ -574,12 +702,12 @@ mod tests {
             .iter()
             .map(|v| (v / len).norm_sqr())
             .collect();
-        plan.inverse_power_one_sided(&mut spec.clone(), SUPPORT, &mut out);
+        plan.inverse_power_one_sided(&mut spec.clone(), SUPPORT, &mut out, &Steps::none());
         let peak = z.iter().copied().fold(0.0, f32::max);
         assert_kept(&out, |ix, iy, t| z[(ix * ny + iy) * nt + t], 1e-4 * peak);
         // A pointwise map between the inverse and forward transforms: the spectrum of x².
         let mut squared = spec;
-        plan.map_real(&mut squared, |v| v * v);
+        plan.map_real(&mut squared, |v| v * v, &Steps::none());
         let x2: Vec<C32> = x.iter().map(|v| v * v).collect();
         let want = dft(&x2, D, -1.0, 0..3);
         let scale = peak_norm(&want);
@@ -626,9 +754,14 @@ mod tests {
             .map(|v| v.re / len)
             .collect();
         let mut out = vec![0.0f32; SUPPORT[0] * SUPPORT[1] * N_OUT];
-        plan.convolve_even(SUPPORT, lines(value), &quarter, &mut out, |line, o| {
-            o.copy_from_slice(&line[..N_OUT])
-        });
+        plan.convolve_even(
+            SUPPORT,
+            lines(value),
+            &quarter,
+            &mut out,
+            |line, o| o.copy_from_slice(&line[..N_OUT]),
+            &Steps::none(),
+        );
         let peak = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
         assert_kept(&out, |ix, iy, t| want[(ix * ny + iy) * nt + t], 1e-5 * peak);
     }

@@ -8,9 +8,9 @@
 //! output, no voxel × sensor tensors; 64² × 512 takes 67 MB of spectrum.
 
 use crate::confocal::{ConfocalGeometry, TimeGrid};
-use crate::fft3::{Fft3, C32};
+use crate::fft3::{Fft3, Steps, C32};
 use crate::Reconstruction;
-use murk_core::{Capture, Result};
+use murk_core::{Capture, NoProgress, Progress, Result};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,21 +43,26 @@ impl FkPlan {
     }
 
     /// Reconstructs on the scan grid: [nx, ny, nt], depth k·Δs′/2.
-    pub fn run(&self, capture: &Capture) -> Result<Reconstruction> {
+    pub fn run(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
         self.geom.check_same(capture, self.params.grid)?;
         let g = &self.geom;
+        let steps = Steps::start(progress, Fft3::FORWARD_PASSES + Stolt::MIGRATE_PASSES);
         // √(τ·ẑ²), ẑ = k/M: the amplitude of the wavefield, with the t² falloff undone.
         let m = g.nt as f32;
-        let spec = self
-            .stolt
-            .transform(&g.sample(capture), |k, v| v.max(0.0).sqrt() * k as f32 / m);
-        Ok(g.reconstruction(g.nt, self.stolt.migrate_and_crop(spec), "f-k migration"))
+        let spec = self.stolt.transform(
+            &g.sample(capture),
+            |k, v| v.max(0.0).sqrt() * k as f32 / m,
+            &steps,
+        );
+        let volume = self.stolt.migrate_and_crop(spec, &steps);
+        steps.finish("f-k migration")?;
+        Ok(g.reconstruction(g.nt, volume, "f-k migration"))
     }
 }
 
 /// One-shot f-k migration (plans and runs).
 pub fn fk(capture: &Capture, params: FkParams) -> Result<Reconstruction> {
-    FkPlan::new(capture, params)?.run(capture)
+    FkPlan::new(capture, params)?.run(capture, &NoProgress)
 }
 
 /// The Stolt step on the spectrum of the padded [2nx][2ny][2m] grid, shared with CDT.
@@ -84,20 +89,29 @@ impl Stolt {
 
     /// Spectrum of `tau` ([nx][ny][m]) zero-padded into the first octant, sample k of each line
     /// mapped through `f(k, value)` first.
-    pub fn transform(&self, tau: &[f32], f: impl Fn(usize, f32) -> f32 + Sync) -> Vec<C32> {
-        self.fft.forward([self.nx, self.ny], |ix, iy, line| {
+    pub fn transform(
+        &self,
+        tau: &[f32],
+        f: impl Fn(usize, f32) -> f32 + Sync,
+        steps: &Steps,
+    ) -> Vec<C32> {
+        let fill = |ix: usize, iy: usize, line: &mut [f32]| {
             let src = &tau[(ix * self.ny + iy) * self.m..][..self.m];
             line.iter_mut()
                 .zip(src)
                 .enumerate()
                 .for_each(|(k, (d, &s))| *d = f(k, s));
-        })
+        };
+        self.fft.forward([self.nx, self.ny], fill, steps)
     }
+
+    /// Passes of [`Stolt::migrate_and_crop`]: the map, then the inverse transform.
+    pub const MIGRATE_PASSES: usize = 1 + Fft3::INVERSE_PASSES;
 
     /// Stolt-maps the spectrum `spec`, inverse-transforms it and returns |·|² of the first octant.
     /// The map fills only positive temporal frequencies, so the migrated spectrum is not Hermitian:
     /// the inverse is complex, but the stored non-negative half is all there is.
-    pub fn migrate_and_crop(&self, mut spec: Vec<C32>) -> Vec<f32> {
+    pub fn migrate_and_crop(&self, mut spec: Vec<C32>, steps: &Steps) -> Vec<f32> {
         let [nx2, ny2, _] = self.fft.dims;
         let (m, mf) = (self.m, self.m as f64);
         // Signed normalised frequency of FFT index j on an axis of 2n samples.
@@ -108,41 +122,48 @@ impl Stolt {
                 j as f64 - 2.0 * n as f64
             }) / n as f64
         };
-        spec.par_chunks_mut(self.fft.half())
+        let half = self.fft.half();
+        let pass = steps.pass(nx2);
+        spec.par_chunks_mut(ny2 * half)
             .enumerate()
-            .for_each(|(i, col)| {
-                let kx = freq(i / ny2, nx2 / 2);
-                let ky = freq(i % ny2, ny2 / 2);
-                let lateral = self.a2[0] * kx * kx + self.a2[1] * ky * ky;
-                // Source samples exist for k_z′ ≤ (M−1)/M; beyond, and for all larger k_z, it is zero.
-                let mut end = m;
-                // Output m reads the source at index ≥ m, so ascending order never reads a sample that
-                // was already overwritten: the mapping is done in place.
-                for mo in 1..m {
-                    let kz = mo as f64 / mf;
-                    // max() guards the in-place order against rounding when k_x = k_y = 0.
-                    let u = ((lateral + kz * kz).sqrt() * mf).max(mo as f64);
-                    if u > (m - 1) as f64 {
-                        end = mo;
-                        break;
-                    }
-                    // u ≥ 0, so the cast is the floor (f64::floor is a libm call without SSE4.1).
-                    let n = u as usize;
-                    let f = (u - n as f64) as f32;
-                    let hi = if n + 1 < m {
-                        col[n + 1]
-                    } else {
-                        C32::default()
-                    };
-                    col[mo] = (col[n] * (1.0 - f) + hi * f) * (mo as f64 / u) as f32;
+            .for_each(|(ix, slab)| {
+                if !pass.piece() {
+                    return;
                 }
-                // Only k_z > 0 survives: the wavefield travels towards the wall.
-                col[0] = C32::default();
-                col[end..].iter_mut().for_each(|v| *v = C32::default());
+                for (iy, col) in slab.chunks_mut(half).enumerate() {
+                    let kx = freq(ix, nx2 / 2);
+                    let ky = freq(iy, ny2 / 2);
+                    let lateral = self.a2[0] * kx * kx + self.a2[1] * ky * ky;
+                    // Source samples exist for k_z′ ≤ (M−1)/M; beyond, and for all larger k_z, it is zero.
+                    let mut end = m;
+                    // Output m reads the source at index ≥ m, so ascending order never reads a sample that
+                    // was already overwritten: the mapping is done in place.
+                    for mo in 1..m {
+                        let kz = mo as f64 / mf;
+                        // max() guards the in-place order against rounding when k_x = k_y = 0.
+                        let u = ((lateral + kz * kz).sqrt() * mf).max(mo as f64);
+                        if u > (m - 1) as f64 {
+                            end = mo;
+                            break;
+                        }
+                        // u ≥ 0, so the cast is the floor (f64::floor is a libm call without SSE4.1).
+                        let n = u as usize;
+                        let f = (u - n as f64) as f32;
+                        let hi = if n + 1 < m {
+                            col[n + 1]
+                        } else {
+                            C32::default()
+                        };
+                        col[mo] = (col[n] * (1.0 - f) + hi * f) * (mo as f64 / u) as f32;
+                    }
+                    // Only k_z > 0 survives: the wavefield travels towards the wall.
+                    col[0] = C32::default();
+                    col[end..].iter_mut().for_each(|v| *v = C32::default());
+                }
             });
         let mut out = vec![0.0f32; self.nx * self.ny * m];
         self.fft
-            .inverse_power_one_sided(&mut spec, [self.nx, self.ny], &mut out);
+            .inverse_power_one_sided(&mut spec, [self.nx, self.ny], &mut out, steps);
         out
     }
 }
@@ -192,7 +213,7 @@ mod tests {
         let c = confocal(8, 0.64, axis(0.0, 0.01, 64));
         let plan = FkPlan::new(&c, FkParams::default()).unwrap();
         let e = plan
-            .run(&confocal(8, 0.64, axis(0.0, 0.02, 64)))
+            .run(&confocal(8, 0.64, axis(0.0, 0.02, 64)), &NoProgress)
             .unwrap_err();
         assert!(e.to_string().contains("plan was built for"), "{e}");
         let mut single = confocal(8, 0.64, axis(0.0, 0.01, 64));

@@ -8,9 +8,9 @@
 //! piled onto the last sample.
 
 use crate::confocal::{ConfocalGeometry, TimeGrid};
-use crate::fft3::{Fft3, C32};
+use crate::fft3::{Fft3, Steps, C32};
 use crate::Reconstruction;
-use murk_core::{Capture, Error, Result};
+use murk_core::{Capture, Error, NoProgress, Progress, Result};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::PI;
@@ -94,8 +94,9 @@ impl LctPlan {
     }
 
     /// Reconstructs on the scan grid: [nx, ny, nt], depth k·Δs′/2.
-    pub fn run(&self, capture: &Capture) -> Result<Reconstruction> {
+    pub fn run(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
         self.geom.check_same(capture, self.params.grid)?;
+        let steps = Steps::start(progress, Fft3::CONVOLVE_PASSES);
         let (g, m) = (&self.geom, self.m);
         let tau = g.sample(capture);
         let power = match self.params.reflectance {
@@ -118,7 +119,9 @@ impl LctPlan {
                 self.resampler.v_to_t(&v[..m], out);
                 out.iter_mut().for_each(|o| *o = o.max(0.0));
             },
+            &steps,
         );
+        steps.finish("light-cone transform")?;
         Ok(
             g.reconstruction(g.nt, data, "light-cone transform (Wiener)")
                 .row("snr", self.params.snr)
@@ -129,7 +132,7 @@ impl LctPlan {
 
 /// One-shot LCT (plans and runs).
 pub fn lct(capture: &Capture, params: LctParams) -> Result<Reconstruction> {
-    LctPlan::new(capture, params)?.run(capture)
+    LctPlan::new(capture, params)?.run(capture, &NoProgress)
 }
 
 /// The binary light cone on the padded [2nx][2ny][2m] grid, apex at index 0 (negative lateral
@@ -266,7 +269,10 @@ mod tests {
             .filter(|i| psf_at(i / ny, i % ny).is_some())
             .count();
         assert!((norm * (count as f32).sqrt() - 1.0).abs() < 1e-6);
-        let full = wiener(plan.fft.forward([nx, ny], psf), plan.params.snr);
+        let full = wiener(
+            plan.fft.forward([nx, ny], psf, &Steps::none()),
+            plan.params.snr,
+        );
         let peak = full.iter().map(|v| v.norm()).fold(0.0, f32::max);
         for (i, want) in full.iter().enumerate() {
             let (kx, ky, f) = (i / (ny * nh), i / nh % ny, i % nh);

@@ -18,6 +18,8 @@ mod fft3;
 pub mod fk;
 pub mod lct;
 #[cfg(test)]
+mod progress_tests;
+#[cfg(test)]
 mod testutil;
 
 pub use bp::{backproject, backproject_with, BpOptions};

@@ -293,9 +293,9 @@ impl Engine {
             Engine::Pf(plan) => plan.run(cap, progress),
             Engine::Bp(v, o) => murk_baselines::backproject_with(cap, v, *o, progress),
             Engine::Fbp(v, o) => murk_baselines::fbp_with(cap, v, *o, progress),
-            Engine::Lct(plan) => plan.run(cap),
-            Engine::Fk(plan) => plan.run(cap),
-            Engine::Cdt(plan) => plan.run(cap),
+            Engine::Lct(plan) => plan.run(cap, progress),
+            Engine::Fk(plan) => plan.run(cap, progress),
+            Engine::Cdt(plan) => plan.run(cap, progress),
         }
     }
 }

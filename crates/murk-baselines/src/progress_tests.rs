@@ -1,0 +1,82 @@
+//! The confocal methods' progress: the bar ends exactly at the total it announced, and a caller
+//! that asks to stop part-way gets an error, not a partial volume.
+
+use crate::testutil::{add_point, axis, confocal};
+use crate::{CdtParams, CdtPlan, FkParams, FkPlan, LctParams, LctPlan, Reconstruction};
+use murk_core::{Capture, DVec3, Progress, Result};
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+/// Records the announced total and the work done; asks to stop once `stop_at` units are done.
+struct Recorder {
+    total: AtomicU64,
+    done: AtomicU64,
+    stop_at: u64,
+}
+
+impl Recorder {
+    fn new(stop_at: u64) -> Self {
+        Recorder {
+            total: AtomicU64::new(0),
+            done: AtomicU64::new(0),
+            stop_at,
+        }
+    }
+}
+
+impl Progress for Recorder {
+    fn start(&self, total: u64) {
+        self.total.store(total, Relaxed);
+    }
+    fn advance(&self, n: u64) {
+        self.done.fetch_add(n, Relaxed);
+    }
+    fn cancelled(&self) -> bool {
+        self.done.load(Relaxed) >= self.stop_at
+    }
+}
+
+type Run = Box<dyn Fn(&Capture, &dyn Progress) -> Result<Reconstruction>>;
+
+/// Each method planned for `c`, with the word its stop error starts with.
+fn methods(c: &Capture) -> Vec<(&'static str, Run)> {
+    let lct = LctPlan::new(c, LctParams::default()).unwrap();
+    let fk = FkPlan::new(c, FkParams::default()).unwrap();
+    let cdt = CdtPlan::new(c, CdtParams::default()).unwrap();
+    vec![
+        ("light-cone", Box::new(move |c, p| lct.run(c, p))),
+        ("f-k", Box::new(move |c, p| fk.run(c, p))),
+        ("confocal diffuse", Box::new(move |c, p| cdt.run(c, p))),
+    ]
+}
+
+fn capture() -> Capture {
+    let mut c = confocal(16, 0.64, axis(0.0, 0.01, 128));
+    add_point(&mut c, DVec3::new(0.02, -0.02, 0.4));
+    c
+}
+
+#[test]
+fn each_bar_ends_at_its_total() {
+    let c = capture();
+    for (name, run) in methods(&c) {
+        let p = Recorder::new(u64::MAX);
+        let full = run(&c, &p).unwrap();
+        let (total, done) = (p.total.load(Relaxed), p.done.load(Relaxed));
+        assert!(total > 0 && done == total, "{name}: {done} of {total}");
+        // Reporting progress changes nothing in the result.
+        let quiet = run(&c, &murk_core::NoProgress).unwrap();
+        assert_eq!(full.intensity, quiet.intensity, "{name}");
+    }
+}
+
+#[test]
+fn a_stop_part_way_is_an_error() {
+    let c = capture();
+    for (name, run) in methods(&c) {
+        // The first pass is a thousand units: stop a third of the way through it.
+        let p = Recorder::new(333);
+        let e = run(&c, &p).unwrap_err().to_string();
+        assert!(e.starts_with(name) && e.ends_with("stopped"), "{name}: {e}");
+        assert!(p.done.load(Relaxed) < p.total.load(Relaxed), "{name}");
+    }
+}
