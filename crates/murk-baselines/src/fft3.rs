@@ -27,6 +27,13 @@ const T_BLOCK: usize = 32;
 const GROUP: usize = 8;
 const PLANE_BLOCK: usize = 8;
 
+/// `n` complex zeros, allocated zeroed ([`murk_core::buffer::zeroed`]): the spectra here take up
+/// to gigabytes.
+fn zeros(n: usize) -> Vec<C32> {
+    // SAFETY: Complex<f32> is #[repr(C)] {re, im}: zero bits are 0 + 0i.
+    unsafe { murk_core::buffer::zeroed(n) }
+}
+
 /// A method's passes through its data, for the progress bar and for stopping part-way: each pass
 /// counts [`Steps::UNITS`] of the bar whatever its number of pieces, and each piece first asks
 /// whether the caller wants to stop (a stopped method skips its remaining pieces and returns an
@@ -154,7 +161,7 @@ impl Fft3 {
     ) -> Vec<C32> {
         let [nx, ny, nt] = self.dims;
         let nh = self.half();
-        let mut spec = vec![C32::default(); nx * ny * nh];
+        let mut spec = zeros(nx * ny * nh);
         let pass = steps.pass(support[0]);
         spec.par_chunks_mut(ny * nh)
             .take(support[0])
@@ -188,7 +195,7 @@ impl Fft3 {
     pub fn forward_even(&self, t_spectrum: impl Fn(usize, &mut [C32]) + Sync) -> Vec<C32> {
         let [nx, ny, _] = self.dims;
         let (hx, hy) = (nx / 2 + 1, ny / 2 + 1);
-        let mut planes = vec![C32::default(); self.half() * hx * hy];
+        let mut planes = zeros(self.half() * hx * hy);
         planes.par_chunks_mut(hx * hy).enumerate().for_each_init(
             || self.plane(),
             |p, (f, plane)| {
@@ -236,7 +243,7 @@ impl Fft3 {
         assert_eq!(n * sx * sy, out.len());
         // [group][f][line in group], f padded to whole blocks.
         let group_len = nh.next_multiple_of(PLANE_BLOCK) * GROUP;
-        let mut spec = vec![C32::default(); (sx * sy).div_ceil(GROUP) * group_len];
+        let mut spec = zeros((sx * sy).div_ceil(GROUP) * group_len);
         let pass = steps.pass(spec.len() / group_len);
         spec.par_chunks_mut(group_len).enumerate().for_each_init(
             || {

@@ -21,6 +21,29 @@ pub fn grow<T: Copy>(v: &mut Vec<T>, n: usize, fill: T) {
     v.resize(n, fill);
 }
 
+/// `n` zeros, allocated zeroed: the operating system's fresh pages are zero already, so nothing is
+/// written before the buffer is first used (and then by the threads that use it), and huge pages
+/// are requested before that. `vec![Complex32::default(); n]` writes every zero on one thread
+/// instead: 5 s for a 2 GB spectrum.
+///
+/// # Safety
+/// The all-zero bit pattern must be a valid `T` (floats, and complex numbers made of them).
+pub unsafe fn zeroed<T: Copy>(n: usize) -> Vec<T> {
+    let layout = std::alloc::Layout::array::<T>(n).expect("a buffer below isize::MAX bytes");
+    if layout.size() == 0 {
+        return Vec::new();
+    }
+    // SAFETY: the layout has a nonzero size.
+    let ptr = unsafe { std::alloc::alloc_zeroed(layout) };
+    if ptr.is_null() {
+        std::alloc::handle_alloc_error(layout);
+    }
+    advise_huge(ptr as usize, layout.size());
+    // SAFETY: allocated by the global allocator with the layout of n T, all n initialised (zero
+    // bits, a valid T by the caller's guarantee).
+    unsafe { Vec::from_raw_parts(ptr.cast(), n, n) }
+}
+
 /// Asks for huge pages over the 2 MiB-aligned part of `[addr, addr + len)`. Advice only: where the
 /// kernel declines (THP off, another OS) nothing changes but speed.
 fn advise_huge(addr: usize, len: usize) {
@@ -52,5 +75,11 @@ mod tests {
         assert_eq!((v[7], v[3 << 20], v.len()), (2.0, 4.0, 5 << 20));
         super::grow(&mut v, 10, 0.0);
         assert_eq!(v.len(), 10);
+        // SAFETY: zero bits are 0.0.
+        let mut z: Vec<f64> = unsafe { super::zeroed(3 << 20) };
+        assert!(z.len() == 3 << 20 && z.iter().all(|&v| v == 0.0));
+        z.push(1.0);
+        assert_eq!(z[3 << 20], 1.0);
+        assert!(unsafe { super::zeroed::<f32>(0) }.is_empty());
     }
 }
