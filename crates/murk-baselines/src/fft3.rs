@@ -57,7 +57,7 @@ impl<'p> Steps<'p> {
         }
     }
 
-    /// For work inside a plan, which has no bar and is not stopped.
+    /// For work that reports to no bar and is not stopped (plans, `through_slab`, tests).
     pub fn none() -> Steps<'static> {
         Steps::start(&NoProgress, 0)
     }
@@ -80,7 +80,8 @@ impl<'p> Steps<'p> {
         if self.progress.cancelled() {
             return Err(Error::param(format!("{method} stopped")));
         }
-        // A method that declares fewer passes than it runs would overrun its bar.
+        // A method that declares another number of passes than it runs leaves its bar short or
+        // overruns it.
         debug_assert!(
             self.declared == 0 || self.started.load(Relaxed) == self.declared,
             "{method}: {} passes run, {} declared",

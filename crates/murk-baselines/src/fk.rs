@@ -134,10 +134,11 @@ impl Stolt {
                     let kx = freq(ix, nx2 / 2);
                     let ky = freq(iy, ny2 / 2);
                     let lateral = self.a2[0] * kx * kx + self.a2[1] * ky * ky;
-                    // Source samples exist for k_z′ ≤ (M−1)/M; beyond, and for all larger k_z, it is zero.
+                    // Source samples exist for k_z′ ≤ (M−1)/M; beyond, and for all larger k_z,
+                    // it is zero.
                     let mut end = m;
-                    // Output m reads the source at index ≥ m, so ascending order never reads a sample that
-                    // was already overwritten: the mapping is done in place.
+                    // Output m reads the source at index ≥ m, so ascending order never reads a
+                    // sample that was already overwritten: the mapping is done in place.
                     for mo in 1..m {
                         let kz = mo as f64 / mf;
                         // max() guards the in-place order against rounding when k_x = k_y = 0.
