@@ -5,14 +5,19 @@ import time
 
 from conftest import SCENES
 
-# The child installs Python's usual SIGINT handler itself: a process started in the background
-# (as CI may start pytest) inherits SIGINT ignored, and Python then installs none.
-LONG_RENDER = f"""
+
+def child(setup: str, call: str) -> str:
+    """A child script: `setup`, then "started", then `call`; exit status 3 on KeyboardInterrupt. The
+    child installs Python's usual SIGINT handler itself: a process started in the background (as CI
+    may start pytest) inherits SIGINT ignored, and Python then installs none."""
+    return f"""
 import signal, sys, murk
 signal.signal(signal.SIGINT, signal.default_int_handler)
+{setup}
 print("started", flush=True)
 try:
-    murk.render({str(SCENES / 'z-letter.toml')!r}, grid=64, spp=256)  # 64 units of about 0.5 s each
+    {call}
+    print("finished", flush=True)
 except KeyboardInterrupt:
     print("interrupted", flush=True)
     sys.exit(3)
@@ -37,45 +42,24 @@ def seconds_to_stop(script: str) -> float:
 
 
 def test_ctrl_c_interrupts_a_long_render():
-    assert seconds_to_stop(LONG_RENDER) < 10
-
-
-LONG_BP = """
-import signal, sys, murk
-signal.signal(signal.SIGINT, signal.default_int_handler)
-cap = murk.synth("z:1.0", kind="laser-grid", wall_size=2.0, grid=128, bins=2048, bin_width=0.002,
-                 start=1.0)
-print("started", flush=True)
-try:
-    # About 15 s on two cores: 16 384 histograms read at 64³ voxels off the wall's lattice.
-    murk.reconstruct(cap, "bp", volume="-0.9:0.9:64,-0.9:0.9:64,0.5:1.5:64")
-    print("finished", flush=True)
-except KeyboardInterrupt:
-    print("interrupted", flush=True)
-    sys.exit(3)
-"""
+    # 64 units of about 0.5 s each.
+    scene = str(SCENES / "z-letter.toml")
+    assert seconds_to_stop(child("", f"murk.render({scene!r}, grid=64, spp=256)")) < 10
 
 
 def test_ctrl_c_interrupts_a_long_backprojection():
-    # The tiles in flight finish; the rest are skipped.
-    assert seconds_to_stop(LONG_BP) < 3
-
-
-LONG_FK = """
-import signal, sys, murk
-signal.signal(signal.SIGINT, signal.default_int_handler)
-cap = murk.synth("z:1.5", kind="confocal", wall_size=2.0, grid=128, bins=4096, bin_width=0.0015)
-print("started", flush=True)
-try:
-    # About 4 s on two cores: a 2 GB spectrum, transformed, Stolt-mapped and transformed back.
-    murk.reconstruct(cap, "fk")
-    print("finished", flush=True)
-except KeyboardInterrupt:
-    print("interrupted", flush=True)
-    sys.exit(3)
-"""
+    # About 15 s on two cores: 16 384 histograms read at 64³ voxels off the wall's lattice. The
+    # tiles in flight finish; the rest are skipped.
+    setup = ('cap = murk.synth("z:1.0", kind="laser-grid", wall_size=2.0, grid=128, bins=2048, '
+             'bin_width=0.002, start=1.0)')
+    call = 'murk.reconstruct(cap, "bp", volume="-0.9:0.9:64,-0.9:0.9:64,0.5:1.5:64")'
+    assert seconds_to_stop(child(setup, call)) < 3
 
 
 def test_ctrl_c_interrupts_a_long_fk_migration():
-    # Each piece of a pass asks whether to stop; the rest of the passes are skipped.
-    assert seconds_to_stop(LONG_FK) < 1.5
+    # About 4 s on two cores: a 2 GB spectrum, transformed, Stolt-mapped and transformed back. Each
+    # piece of a pass asks whether to stop; the rest of the passes are skipped (the package before
+    # that ran on for 8.5 s).
+    setup = ('cap = murk.synth("z:1.5", kind="confocal", wall_size=2.0, grid=128, bins=4096, '
+             'bin_width=0.0015)')
+    assert seconds_to_stop(child(setup, 'murk.reconstruct(cap, "fk")')) < 1.5

@@ -324,23 +324,7 @@ mod tests {
     /// the rest and returns an error instead of a partial volume.
     #[test]
     fn cancelled_backprojection_stops_early_with_an_error() {
-        use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-        #[derive(Default)]
-        struct StopAfterOne {
-            total: AtomicU64,
-            done: AtomicU64,
-        }
-        impl Progress for StopAfterOne {
-            fn start(&self, total: u64) {
-                self.total.store(total, Relaxed);
-            }
-            fn advance(&self, n: u64) {
-                self.done.fetch_add(n, Relaxed);
-            }
-            fn cancelled(&self) -> bool {
-                self.done.load(Relaxed) >= 1
-            }
-        }
+        use std::sync::atomic::Ordering::Relaxed;
         let mut c = confocal(16, 0.6, axis(0.0137, 0.01, 160));
         add_point(&mut c, DVec3::new(0.06, -0.04, 0.45));
         let g = c.illum.regular_grid().unwrap();
@@ -360,7 +344,7 @@ mod tests {
         // The lattice path reports depth planes (31), the general one tiles of 16 columns (70).
         for (vol, pieces) in [(on_grid, 31), (off_grid, 70)] {
             assert!(backproject(&c, &vol, BpOptions::default()).is_ok());
-            let p = StopAfterOne::default();
+            let p = crate::testutil::Recorder::new(1);
             let e = one
                 .install(|| backproject_with(&c, &vol, BpOptions::default(), &p))
                 .unwrap_err();

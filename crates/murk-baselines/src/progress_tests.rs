@@ -1,39 +1,10 @@
 //! The confocal methods' progress: the bar ends exactly at the total it announced, and a caller
 //! that asks to stop part-way gets an error, not a partial volume.
 
-use crate::testutil::{add_point, axis, confocal};
+use crate::testutil::{add_point, axis, confocal, Recorder};
 use crate::{CdtParams, CdtPlan, FkParams, FkPlan, LctParams, LctPlan, Reconstruction};
 use murk_core::{Capture, DVec3, Progress, Result};
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-
-/// Records the announced total and the work done; asks to stop once `stop_at` units are done.
-struct Recorder {
-    total: AtomicU64,
-    done: AtomicU64,
-    stop_at: u64,
-}
-
-impl Recorder {
-    fn new(stop_at: u64) -> Self {
-        Recorder {
-            total: AtomicU64::new(0),
-            done: AtomicU64::new(0),
-            stop_at,
-        }
-    }
-}
-
-impl Progress for Recorder {
-    fn start(&self, total: u64) {
-        self.total.store(total, Relaxed);
-    }
-    fn advance(&self, n: u64) {
-        self.done.fetch_add(n, Relaxed);
-    }
-    fn cancelled(&self) -> bool {
-        self.done.load(Relaxed) >= self.stop_at
-    }
-}
+use std::sync::atomic::Ordering::Relaxed;
 
 type Run = Box<dyn Fn(&Capture, &dyn Progress) -> Result<Reconstruction>>;
 

@@ -1,7 +1,39 @@
-//! Synthetic confocal captures for the tests: point scatterers splatted linearly around bin centres.
+//! Synthetic confocal captures for the tests (point scatterers splatted linearly around bin centres),
+//! and a progress sink that records what a method reports.
 
 use crate::Reconstruction;
-use murk_core::{Capture, DVec3, PointSet, TimeAxis};
+use murk_core::{Capture, DVec3, PointSet, Progress, TimeAxis};
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+/// A progress sink that records the announced total and the work done, and asks to stop once
+/// `stop_at` units are done.
+pub struct Recorder {
+    pub total: AtomicU64,
+    pub done: AtomicU64,
+    stop_at: u64,
+}
+
+impl Recorder {
+    pub fn new(stop_at: u64) -> Self {
+        Recorder {
+            total: AtomicU64::new(0),
+            done: AtomicU64::new(0),
+            stop_at,
+        }
+    }
+}
+
+impl Progress for Recorder {
+    fn start(&self, total: u64) {
+        self.total.store(total, Relaxed);
+    }
+    fn advance(&self, n: u64) {
+        self.done.fetch_add(n, Relaxed);
+    }
+    fn cancelled(&self) -> bool {
+        self.done.load(Relaxed) >= self.stop_at
+    }
+}
 
 /// A confocal scan of `n × n` points over a `wall` m square centred on the origin, with empty histograms.
 pub fn confocal(n: usize, wall: f64, time: TimeAxis) -> Capture {
