@@ -130,8 +130,8 @@ impl Stolt {
                 if !pass.piece() {
                     return;
                 }
+                let kx = freq(ix, nx2 / 2);
                 for (iy, col) in slab.chunks_mut(half).enumerate() {
-                    let kx = freq(ix, nx2 / 2);
                     let ky = freq(iy, ny2 / 2);
                     let lateral = self.a2[0] * kx * kx + self.a2[1] * ky * ky;
                     // Source samples exist for k_z′ ≤ (M−1)/M; beyond, and for all larger k_z,

@@ -196,10 +196,10 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
         return crate::confocal::run(python.as_deref(), a.tal_bench.as_deref(), a.runs, quiet);
     }
     if let Some(case) = &a.paper_only {
-        return z_letter(case, a.runs, quiet);
+        return paper_formats(case, a.runs, quiet);
     }
     if !a.skip_z {
-        z_letter("all", a.runs, quiet)?;
+        paper_formats("all", a.runs, quiet)?;
     }
     match python {
         Some(py) => {
@@ -217,11 +217,19 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
 /// The paper's synthetic setups: 128 × 128 laser grid on a 2 m wall, one SPAD point at the centre, a
 /// planar Z 2 m away (the content does not change the time); the Z's 73 × 59 × 73 voxels from 4096 bins of
 /// 0.9 mm from 3.5 m, and the shelf's 142³ voxels from the study's 4096 bins of 1.5 mm from 2.0 m.
-fn z_letter(case: &str, runs: usize, quiet: bool) -> anyhow::Result<()> {
-    let c = 1.0 - 1.0 / 128.0;
-    if case == "shelf" {
-        return shelf(runs, quiet);
+/// `case`: "z", "shelf" or "all".
+fn paper_formats(case: &str, runs: usize, quiet: bool) -> anyhow::Result<()> {
+    if case != "shelf" {
+        z_letter(runs, quiet)?;
     }
+    if case != "z" {
+        shelf(runs, quiet)?;
+    }
+    Ok(())
+}
+
+fn z_letter(runs: usize, quiet: bool) -> anyhow::Result<()> {
+    let c = 1.0 - 1.0 / 128.0;
     paper_case(
         "Z letter, 128² laser grid × 4096 bins → 73×59×73 voxels",
         TimeAxis {
@@ -236,11 +244,7 @@ fn z_letter(case: &str, runs: usize, quiet: bool) -> anyhow::Result<()> {
         },
         runs,
         quiet,
-    )?;
-    if case == "z" {
-        return Ok(());
-    }
-    shelf(runs, quiet)
+    )
 }
 
 fn shelf(runs: usize, quiet: bool) -> anyhow::Result<()> {

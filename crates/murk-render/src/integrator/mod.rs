@@ -447,7 +447,6 @@ impl<'a> Tracer<'a> {
                     medium_len = m1 - m0;
                     let sigma_s = m.sigma_s();
                     if sigma_s > 0.0 {
-                        let pdf_ff = |t: f64| m.free_flight_pdf(t - m0);
                         // Connections from distances drawn toward each target (equiangular, and uniform in the
                         // capture's time window), MIS-combined (balance heuristic) with each other, with the
                         // free-flight vertex's connection below and with target-side sampling.
@@ -505,7 +504,7 @@ impl<'a> Tracer<'a> {
                             // What leaves this vertex keeps the first vertex's outgoing direction.
                             out.at_first = false;
                             let y = pos + d * t;
-                            let pff = pdf_ff(t);
+                            let pff = m.free_flight_pdf(t - m0);
                             let mis = |k: usize| {
                                 pff / (pff + seg[k].pdf(t) + target_pdf(m, &seg[k], k, y, t))
                             };
