@@ -224,6 +224,12 @@ fn bad_scenes_name_file_and_field() {
             "bin_width = 0.001",
             "capture.bins/bin_width/start",
         ),
+        // Past u32 (the tails' replay converts bin indices to it), before the memory budget.
+        (
+            "bins = 64",
+            "bins = 5000000000",
+            "capture.bins: must be at most 4294967295",
+        ),
         (
             "bins = 64",
             "bins = 64\nstart = 50.0",

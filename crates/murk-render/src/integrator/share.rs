@@ -30,9 +30,11 @@ pub(super) fn replay(
     for (e, tl) in tail.iter().enumerate() {
         let x = tl.bin + shift;
         if x >= 0.0 && x < end {
-            // SAFETY: 0 ≤ x < bins (NaN fails the test), so truncation to usize is exact.
-            let bin: usize = unsafe { x.to_int_unchecked() };
-            hists[tl.hist0 + bin] += (tl.value * scale * weight(e)) as f32;
+            // SAFETY: 0 ≤ x < bins ≤ u32::MAX (NaN fails the test; scene resolution bounds bins), so
+            // truncation to u32 is exact. To usize it needs a fix-up for values past i64::MAX: a
+            // tenth of a fog render's time went to it.
+            let bin: u32 = unsafe { x.to_int_unchecked() };
+            hists[tl.hist0 + bin as usize] += (tl.value * scale * weight(e)) as f32;
         }
     }
 }

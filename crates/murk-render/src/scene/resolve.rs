@@ -63,6 +63,13 @@ impl CaptureDef {
                 format!("needs at least one point per axis, got {:?}", c.grid),
             ));
         }
+        // The replay of shared tails converts bin indices to u32 (crates/murk-render's share.rs).
+        if c.bins > u32::MAX as usize {
+            return Err(bad(
+                "capture.bins",
+                format!("must be at most {}, got {}", u32::MAX, c.bins),
+            ));
+        }
         // H (f32 per bin) is the largest buffer a render allocates; checked before the grid's points.
         let points = c.grid[0].saturating_mul(c.grid[1]);
         let hists = match c.kind {
