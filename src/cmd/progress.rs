@@ -28,9 +28,13 @@ impl Bar {
 }
 
 impl murk_recon::Progress for Bar {
+    /// A new bar: a method whose plan reports progress starts a second one for its run. The
+    /// position goes back first so that no frame shows the old position against the new length,
+    /// and the rate of the last stage does not feed the new ETA.
     fn start(&self, total: u64) {
-        self.0.set_length(total);
         self.0.set_position(0);
+        self.0.set_length(total);
+        self.0.reset_eta();
     }
     fn advance(&self, n: u64) {
         self.0.inc(n);

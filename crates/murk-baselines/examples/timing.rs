@@ -5,7 +5,7 @@
 //! (N × N × 512 capture, default 32; METHOD runs only that method, e.g. to measure its memory.)
 
 use murk_baselines::*;
-use murk_core::{Axis, Capture, DVec3, PointSet, TimeAxis, Volume};
+use murk_core::{Axis, Capture, DVec3, NoProgress, PointSet, TimeAxis, Volume};
 use std::time::Instant;
 
 fn main() {
@@ -52,7 +52,7 @@ fn main() {
         measure(
             "lct (M = 512)",
             runs,
-            || LctPlan::new(&c, LctParams::default()).unwrap(),
+            || LctPlan::new(&c, LctParams::default(), &NoProgress).unwrap(),
             |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });
@@ -68,7 +68,7 @@ fn main() {
         measure(
             "cdt (reference grid, 128 samples)",
             runs,
-            || CdtPlan::new(&c, CdtParams::default()).unwrap(),
+            || CdtPlan::new(&c, CdtParams::default(), &NoProgress).unwrap(),
             |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });
@@ -80,7 +80,7 @@ fn main() {
         measure(
             "cdt (native, 512 samples)",
             runs,
-            || CdtPlan::new(&c, native).unwrap(),
+            || CdtPlan::new(&c, native, &NoProgress).unwrap(),
             |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });

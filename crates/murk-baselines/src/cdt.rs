@@ -183,7 +183,9 @@ pub struct CdtPlan {
 }
 
 impl CdtPlan {
-    pub fn new(capture: &Capture, params: CdtParams) -> Result<Self> {
+    /// Plans for captures of `capture`'s geometry, reporting the kernel's transforms to `progress`
+    /// (stopped when it asks).
+    pub fn new(capture: &Capture, params: CdtParams, progress: &dyn Progress) -> Result<Self> {
         params.slab.validate()?;
         if params.snr.is_nan() || params.snr <= 0.0 {
             return Err(Error::param(format!(
@@ -193,7 +195,9 @@ impl CdtPlan {
         }
         let geom = ConfocalGeometry::new(capture, params.grid)?;
         let stolt = Stolt::new(&geom);
-        let mut h = round_trip_spectrum(&geom, &params.slab, &stolt.fft);
+        let steps = Steps::start(progress, Fft3::FORWARD_PASSES + Fft3::MAP_REAL_PASSES);
+        let mut h = round_trip_spectrum(&geom, &params.slab, &stolt.fft, &steps);
+        steps.finish("confocal diffuse tomography")?;
         let inv_snr = (1.0 / params.snr) as f32;
         h.par_iter_mut()
             .for_each(|f| *f = f.conj() / (f.norm_sqr() + inv_snr));
@@ -245,7 +249,7 @@ impl CdtPlan {
 
 /// One-shot CDT (plans and runs).
 pub fn cdt(capture: &Capture, params: CdtParams) -> Result<Reconstruction> {
-    CdtPlan::new(capture, params)?.run(capture, &NoProgress)
+    CdtPlan::new(capture, params, &NoProgress)?.run(capture, &NoProgress)
 }
 
 /// The CDT forward model: a free-space confocal capture as seen through `slab`, i.e. convolved in
@@ -261,7 +265,7 @@ pub fn through_slab(capture: &Capture, slab: &SlabParams) -> Result<Capture> {
         ));
     }
     let stolt = Stolt::new(&g);
-    let h = round_trip_spectrum(&g, slab, &stolt.fft);
+    let h = round_trip_spectrum(&g, slab, &stolt.fft, &Steps::none());
     let mut spec = stolt.transform(&g.sample(&c), |_, v| v, &Steps::none());
     spec.par_iter_mut().zip(&h).for_each(|(b, h)| *b *= h);
     // The histograms are [nx][ny][nt] in scan order, the shape of the kept octant.
@@ -272,16 +276,21 @@ pub fn through_slab(capture: &Capture, slab: &SlabParams) -> Result<Capture> {
 }
 
 /// Spectrum of K ⊛ K (circular) on the padded grid of `fft`.
-fn round_trip_spectrum(g: &ConfocalGeometry, slab: &SlabParams, fft: &Fft3) -> Vec<C32> {
+fn round_trip_spectrum(
+    g: &ConfocalGeometry,
+    slab: &SlabParams,
+    fft: &Fft3,
+    steps: &Steps,
+) -> Vec<C32> {
     let [nx2, ny2, m2] = fft.dims;
     let k = slab_kernel(g, slab, fft.dims);
     let fill = |ix: usize, iy: usize, line: &mut [f32]| {
         line.copy_from_slice(&k[(ix * ny2 + iy) * m2..][..m2])
     };
-    let mut h = fft.forward([nx2, ny2], fill, &Steps::none());
+    let mut h = fft.forward([nx2, ny2], fill, steps);
     h.par_iter_mut().for_each(|v| *v = *v * *v);
     // |·| as the reference: removes the rounding noise's sign.
-    fft.map_real(&mut h, f32::abs, &Steps::none());
+    fft.map_real(&mut h, f32::abs, steps);
     h
 }
 

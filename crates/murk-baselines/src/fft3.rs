@@ -126,9 +126,10 @@ pub(crate) struct Fft3 {
 }
 
 impl Fft3 {
-    /// Passes through the data of [`Fft3::forward`], [`Fft3::convolve_even`], [`Fft3::map_real`],
+    /// Passes through the data of [`Fft3::forward`], [`Fft3::forward_even`], [`Fft3::convolve_even`], [`Fft3::map_real`],
     /// and of [`Fft3::inverse`] and [`Fft3::inverse_power_one_sided`], for [`Steps::start`].
     pub const FORWARD_PASSES: usize = 3;
+    pub const FORWARD_EVEN_PASSES: usize = 1;
     pub const CONVOLVE_PASSES: usize = 3;
     pub const MAP_REAL_PASSES: usize = 5;
     pub const INVERSE_PASSES: usize = 3;
@@ -193,13 +194,21 @@ impl Fft3 {
     /// (f, ky, kx), as [`Fft3::convolve_even`] reads it. `t_spectrum(f, plane)` writes the
     /// temporal spectrum at frequency f of the lines x ≤ nx/2, y ≤ ny/2 into
     /// `plane[x·(ny/2 + 1) + y]`.
-    pub fn forward_even(&self, t_spectrum: impl Fn(usize, &mut [C32]) + Sync) -> Vec<C32> {
+    pub fn forward_even(
+        &self,
+        t_spectrum: impl Fn(usize, &mut [C32]) + Sync,
+        steps: &Steps,
+    ) -> Vec<C32> {
         let [nx, ny, _] = self.dims;
         let (hx, hy) = (nx / 2 + 1, ny / 2 + 1);
         let mut planes = zeros(self.half() * hx * hy);
+        let pass = steps.pass(self.half());
         planes.par_chunks_mut(hx * hy).enumerate().for_each_init(
             || self.plane(),
             |p, (f, plane)| {
+                if !pass.piece() {
+                    return;
+                }
                 t_spectrum(f, plane);
                 // The y pass needs only the distinct x rows, and the x pass only ky ≤ ny/2.
                 for (row, quarter) in p.xy[..hx * ny].chunks_mut(ny).zip(plane.chunks(hy)) {
@@ -735,13 +744,16 @@ mod tests {
             |ix: usize, iy: usize, t: usize| value(mirror(ix, nx), 3 * mirror(iy, ny), t * t);
         let k = dense([nx, ny], kernel);
         let k_t = dft(&k, D, -1.0, 2..3);
-        let quarter = plan.forward_even(|f, plane| {
-            for (x, row) in plane.chunks_mut(hy).enumerate() {
-                for (y, v) in row.iter_mut().enumerate() {
-                    *v = k_t[(x * ny + y) * nt + f];
+        let quarter = plan.forward_even(
+            |f, plane| {
+                for (x, row) in plane.chunks_mut(hy).enumerate() {
+                    for (y, v) in row.iter_mut().enumerate() {
+                        *v = k_t[(x * ny + y) * nt + f];
+                    }
                 }
-            }
-        });
+            },
+            &Steps::none(),
+        );
         let k_spec = dft(&k_t, D, -1.0, 0..2);
         let scale = peak_norm(&k_spec);
         for (i, b) in k_spec.iter().enumerate().filter(|(i, _)| i % nt < nh) {

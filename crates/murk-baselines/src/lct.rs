@@ -56,7 +56,9 @@ pub struct LctPlan {
 }
 
 impl LctPlan {
-    pub fn new(capture: &Capture, params: LctParams) -> Result<Self> {
+    /// Plans for captures of `capture`'s geometry; the kernel's spectrum takes about a second at
+    /// 128² × 4 096, so it reports to `progress` and stops when asked.
+    pub fn new(capture: &Capture, params: LctParams, progress: &dyn Progress) -> Result<Self> {
         if params.snr.is_nan() || params.snr <= 0.0 {
             return Err(Error::param(format!(
                 "LCT snr must be positive, got {}",
@@ -76,12 +78,17 @@ impl LctPlan {
             })
             .collect();
         // The cone is even in x and y about its apex, so its spectrum and the filter are too.
-        let spectrum = fft.forward_even(|f, plane| {
-            for (v, d) in plane.iter_mut().zip(&delay) {
-                // kf mod 2m, m a power of two.
-                *v = d.map_or(C32::default(), |k| phase[(k * f) & (2 * m - 1)]);
-            }
-        });
+        let steps = Steps::start(progress, Fft3::FORWARD_EVEN_PASSES);
+        let spectrum = fft.forward_even(
+            |f, plane| {
+                for (v, d) in plane.iter_mut().zip(&delay) {
+                    // kf mod 2m, m a power of two.
+                    *v = d.map_or(C32::default(), |k| phase[(k * f) & (2 * m - 1)]);
+                }
+            },
+            &steps,
+        );
+        steps.finish("light-cone transform")?;
         let filter = wiener(spectrum, params.snr);
         Ok(LctPlan {
             geom,
@@ -132,7 +139,7 @@ impl LctPlan {
 
 /// One-shot LCT (plans and runs).
 pub fn lct(capture: &Capture, params: LctParams) -> Result<Reconstruction> {
-    LctPlan::new(capture, params)?.run(capture, &NoProgress)
+    LctPlan::new(capture, params, &NoProgress)?.run(capture, &NoProgress)
 }
 
 /// The binary light cone on the padded [2nx][2ny][2m] grid, apex at index 0 (negative lateral
@@ -254,7 +261,7 @@ mod tests {
         let mut c = confocal(8, 0.64, axis(0.0, 0.01, 100));
         let grid = murk_core::PointSet::wall_grid(DVec3::ZERO, 0.64, 0.48, 8, 6);
         (c.illum, c.sensor, c.h) = (grid.clone(), grid, vec![0.0; 8 * 6 * 100]);
-        let plan = LctPlan::new(&c, LctParams::default()).unwrap();
+        let plan = LctPlan::new(&c, LctParams::default(), &NoProgress).unwrap();
         let [nx, ny, _] = plan.fft.dims;
         let (hx, hy, nh) = (nx / 2 + 1, ny / 2 + 1, plan.fft.half());
         let (delay, norm) = light_cone(&plan.geom, plan.m);

@@ -1,18 +1,19 @@
-//! The confocal methods' progress: the bar ends exactly at the total it announced, and a caller
-//! that asks to stop part-way gets an error, not a partial volume.
+//! The confocal methods' progress, of their plans and of their runs: each bar ends exactly at the
+//! total it announced, and a caller that asks to stop part-way gets an error, not a plan or a
+//! partial volume.
 
 use crate::testutil::{add_point, axis, confocal, Recorder};
 use crate::{CdtParams, CdtPlan, FkParams, FkPlan, LctParams, LctPlan, Reconstruction};
-use murk_core::{Capture, DVec3, Progress, Result};
+use murk_core::{Capture, DVec3, NoProgress, Progress, Result};
 use std::sync::atomic::Ordering::Relaxed;
 
 type Run = Box<dyn Fn(&Capture, &dyn Progress) -> Result<Reconstruction>>;
 
 /// Each method planned for `c`, with the word its stop error starts with.
 fn methods(c: &Capture) -> Vec<(&'static str, Run)> {
-    let lct = LctPlan::new(c, LctParams::default()).unwrap();
+    let lct = LctPlan::new(c, LctParams::default(), &NoProgress).unwrap();
     let fk = FkPlan::new(c, FkParams::default()).unwrap();
-    let cdt = CdtPlan::new(c, CdtParams::default()).unwrap();
+    let cdt = CdtPlan::new(c, CdtParams::default(), &NoProgress).unwrap();
     vec![
         ("light-cone", Box::new(move |c, p| lct.run(c, p))),
         ("f-k", Box::new(move |c, p| fk.run(c, p))),
@@ -35,7 +36,7 @@ fn each_bar_ends_at_its_total() {
         let (total, done) = (p.total.load(Relaxed), p.done.load(Relaxed));
         assert!(total > 0 && done == total, "{name}: {done} of {total}");
         // Reporting progress changes nothing in the result.
-        let quiet = run(&c, &murk_core::NoProgress).unwrap();
+        let quiet = run(&c, &NoProgress).unwrap();
         assert_eq!(full.intensity, quiet.intensity, "{name}");
     }
 }
@@ -47,6 +48,38 @@ fn a_stop_part_way_is_an_error() {
         // The first pass is a thousand units: stop a third of the way through it.
         let p = Recorder::new(333);
         let e = run(&c, &p).unwrap_err().to_string();
+        assert!(e.starts_with(name) && e.ends_with("stopped"), "{name}: {e}");
+        assert!(p.done.load(Relaxed) < p.total.load(Relaxed), "{name}");
+    }
+}
+
+type MakePlan = Box<dyn Fn(&Capture, &dyn Progress) -> Result<()>>;
+
+/// The methods whose plans report progress (f-k's plans only its FFTs), with the word their stop
+/// error starts with.
+fn plans() -> Vec<(&'static str, MakePlan)> {
+    vec![
+        (
+            "light-cone",
+            Box::new(|c, p| LctPlan::new(c, LctParams::default(), p).map(drop)),
+        ),
+        (
+            "confocal diffuse",
+            Box::new(|c, p| CdtPlan::new(c, CdtParams::default(), p).map(drop)),
+        ),
+    ]
+}
+
+#[test]
+fn plans_report_their_bar_and_stop_part_way() {
+    let c = capture();
+    for (name, plan) in plans() {
+        let p = Recorder::new(u64::MAX);
+        plan(&c, &p).unwrap();
+        let (total, done) = (p.total.load(Relaxed), p.done.load(Relaxed));
+        assert!(total > 0 && done == total, "{name}: {done} of {total}");
+        let p = Recorder::new(333);
+        let e = plan(&c, &p).unwrap_err().to_string();
         assert!(e.starts_with(name) && e.ends_with("stopped"), "{name}: {e}");
         assert!(p.done.load(Relaxed) < p.total.load(Relaxed), "{name}");
     }

@@ -265,7 +265,12 @@ enum Engine {
 }
 
 impl Engine {
-    fn new(geometry: &Capture, method: &Method, volume: Option<&Volume>) -> Result<Engine> {
+    fn new(
+        geometry: &Capture,
+        method: &Method,
+        volume: Option<&Volume>,
+        progress: &dyn Progress,
+    ) -> Result<Engine> {
         let on_volume = || volume.ok_or_else(|| Error::param("this method needs a volume"));
         Ok(match *method {
             Method::Pf(p) => Engine::Pf(Box::new(PfPlan::new(
@@ -282,9 +287,9 @@ impl Engine {
             )?)),
             Method::Bp => Engine::Bp(*on_volume()?, BpOptions::default()),
             Method::Fbp(o) => Engine::Fbp(*on_volume()?, o),
-            Method::Lct(p) => Engine::Lct(LctPlan::new(geometry, p)?),
+            Method::Lct(p) => Engine::Lct(LctPlan::new(geometry, p, progress)?),
             Method::Fk(p) => Engine::Fk(FkPlan::new(geometry, p)?),
-            Method::Cdt(p) => Engine::Cdt(CdtPlan::new(geometry, p)?),
+            Method::Cdt(p) => Engine::Cdt(CdtPlan::new(geometry, p, progress)?),
         })
     }
 
@@ -313,7 +318,9 @@ pub struct Plan {
 }
 
 impl Plan {
-    pub fn new(cap: &Capture, req: &Request) -> Result<Plan> {
+    /// Plans `req` for captures of `cap`'s geometry. The methods whose plan takes long (the LCT's and
+    /// CDT's kernel spectra) report it to `progress` as a bar of its own and stop when it asks.
+    pub fn new(cap: &Capture, req: &Request, progress: &dyn Progress) -> Result<Plan> {
         let m = &req.method;
         let mut geometry = cap.geometry();
         geometry.validate_geometry()?;
@@ -347,7 +354,7 @@ impl Plan {
             (Gate::Auto, None) | (Gate::Off, _) => None,
             (Gate::At(p), _) => Some(p),
         };
-        let engine = Engine::new(&geometry, m, volume.as_ref())?;
+        let engine = Engine::new(&geometry, m, volume.as_ref(), progress)?;
         Ok(Plan {
             offset_m,
             edge_m,
@@ -379,7 +386,7 @@ impl Plan {
 
 /// Runs `req` on `cap` (plans and runs).
 pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Reconstruction> {
-    Plan::new(&cap, req)?.run(cap, progress)
+    Plan::new(&cap, req, progress)?.run(cap, progress)
 }
 
 fn closing_rows(offset_m: f64, gated: &GateReport, end: &EndReport) -> Vec<(String, String)> {

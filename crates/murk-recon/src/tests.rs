@@ -717,7 +717,7 @@ fn a_plan_serves_every_capture_of_its_geometry() {
             }),
             ..Request::new(method)
         };
-        let plan = Plan::new(&a, &req).unwrap();
+        let plan = Plan::new(&a, &req, &NoProgress).unwrap();
         for cap in [&a, &b] {
             let reused = plan.run(cap.clone(), &NoProgress).unwrap();
             let fresh = crate::pipeline::run(cap.clone(), &req, &NoProgress).unwrap();

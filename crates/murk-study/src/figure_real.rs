@@ -58,7 +58,7 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> Result<Vec<Cel
         ..Default::default()
     };
     let (secs, r) = timed(runs, || {
-        CdtPlan::new(&cap, params)?.run(&cap, &murk_core::NoProgress)
+        CdtPlan::new(&cap, params, &murk_core::NoProgress)?.run(&cap, &murk_core::NoProgress)
     })?;
     let cdt = Cell { rec: r, secs };
     // PF on CDT's voxels (the scan grid laterally, the same depths) but the first: PF needs z > 0.
