@@ -61,10 +61,16 @@ def _progress(progress: Progress, label: str):
         return progress
     from tqdm.auto import tqdm
 
-    bar = tqdm(desc=label, total=0)
+    # One bar per stage: a method whose plan reports progress (lct, cdt) starts a second one, with
+    # another total, for its run.
+    bar = None
 
     def update(done, total):
-        bar.total = total
+        nonlocal bar
+        if bar is None or bar.total != total or done < bar.n:
+            if bar is not None:
+                bar.close()
+            bar = tqdm(desc=label, total=total)
         bar.n = done
         bar.refresh()
         if done >= total:

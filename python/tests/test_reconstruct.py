@@ -75,3 +75,24 @@ def test_an_exception_in_the_callback_stops_the_reconstruction(captures):
 def test_progress_true_draws_a_tqdm_bar(captures, capsys):
     murk.reconstruct(captures["grid"], "bp", volume=VOL, progress=True)
     assert "reconstruct" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def confocal_128():
+    return murk.synth("z:1.5", kind="confocal", wall_size=2.0, grid=128, bins=4096, bin_width=0.0015)
+
+
+def test_lct_reports_its_plan_then_its_run(confocal_128):
+    # The plan's kernel spectrum (about a second here) is one pass of 1000 units, the run three.
+    seen = []
+    murk.reconstruct(confocal_128, "lct", progress=lambda done, total: seen.append((done, total)))
+    totals = [t for _, t in seen]
+    assert 1000 in totals and totals[-1] == 3000, seen
+    assert seen[-1] == (3000, 3000), seen
+
+
+@pytest.mark.skipif(importlib.util.find_spec("tqdm") is None, reason="tqdm is not installed")
+def test_progress_true_draws_a_bar_per_stage(confocal_128, capsys):
+    murk.reconstruct(confocal_128, "lct", progress=True)
+    err = capsys.readouterr().err
+    assert "1000/1000" in err and "3000/3000" in err, err[-2000:]

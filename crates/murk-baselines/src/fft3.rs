@@ -57,7 +57,7 @@ impl<'p> Steps<'p> {
         }
     }
 
-    /// For work that reports to no bar and is not stopped (plans, `through_slab`, tests).
+    /// For work that reports to no bar and is not stopped (`through_slab`, tests).
     pub fn none() -> Steps<'static> {
         Steps::start(&NoProgress, 0)
     }
@@ -126,8 +126,9 @@ pub(crate) struct Fft3 {
 }
 
 impl Fft3 {
-    /// Passes through the data of [`Fft3::forward`], [`Fft3::forward_even`], [`Fft3::convolve_even`], [`Fft3::map_real`],
-    /// and of [`Fft3::inverse`] and [`Fft3::inverse_power_one_sided`], for [`Steps::start`].
+    /// Passes through the data of [`Fft3::forward`], [`Fft3::forward_even`],
+    /// [`Fft3::convolve_even`], [`Fft3::map_real`], and of [`Fft3::inverse`] and
+    /// [`Fft3::inverse_power_one_sided`], for [`Steps::start`].
     pub const FORWARD_PASSES: usize = 3;
     pub const FORWARD_EVEN_PASSES: usize = 1;
     pub const CONVOLVE_PASSES: usize = 3;

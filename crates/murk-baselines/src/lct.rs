@@ -56,8 +56,8 @@ pub struct LctPlan {
 }
 
 impl LctPlan {
-    /// Plans for captures of `capture`'s geometry; the kernel's spectrum takes about a second at
-    /// 128² × 4 096, so it reports to `progress` and stops when asked.
+    /// Plans for captures of `capture`'s geometry. The kernel's spectrum is a pass through a grid
+    /// as large as a run's, so it reports to `progress` and stops when asked.
     pub fn new(capture: &Capture, params: LctParams, progress: &dyn Progress) -> Result<Self> {
         if params.snr.is_nan() || params.snr <= 0.0 {
             return Err(Error::param(format!(
