@@ -31,8 +31,8 @@ pub(super) fn replay(
         let x = tl.bin + shift;
         if x >= 0.0 && x < end {
             // SAFETY: 0 ≤ x < bins ≤ u32::MAX (NaN fails the test; scene resolution bounds bins), so
-            // truncation to u32 is exact. To usize it needs a fix-up for values past i64::MAX: a
-            // tenth of a fog render's time went to it.
+            // truncation to u32 is exact. To usize the conversion needs a fix-up for values past
+            // i64::MAX, on the renderer's hottest loop (docs/renderer-sampling.md).
             let bin: u32 = unsafe { x.to_int_unchecked() };
             hists[tl.hist0 + bin as usize] += (tl.value * scale * weight(e)) as f32;
         }

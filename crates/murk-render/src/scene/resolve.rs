@@ -63,7 +63,7 @@ impl CaptureDef {
                 format!("needs at least one point per axis, got {:?}", c.grid),
             ));
         }
-        // The replay of shared tails converts bin indices to u32 (crates/murk-render's share.rs).
+        // The replay of shared tails converts bin indices to u32 (integrator/share.rs).
         if c.bins > u32::MAX as usize {
             return Err(bad(
                 "capture.bins",
