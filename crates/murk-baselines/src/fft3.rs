@@ -7,6 +7,7 @@
 //! With symmetry: a convolution with a kernel that is even in x and y (the LCT's light cone) needs
 //! only a quarter of the kernel's spectrum, and goes one temporal frequency plane at a time.
 
+use murk_core::buffer::zeroed;
 use murk_core::{Error, NoProgress, Progress, Result};
 use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
@@ -26,13 +27,6 @@ const T_BLOCK: usize = 32;
 /// group is 512 contiguous bytes, and a group stays in cache along t.
 const GROUP: usize = 8;
 const PLANE_BLOCK: usize = 8;
-
-/// `n` complex zeros, allocated zeroed ([`murk_core::buffer::zeroed`]): the spectra here take up
-/// to gigabytes.
-fn zeros(n: usize) -> Vec<C32> {
-    // SAFETY: Complex<f32> is #[repr(C)] {re, im}: zero bits are 0 + 0i.
-    unsafe { murk_core::buffer::zeroed(n) }
-}
 
 /// A method's passes through its data, for the progress bar and for stopping part-way: each pass
 /// counts [`Steps::UNITS`] of the bar whatever its number of pieces, and each piece first asks
@@ -164,7 +158,7 @@ impl Fft3 {
     ) -> Vec<C32> {
         let [nx, ny, nt] = self.dims;
         let nh = self.half();
-        let mut spec = zeros(nx * ny * nh);
+        let mut spec = zeroed(nx * ny * nh);
         let pass = steps.pass(support[0]);
         spec.par_chunks_mut(ny * nh)
             .take(support[0])
@@ -202,7 +196,7 @@ impl Fft3 {
     ) -> Vec<C32> {
         let [nx, ny, _] = self.dims;
         let (hx, hy) = (nx / 2 + 1, ny / 2 + 1);
-        let mut planes = zeros(self.half() * hx * hy);
+        let mut planes = zeroed(self.half() * hx * hy);
         let pass = steps.pass(self.half());
         planes.par_chunks_mut(hx * hy).enumerate().for_each_init(
             || self.plane(),
@@ -254,7 +248,7 @@ impl Fft3 {
         assert_eq!(n * sx * sy, out.len());
         // [group][f][line in group], f padded to whole blocks.
         let group_len = nh.next_multiple_of(PLANE_BLOCK) * GROUP;
-        let mut spec = zeros((sx * sy).div_ceil(GROUP) * group_len);
+        let mut spec = zeroed((sx * sy).div_ceil(GROUP) * group_len);
         let pass = steps.pass(spec.len() / group_len);
         spec.par_chunks_mut(group_len).enumerate().for_each_init(
             || {

@@ -21,8 +21,7 @@ pub fn run(
     let ifft = FftPlanner::<f32>::new().plan_fft_inverse(nf);
     // Filtered signal of each histogram at residual path n·Δs (offsets already folded into the spectra).
     // Zero outside the band; allocated zeroed (a gigabyte at the paper's format).
-    // SAFETY: Complex<f32> is #[repr(C)] {re, im}: zero bits are 0 + 0i.
-    let mut signals: Vec<Complex32> = unsafe { murk_core::buffer::zeroed(cap.n_hist() * nf) };
+    let mut signals: Vec<Complex32> = murk_core::buffer::zeroed(cap.n_hist() * nf);
     signals.par_chunks_mut(nf).enumerate().for_each_init(
         || vec![Complex32::default(); ifft.get_inplace_scratch_len()],
         |scratch, (i, sig)| {

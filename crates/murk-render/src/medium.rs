@@ -76,7 +76,13 @@ impl Medium {
 
     /// Density of a free flight ending after `len_m` (σt·e^{−σt·len}).
     pub fn free_flight_pdf(&self, len_m: f64) -> f64 {
-        self.sigma_t * self.transmittance(len_m)
+        self.transmittance_and_pdf(len_m).1
+    }
+
+    /// [`Medium::transmittance`] and [`Medium::free_flight_pdf`] after `len_m`, from one exponential.
+    pub fn transmittance_and_pdf(&self, len_m: f64) -> (f64, f64) {
+        let tr = self.transmittance(len_m);
+        (tr, self.sigma_t * tr)
     }
 
     /// A free-flight distance drawn from [`Medium::free_flight_pdf`] with the uniform number `u`.

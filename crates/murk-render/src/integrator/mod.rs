@@ -470,10 +470,8 @@ impl<'a> Tracer<'a> {
                                     continue;
                                 }
                                 let y = pos + d * t;
-                                // One exponential for the transmittance and the free-flight density.
-                                let tr = m.transmittance(t - m0);
+                                let (tr, pff) = m.transmittance_and_pdf(t - m0);
                                 let b = beta * sigma_s * tr / pdf;
-                                let pff = m.sigma_t * tr;
                                 let w =
                                     pdf / (seg[k].pdf(t) + pff + target_pdf(m, &seg[k], k, y, t));
                                 let o = opl + t + m.extra_path_m(t - m0);
