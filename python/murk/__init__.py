@@ -40,6 +40,7 @@ __all__ = [
     "write_capture",
     "synth",
     "render",
+    "render_albedos",
     "merge",
     "reconstruct",
     "Error",
@@ -160,11 +161,40 @@ def render(
     """
     path, args = _render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
                               checkpoint=checkpoint, checkpoint_every=checkpoint_every, out=out)
+    return _murk.render(path, args, threads, _progress(progress, "render"))[0]
+
+
+def render_albedos(
+    scene: Union[str, os.PathLike],
+    albedos: Sequence[float],
+    *,
+    spp: Optional[int] = None,
+    seed: int = 0,
+    shard: Optional[Tuple[int, int]] = None,
+    set: Union[None, Dict[str, Any], Sequence[str]] = None,
+    grid: Optional[int] = None,
+    bins: Optional[int] = None,
+    checkpoint: Union[None, str, os.PathLike] = None,
+    checkpoint_every: float = 60.0,
+    out: Union[None, str, os.PathLike] = None,
+    threads: Optional[int] = None,
+    progress: Progress = None,
+) -> List[Capture]:
+    """``murk render --albedos``: one capture per medium albedo, from the same paths. Each equals, to
+    float rounding, ``render(scene, set={"medium.albedo": a}, ...)`` with the same seed, for the tracing
+    cost of one render. out: also write capture a to ``out`` with ``-albedo<a>`` before its extension.
+    Other keywords as :func:`render`.
+
+    >>> clear, thick = murk.render_albedos("scenes/z-letter.toml", [0.15, 0.83], grid=32, spp=64)
+    """
+    path, args = _render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
+                              checkpoint=checkpoint, checkpoint_every=checkpoint_every, out=out,
+                              albedos=[float(a) for a in albedos])
     return _murk.render(path, args, threads, _progress(progress, "render"))
 
 
 def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, checkpoint_every=60.0,
-                 out=None) -> Tuple[str, dict]:
+                 out=None, albedos=()) -> Tuple[str, dict]:
     """The scene's path and the keywords ``_murk``'s render calls take; a scene given as TOML text
     is read as if from ``./scene.toml``."""
     path, text = os.fspath(scene), None
@@ -173,7 +203,8 @@ def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, c
     return path, dict(text=text, spp=spp, seed=seed, shard=None if shard is None else tuple(shard),
                       set=_overrides(set), grid=grid, bins=bins,
                       checkpoint=None if checkpoint is None else os.fspath(checkpoint),
-                      checkpoint_every=checkpoint_every, out=None if out is None else os.fspath(out))
+                      checkpoint_every=checkpoint_every, out=None if out is None else os.fspath(out),
+                      albedos=list(albedos))
 
 
 def merge(parts: Sequence[Union[Capture, str, os.PathLike]]) -> Capture:

@@ -39,7 +39,8 @@ def plan(
 ) -> List[dict]:
     """Plans the study in ``out`` (writes plan.json, makes renders/) and returns its render tasks, in
     the order and with the commands of ``murk experiment paper --list-tasks``: dicts with ``id``,
-    ``scene``, ``out``, ``spp``, ``seed``, ``shard``, ``set``, ``capture``, ``capture_out`` and
+    ``scene``, ``out``, ``spp``, ``seed``, ``shard``, ``set``, ``albedos`` (a sweep's, else empty),
+    ``outs`` (the files the task writes), ``captures``, ``capture_outs`` (its merged captures) and
     ``command``."""
     return _murk.study_plan(os.fspath(out), _study(scale, only, cells, seeds, shards, spp, scenes))
 
@@ -54,19 +55,24 @@ def run(out, *, scale="quick", only=(), cells=(), seeds=1, shards=1, spp=None, s
 
 
 def pending(tasks: Sequence[dict]) -> List[dict]:
-    """The tasks whose output, and whose capture's merged file, are both missing."""
-    return [t for t in tasks
-            if not os.path.exists(t["out"]) and not os.path.exists(t["capture_out"])]
+    """The tasks whose outputs, and whose job's merged captures, are not all there."""
+    def there(paths):
+        return all(os.path.exists(p) for p in paths)
+    return [t for t in tasks if not there(t["outs"]) and not there(t["capture_outs"])]
 
 
 def render_task(task: dict, threads=None) -> str:
     """One Dask task: the study's render ``task`` as its ``murk render`` command runs it, into the
-    capture file ``task["out"]`` (kept if already there), resuming from ``out + ".ckpt"``; returns
+    files ``task["outs"]`` (kept if already there), resuming from ``out + ".ckpt"``; returns
     ``task["out"]``."""
     out = os.fspath(task["out"])
-    if not os.path.exists(out):
-        murk.render(task["scene"], spp=task["spp"], seed=task["seed"], shard=task["shard"],
-                    set=task["set"], checkpoint=out + ".ckpt", out=out, threads=threads)
+    if not all(os.path.exists(p) for p in task["outs"]):
+        kw = dict(spp=task["spp"], seed=task["seed"], shard=task["shard"], set=task["set"],
+                  checkpoint=out + ".ckpt", out=out, threads=threads)
+        if task["albedos"]:
+            murk.render_albedos(task["scene"], task["albedos"], **kw)
+        else:
+            murk.render(task["scene"], **kw)
     return out
 
 

@@ -77,6 +77,7 @@ pub struct RenderArgs {
     checkpoint: Option<PathBuf>,
     checkpoint_every: f64,
     out: Option<PathBuf>,
+    albedos: Vec<f64>,
 }
 
 impl RenderArgs {
@@ -93,6 +94,15 @@ impl RenderArgs {
         }
     }
 
+    /// The render of `scene`: plain, or a sweep over `albedos`.
+    fn plan<'s>(&self, scene: &'s Scene) -> murk_core::Result<Plan<'s>> {
+        if self.albedos.is_empty() {
+            Ok(Plan::new(scene))
+        } else {
+            Plan::sweep(scene, &self.albedos)
+        }
+    }
+
     fn options(&self, scene: &Scene) -> RenderOptions {
         RenderOptions {
             spp: self.spp.unwrap_or(scene.settings.spp),
@@ -104,7 +114,9 @@ impl RenderArgs {
     }
 }
 
-/// A Monte Carlo render of a scene, as `murk render` does it; see `murk.render`.
+/// A Monte Carlo render of a scene, as `murk render` does it: one capture, or one per albedo of
+/// `args.albedos` (written to `out` as `murk render --albedos` names them); see `murk.render` and
+/// `murk.render_albedos`.
 #[pyfunction]
 #[pyo3(signature = (scene, args, threads, progress))]
 pub fn render(
@@ -113,24 +125,32 @@ pub fn render(
     args: RenderArgs,
     threads: Option<usize>,
     progress: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Capture> {
-    let cap = compute(py, progress, threads, |t: &Ticker| {
+) -> PyResult<Vec<Capture>> {
+    let caps = compute(py, progress, threads, |t: &Ticker| {
         let scene = args.scene(&scene)?;
-        let cap = Plan::new(&scene).render_until(
+        let caps = args.plan(&scene)?.render_all_until(
             &args.options(&scene),
             &|done, total| t.count(done as u64, total as u64),
             t.stop(),
         )?;
         if let Some(out) = &args.out {
-            murk_io::write_capture(out, &cap)?;
+            let outs: Vec<PathBuf> = match args.albedos.is_empty() {
+                true => vec![out.clone()],
+                false => (args.albedos.iter())
+                    .map(|&a| murk_render::sweep_output(out, a))
+                    .collect(),
+            };
+            for (o, cap) in outs.iter().zip(&caps) {
+                murk_io::write_capture(o, cap)?;
+            }
         }
         if let Some(c) = &args.checkpoint {
             // The capture is complete; a stale checkpoint would only mislead a later resume.
             let _ = std::fs::remove_file(c);
         }
-        Ok(cap)
+        Ok(caps)
     })?;
-    Ok(Capture { cap })
+    Ok(caps.into_iter().map(|cap| Capture { cap }).collect())
 }
 
 /// Shard `args.shard` of a scene rendered into its checkpoint `args.checkpoint` alone, which then
@@ -146,7 +166,7 @@ pub fn render_part(
 ) -> PyResult<()> {
     compute(py, progress, threads, |t: &Ticker| {
         let scene = args.scene(&scene)?;
-        Plan::new(&scene).render_part(
+        args.plan(&scene)?.render_part(
             &args.options(&scene),
             &|done, total| t.count(done as u64, total as u64),
             t.stop(),
@@ -252,10 +272,16 @@ pub fn study_plan<'py>(
         for t in &c.tasks {
             let d = PyDict::new(py);
             d.set_item("id", &t.id)?;
-            d.set_item("capture", &c.id)?;
+            let captures = c.capture_ids();
+            let capture_outs: Vec<PathBuf> = (captures.iter())
+                .map(|id| out.join(murk_study::run::capture_path(id)))
+                .collect();
+            d.set_item("captures", captures)?;
             d.set_item("scene", plan.scenes_dir.join(c.scene.file()))?;
             d.set_item("out", out.join(&t.out))?;
-            d.set_item("capture_out", out.join(murk_study::run::capture_path(c)))?;
+            d.set_item("outs", c.outputs(&out.join(&t.out)))?;
+            d.set_item("capture_outs", capture_outs)?;
+            d.set_item("albedos", &c.albedos)?;
             d.set_item("spp", c.spp)?;
             d.set_item("seed", c.seed)?;
             d.set_item("shard", t.shard)?;

@@ -1,3 +1,4 @@
+import os
 import subprocess
 import sys
 
@@ -33,6 +34,26 @@ def test_study_on_dask_renders_the_cli_bytes_and_reuses_them(tmp_path):
     tasks = murk.experiment.plan(tmp_path / "dask", only=["fig3a"], spp=4, shards=2,
                                  scenes=SCENES)
     assert murk.experiment.pending(tasks) == []
+
+
+@needs_cli
+def test_a_sweep_task_on_dask_writes_the_cli_captures(tmp_path):
+    # One row of Fig. 3b is one task that renders every albedo of the row.
+    args = dict(only=["fig3b"], cells=["μt = 2 α = 0.15", "μt = 2 α = 0.83"], spp=2,
+                scenes=SCENES)
+    flags = ["--only", "fig3b", "--cell", "μt = 2 α = 0.15", "--cell", "μt = 2 α = 0.83",
+             "--spp", "2", "--scenes", SCENES]
+    cli("experiment", "paper", "--out", tmp_path / "cli", *flags, "--quiet", cwd=ROOT)
+    tasks = murk.experiment.plan(tmp_path / "dask", **args)
+    [sweep] = [t for t in tasks if t["albedos"]]
+    assert sweep["albedos"] == [0.15, 0.83] and "--albedos 0.15,0.83" in sweep["command"]
+    assert len(sweep["outs"]) == 2 and len(sweep["capture_outs"]) == 2
+    done = murk.experiment.run_dask(tmp_path / "dask", finish=False, **args)
+    assert len(done) == 2
+    for p in sweep["capture_outs"]:
+        name = os.path.basename(p)
+        assert open(p, "rb").read() == (tmp_path / "cli" / "renders" / name).read_bytes()
+    assert murk.experiment.pending(murk.experiment.plan(tmp_path / "dask", **args)) == []
 
 
 def test_bad_study_arguments(tmp_path):

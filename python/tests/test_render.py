@@ -22,6 +22,20 @@ def test_render_and_merged_shards_give_the_cli_bytes(tmp_path):
     assert np.array_equal(whole.H, murk.read_capture(tmp_path / "cli.h5").H)
 
 
+@needs_cli
+def test_albedo_sweep_gives_the_cli_files_and_each_albedo_alone(tmp_path):
+    cli("render", Z, "--out", tmp_path / "cli.h5", "--grid", "8", "--spp", "32", "--seed", "3",
+        "--albedos", "0.2,0.8", "--quiet")
+    caps = murk.render_albedos(Z, [0.2, 0.8], grid=8, spp=32, seed=3, out=tmp_path / "py.h5")
+    assert len(caps) == 2
+    for a, cap in zip(["0.2", "0.8"], caps):
+        py, cl = tmp_path / f"py-albedo{a}.h5", tmp_path / f"cli-albedo{a}.h5"
+        assert py.read_bytes() == cl.read_bytes()
+        alone = murk.render(Z, grid=8, spp=32, seed=3, set={"medium.albedo": float(a)})
+        assert np.allclose(cap.H, alone.H, rtol=1e-5, atol=1e-12 * alone.H.max())
+    assert not np.allclose(caps[0].H, caps[1].H)
+
+
 def test_scene_text_and_list_overrides():
     text = Z.read_text()
     a = murk.render(text, grid=4, spp=8, set=["medium.albedo=0.5"])

@@ -14,7 +14,8 @@ murk render scenes/t-wall-medium.toml --out fog.h5 --spp 64\n  \
 murk render scenes/z-letter.toml --out z.h5 --grid 32 --bins 1024 --set medium.albedo=0.83 --set medium.g=0.7\n  \
 murk render scenes/shelf.toml --out shelf.h5 --truth shelf-truth.h5\n  \
 murk render scenes/z-letter.toml --out part0.h5 --shard 0/4   # then murk merge part*.h5 --out z.h5\n  \
-murk render scenes/z-letter.toml --out z.h5 --resume          # continue from z.h5.ckpt")]
+murk render scenes/z-letter.toml --out z.h5 --resume          # continue from z.h5.ckpt\n  \
+murk render scenes/z-letter.toml --out z.h5 --albedos 0.15,0.5,0.83   # z-albedo0.15.h5, z-albedo0.5.h5, …")]
 pub struct RenderArgs {
     /// Scene file (TOML; examples in scenes/).
     pub scene: PathBuf,
@@ -57,6 +58,11 @@ pub struct RenderArgs {
     /// Continue from OUT.ckpt left by an interrupted run with the same scene, spp, seed and shard.
     #[arg(long)]
     pub resume: bool,
+    /// Render one capture per medium albedo from the same paths (OUT with `-albedo<α>` before its
+    /// extension): each equals, to float rounding, a render with `--set medium.albedo=α` and the same
+    /// seed, for the tracing cost of one render plus one histogram write per albedo.
+    #[arg(long, value_delimiter = ',', value_name = "α,α,…")]
+    pub albedos: Vec<f64>,
 }
 
 #[derive(Args)]
@@ -100,7 +106,9 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         bins: a.bins,
         set: a.set.clone(),
     };
-    murk_io::refuse_overwrite(&a.out, &[&a.scene])?;
+    for out in outputs(&a) {
+        murk_io::refuse_overwrite(&out, &[&a.scene])?;
+    }
     if let Some(t) = &a.truth {
         murk_io::refuse_overwrite(t, &[&a.scene, &a.out])?;
         anyhow::ensure!(
@@ -120,8 +128,24 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     pool.install(|| render(&a, &scene, quiet))
 }
 
+/// The capture files a render writes: OUT, or one per albedo of a sweep.
+fn outputs(a: &RenderArgs) -> Vec<PathBuf> {
+    if a.albedos.is_empty() {
+        vec![a.out.clone()]
+    } else {
+        a.albedos
+            .iter()
+            .map(|&al| murk_render::sweep_output(&a.out, al))
+            .collect()
+    }
+}
+
 fn render(a: &RenderArgs, scene: &Scene, quiet: bool) -> anyhow::Result<()> {
-    let plan = Plan::new(scene);
+    let plan = if a.albedos.is_empty() {
+        Plan::new(scene)
+    } else {
+        Plan::sweep(scene, &a.albedos)?
+    };
     let n_units = plan.shard_units(a.shard).len();
     let spp = match (a.spp, a.time_budget) {
         (Some(s), _) => s,
@@ -155,10 +179,14 @@ fn render(a: &RenderArgs, scene: &Scene, quiet: bool) -> anyhow::Result<()> {
             .expect("static template"),
     );
     let t0 = Instant::now();
-    let cap = plan.render(&opt, &|done, _| bar.set_position(done as u64))?;
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let caps = plan.render_all_until(&opt, &|done, _| bar.set_position(done as u64), &never)?;
     bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
-    murk_io::write_capture(&a.out, &cap)?;
+    let outs = outputs(a);
+    for (out, cap) in outs.iter().zip(&caps) {
+        murk_io::write_capture(out, cap)?;
+    }
     if opt.checkpoint.is_some() {
         // The capture is safely written; a stale checkpoint would only mislead a later --resume.
         let _ = std::fs::remove_file(&ckpt);
@@ -170,7 +198,10 @@ fn render(a: &RenderArgs, scene: &Scene, quiet: bool) -> anyhow::Result<()> {
             "murk: {} points × {spp} spp in {secs:.2} s ({:.2} M paths/s) → {}",
             points,
             paths / secs / 1e6,
-            a.out.display()
+            outs.iter()
+                .map(|o| o.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     Ok(())

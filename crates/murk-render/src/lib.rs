@@ -24,7 +24,9 @@ pub use geometry::{Aabb, Geometry, Object, Shape};
 pub use integrator::{Endpoint, Sampler, Tracer};
 pub use medium::{Medium, Phase};
 pub use overrides::Overrides;
-pub use render::{fingerprint, merge, render_key, scene_info, Plan, RenderOptions};
+pub use render::{
+    fingerprint, merge, render_key, scene_info, sweep_output, Plan, RenderOptions, MAX_SWEEP,
+};
 pub use scene::{
     CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, ObjectDef, Relay, RelayDef, RelayKind,
     RenderDef, Scene, SceneFile, TraceFrom,

@@ -36,7 +36,14 @@ pub struct Plan<'a> {
     /// the grid.
     grid: (usize, usize),
     tile: (usize, usize),
+    /// The medium albedos rendered from the same paths, one capture each (empty: the scene's own).
+    albedos: Vec<f64>,
+    /// Each capture's albedo over the scene medium's own (one 1 for a plain render).
+    ratios: Vec<f64>,
 }
+
+/// Most albedos one sweep renders.
+pub const MAX_SWEEP: usize = 16;
 
 impl<'a> Plan<'a> {
     pub fn new(scene: &'a Scene) -> Self {
@@ -74,7 +81,49 @@ impl<'a> Plan<'a> {
             from_laser,
             grid,
             tile: (fit(grid.0), fit(grid.1)),
+            albedos: Vec::new(),
+            ratios: vec![1.0],
         }
+    }
+
+    /// A plan that renders one capture per medium albedo in `albedos` from the same paths. In a
+    /// scattering medium no path's sampling depends on the albedo (there is no roulette there unless
+    /// `render.rr_depth` asks for it), so each contribution only scales by the albedo to the power of its
+    /// medium scattering events: capture j equals, up to float rounding, the capture of the scene with
+    /// `medium.albedo = albedos[j]` and the same seed. The tracing is paid once; only the histogram
+    /// writes are paid per albedo.
+    pub fn sweep(scene: &'a Scene, albedos: &[f64]) -> Result<Self> {
+        let own = scene.medium.filter(|_| scene.scatters()).map(|m| m.albedo);
+        let Some(own) = own else {
+            return Err(Error::param(
+                "an albedo sweep needs a scattering medium (medium.mu_t > 0 and medium.albedo > 0)",
+            ));
+        };
+        if albedos.is_empty() || albedos.len() > MAX_SWEEP {
+            return Err(Error::param(format!(
+                "an albedo sweep takes 1 to {MAX_SWEEP} albedos, got {}",
+                albedos.len()
+            )));
+        }
+        if let Some(a) = albedos.iter().find(|a| !(0.0..=1.0).contains(*a)) {
+            return Err(Error::param(format!(
+                "albedo {a} of the sweep: must be in [0, 1]"
+            )));
+        }
+        let mut plan = Plan::new(scene);
+        murk_core::Limits::get().elements(
+            "the sweep's captures",
+            &[albedos.len(), plan.n_hists(), scene.capture.time.bins],
+            4,
+        )?;
+        plan.albedos = albedos.to_vec();
+        plan.ratios = albedos.iter().map(|a| a / own).collect();
+        Ok(plan)
+    }
+
+    /// The albedos of a sweep (empty for a plain render).
+    pub fn albedos(&self) -> &[f64] {
+        &self.albedos
     }
 
     /// Work units: tiles.
@@ -163,18 +212,32 @@ impl<'a> Plan<'a> {
         // near 1e-6 of each bin at thousands of spp, far below the Monte Carlo error.
         let mut acc = vec![0.0f32; self.unit_len()];
         let mut s = Sampler::new(seed, u as u64);
-        self.tracer.trace(&origins, &targets, spp, &mut s, &mut acc);
+        let sweep = (spp, &self.ratios[..]);
+        self.tracer
+            .trace(&origins, &targets, sweep, &mut s, &mut acc);
         let norm = 1.0 / spp as f64;
         acc.iter().map(|&v| (v as f64 * norm) as f32).collect()
     }
 
-    fn store(&self, h: &mut [f32], u: usize, buf: &[f32]) {
+    /// Copies unit `u`'s histograms into the captures (a sweep's bins hold one value per capture).
+    fn store(&self, caps: &mut [Capture], u: usize, buf: &[f32]) {
         let nt = self.scene.capture.time.bins;
+        let n = caps.len();
         let hists = self
             .unit_points(u)
             .flat_map(|p| (0..self.n_targets()).map(move |k| self.hist(p, k)));
         for (k, hist) in hists.enumerate() {
-            h[hist * nt..(hist + 1) * nt].copy_from_slice(&buf[k * nt..(k + 1) * nt]);
+            let src = &buf[k * nt * n..(k + 1) * nt * n];
+            if n == 1 {
+                caps[0].h[hist * nt..(hist + 1) * nt].copy_from_slice(src);
+                continue;
+            }
+            for (j, cap) in caps.iter_mut().enumerate() {
+                let dst = &mut cap.h[hist * nt..(hist + 1) * nt];
+                dst.iter_mut()
+                    .zip(src.iter().skip(j).step_by(n))
+                    .for_each(|(d, s)| *d = *s);
+            }
         }
     }
 
@@ -200,13 +263,18 @@ impl<'a> Plan<'a> {
         (i..n).step_by(k.max(1)).map(|j| j * g % n).collect()
     }
 
+    fn n_hists(&self) -> usize {
+        let c = &self.scene.capture;
+        match c.pairing {
+            Pairing::Paired => c.illum.len(),
+            Pairing::Product => c.illum.len() * c.sensor.len(),
+        }
+    }
+
     /// An all-zero capture with this scene's layout.
     pub fn empty_capture(&self, scene_info: String) -> Capture {
         let c = &self.scene.capture;
-        let n_hist = match c.pairing {
-            Pairing::Paired => c.illum.len(),
-            Pairing::Product => c.illum.len() * c.sensor.len(),
-        };
+        let n_hist = self.n_hists();
         Capture {
             illum: c.illum.clone(),
             sensor: c.sensor.clone(),
@@ -237,10 +305,52 @@ impl<'a> Plan<'a> {
         progress: &(dyn Fn(usize, usize) + Sync),
         stop: &AtomicBool,
     ) -> Result<Capture> {
-        let mut cap = self.empty_capture(scene_info(self.scene, opt.spp, opt.seed, opt.shard));
-        self.run(opt, progress, stop, Some(&mut cap.h))?;
-        self.finish(&mut cap);
-        Ok(cap)
+        self.single(self.render_all_until(opt, progress, stop)?)
+    }
+
+    /// As [`Plan::render_until`], with one capture per albedo of a sweep (one for a plain plan).
+    pub fn render_all_until(
+        &self,
+        opt: &RenderOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+        stop: &AtomicBool,
+    ) -> Result<Vec<Capture>> {
+        let mut caps = self.empty_captures(opt.spp, opt.seed, opt.shard);
+        self.run(opt, progress, stop, Some(&mut caps))?;
+        caps.iter_mut().for_each(|c| self.finish(c));
+        Ok(caps)
+    }
+
+    /// The one capture of a plain plan; a sweep's several are refused rather than dropped.
+    fn single(&self, mut caps: Vec<Capture>) -> Result<Capture> {
+        match caps.len() {
+            1 => Ok(caps.remove(0)),
+            n => Err(Error::param(format!(
+                "an albedo sweep renders {n} captures: use its `_all` call"
+            ))),
+        }
+    }
+
+    /// One empty capture per albedo, each with its `scene_info`.
+    fn empty_captures(&self, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> Vec<Capture> {
+        let info = scene_info(self.scene, spp, seed, shard);
+        if self.albedos.is_empty() {
+            return vec![self.empty_capture(info)];
+        }
+        self.albedos
+            .iter()
+            .map(|a| {
+                // Before the shard line, which merging strips.
+                let (head, shard) = match info.find(SHARD_KEY) {
+                    Some(i) => info.split_at(i),
+                    None => (&info[..], ""),
+                };
+                self.empty_capture(format!(
+                    "{head}{SWEEP_KEY}{:?}\n{ALBEDO_KEY}{a:?}\n{shard}",
+                    self.albedos
+                ))
+            })
+            .collect()
     }
 
     /// Renders shard `opt.shard` into its checkpoint alone, which holds every unit of the shard when
@@ -264,22 +374,27 @@ impl<'a> Plan<'a> {
     /// that [`Plan::render_part`] completed: `parts[i]` holds shard (i, parts.len()). A part of another
     /// render, or one with units missing, is refused naming its file.
     pub fn assemble(&self, spp: u64, seed: u64, parts: &[PathBuf]) -> Result<Capture> {
+        self.single(self.assemble_all(spp, seed, parts)?)
+    }
+
+    /// As [`Plan::assemble`], with one capture per albedo of a sweep.
+    pub fn assemble_all(&self, spp: u64, seed: u64, parts: &[PathBuf]) -> Result<Vec<Capture>> {
         let n = parts.len();
         if n == 0 {
             return Err(Error::param("assembling needs at least one part"));
         }
-        let mut cap = self.empty_capture(scene_info(self.scene, spp, seed, None));
+        let mut caps = self.empty_captures(spp, seed, None);
         let mut mine = vec![false; self.n_units()];
         for (i, path) in parts.iter().enumerate() {
             let shard = Some((i, n));
             let units = self.shard_units(shard);
             units.iter().for_each(|&u| mine[u] = true);
             let mut found = 0;
-            let key = render_key(self.scene, spp, seed, shard);
+            let key = self.key(spp, seed, shard);
             read_checkpoint(path, &key, self.unit_len(), self.n_units(), |u, buf| {
                 // Each unit once: a unit of another shard or a repeat is not stored again.
                 if std::mem::replace(&mut mine[u], false) {
-                    self.store(&mut cap.h, u, buf);
+                    self.store(&mut caps, u, buf);
                     found += 1;
                 }
             })?
@@ -299,8 +414,18 @@ impl<'a> Plan<'a> {
                 ));
             }
         }
-        self.finish(&mut cap);
-        Ok(cap)
+        caps.iter_mut().for_each(|c| self.finish(c));
+        Ok(caps)
+    }
+
+    /// The render key of this plan's renders: [`render_key`], with the albedos of a sweep.
+    pub fn key(&self, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> String {
+        let key = render_key(self.scene, spp, seed, shard);
+        if self.albedos.is_empty() {
+            key
+        } else {
+            format!("{key}\nrender.albedo_sweep = {:?}", self.albedos)
+        }
     }
 
     /// Renders the units of `opt.shard` that its checkpoint does not hold yet, into `h` when given.
@@ -312,7 +437,7 @@ impl<'a> Plan<'a> {
         opt: &RenderOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
         stop: &AtomicBool,
-        mut h: Option<&mut [f32]>,
+        mut h: Option<&mut [Capture]>,
     ) -> Result<()> {
         if opt.spp == 0 {
             return Err(Error::param("spp must be at least 1"));
@@ -331,7 +456,7 @@ impl<'a> Plan<'a> {
         let ckpt = match &opt.checkpoint {
             Some(p) => Some(Checkpoint::open(
                 p,
-                &render_key(self.scene, opt.spp, opt.seed, opt.shard),
+                &self.key(opt.spp, opt.seed, opt.shard),
                 self.unit_len(),
                 self.n_units(),
                 |u, buf| {
@@ -351,7 +476,7 @@ impl<'a> Plan<'a> {
         // Each finished unit is stored at once, and the first to finish after the interval appends
         // everything pending to the checkpoint: the interval is honoured to within one unit.
         struct Shared<'c> {
-            h: Option<&'c mut [f32]>,
+            h: Option<&'c mut [Capture]>,
             done: usize,
             pending: Vec<(usize, Vec<f32>)>,
             last: Instant,
@@ -407,8 +532,26 @@ impl<'a> Plan<'a> {
     }
 
     fn unit_len(&self) -> usize {
-        self.n_targets() * self.scene.capture.time.bins * self.tile.0 * self.tile.1
+        self.ratios.len()
+            * self.n_targets()
+            * self.scene.capture.time.bins
+            * self.tile.0
+            * self.tile.1
     }
+}
+
+/// Where a sweep's capture of `albedo` goes when the render's output is `out`: `-albedo<α>` before the
+/// extension (`z.h5` → `z-albedo0.5.h5`; a shard part's `z.part0of4.h5` → `z.part0of4-albedo0.5.h5`).
+pub fn sweep_output(out: &Path, albedo: f64) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy())
+        .unwrap_or_default();
+    let name = match out.extension() {
+        Some(ext) => format!("{stem}-albedo{albedo}.{}", ext.to_string_lossy()),
+        None => format!("{stem}-albedo{albedo}"),
+    };
+    out.with_file_name(name)
 }
 
 /// YAML for the capture's `scene_info`: the scene file, spp, seed, murk version, the overrides and the
@@ -438,6 +581,9 @@ pub fn scene_info(scene: &Scene, spp: u64, seed: u64, shard: Option<(usize, usiz
 }
 
 const SHARD_KEY: &str = "shard: ";
+/// A sweep's albedos, and the one a capture of it has, in its `scene_info`.
+const SWEEP_KEY: &str = "albedo_sweep: ";
+const ALBEDO_KEY: &str = "albedo: ";
 
 /// Sums shard parts into the capture an unsharded render gives, bit for bit: shards own disjoint
 /// histograms, so each sum adds exact zeros.

@@ -2,7 +2,7 @@
 //! simulate), each task keyed by the fingerprint of its resolved scene so finished work is found again.
 
 use murk_core::{Error, Result};
-use murk_render::{fingerprint, render_key, Overrides, Scene};
+use murk_render::{fingerprint, sweep_output, Overrides, Scene};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -177,18 +177,44 @@ impl Format {
     }
 }
 
-/// One simulated capture (a cell's medium at one seed), rendered as `shards` tasks.
+/// One simulated render (a cell's medium at one seed), rendered as `shards` tasks. Cells whose media
+/// differ only in albedo share one render, an albedo sweep, which writes one capture per albedo.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CaptureJob {
-    /// Fingerprint of the unsharded render key: names the merged capture `renders/<id>.h5`.
+    /// Fingerprint of the unsharded render key: names the merged captures (`capture_ids`).
     pub id: String,
     pub scene: SceneKind,
+    /// The medium; a sweep's paths are traced with the largest of its albedos.
     pub medium: MediumParams,
     pub seed: u64,
     /// Overrides of the scene file, as `murk render --set` takes them.
     pub set: Vec<String>,
     pub spp: u64,
+    /// The albedos a sweep renders from the same paths, one capture each; empty: one capture.
+    #[serde(default)]
+    pub albedos: Vec<f64>,
     pub tasks: Vec<RenderTask>,
+}
+
+impl CaptureJob {
+    /// The captures the job writes: its id, or `<id>-albedo<α>` per albedo of a sweep (each named
+    /// `renders/<capture id>.h5`).
+    pub fn capture_ids(&self) -> Vec<String> {
+        if self.albedos.is_empty() {
+            return vec![self.id.clone()];
+        }
+        let files = self.outputs(Path::new(&self.id));
+        files.iter().map(|f| f.display().to_string()).collect()
+    }
+
+    /// The files a task whose output is `out` writes: `out`, or one per albedo of a sweep (as
+    /// `murk render --albedos` names them).
+    pub fn outputs(&self, out: &Path) -> Vec<PathBuf> {
+        if self.albedos.is_empty() {
+            return vec![out.to_path_buf()];
+        }
+        self.albedos.iter().map(|&a| sweep_output(out, a)).collect()
+    }
 }
 
 /// One `murk render` run: a shard of a capture.
@@ -352,12 +378,34 @@ impl Plan {
                 opt.cells
             )));
         }
+        // Cells whose fog differs only in albedo share one render, an albedo sweep: its paths do not
+        // depend on the albedo, so the tracing is paid once per row (docs/study.md).
+        let mut sweeps: Vec<((SceneKind, u64, u64), Vec<f64>)> = Vec::new();
+        for (.., scene, m, _) in cells.iter().filter(|c| c.4.mu_t > 0.0) {
+            let key = (*scene, m.mu_t.to_bits(), m.g.to_bits());
+            match sweeps.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, a)) if !a.contains(&m.albedo) => a.push(m.albedo),
+                Some(_) => {}
+                None => sweeps.push((key, vec![m.albedo])),
+            }
+        }
+        sweeps
+            .iter_mut()
+            .for_each(|(_, a)| a.sort_by(f64::total_cmp));
+        let sweep_of = |scene: SceneKind, m: MediumParams| -> Vec<f64> {
+            let key = (scene, m.mu_t.to_bits(), m.g.to_bits());
+            sweeps
+                .iter()
+                .find(|(k, a)| *k == key && a.len() > 1)
+                .map_or_else(Vec::new, |(_, a)| a.clone())
+        };
         for (figure, row, col, scene, medium, lambda_factor) in cells {
+            let albedos = sweep_of(scene, medium);
             let captures = (0..opt.seeds)
-                .map(|s| plan.capture(opt, scene, medium, s))
+                .map(|s| plan.capture(opt, scene, medium, &albedos, s))
                 .collect::<Result<_>>()?;
             let reference = (0..opt.seeds)
-                .map(|s| plan.capture(opt, scene, none, s))
+                .map(|s| plan.capture(opt, scene, none, &[], s))
                 .collect::<Result<_>>()?;
             plan.cells.push(Cell {
                 figure,
@@ -387,32 +435,42 @@ impl Plan {
         ]
     }
 
-    /// The capture job for (scene, medium, seed), added once; returns its id.
+    /// The capture of (scene, medium, seed), its job added once (a sweep over `albedos` where there
+    /// are any); returns the capture's id.
     fn capture(
         &mut self,
         opt: &StudyOptions,
         scene: SceneKind,
         medium: MediumParams,
+        albedos: &[f64],
         seed: u64,
     ) -> Result<String> {
-        let set = Plan::overrides(opt, scene, medium);
+        // A sweep traces with its largest albedo, so every other one scales contributions down.
+        let traced = MediumParams {
+            albedo: albedos.iter().copied().fold(medium.albedo, f64::max),
+            ..medium
+        };
+        let set = Plan::overrides(opt, scene, traced);
         let resolved = load_scene(&opt.scenes_dir, scene, &set)?;
+        let render = if albedos.is_empty() {
+            murk_render::Plan::new(&resolved)
+        } else {
+            murk_render::Plan::sweep(&resolved, albedos)?
+        };
         let spp = opt.spp.unwrap_or(Format::of(scene, opt.scale).spp);
-        let id = format!(
-            "{:016x}",
-            fingerprint(&render_key(&resolved, spp, seed, None))
-        );
-        if self.captures.iter().any(|c| c.id == id) {
-            return Ok(id);
+        let id = format!("{:016x}", fingerprint(&render.key(spp, seed, None)));
+        let capture_id = |job: &CaptureJob| {
+            let k = job.albedos.iter().position(|a| *a == medium.albedo);
+            job.capture_ids()[k.unwrap_or(0)].clone()
+        };
+        if let Some(job) = self.captures.iter().find(|c| c.id == id) {
+            return Ok(capture_id(job));
         }
         let n = opt.shards;
         let tasks = (0..n)
             .map(|i| {
                 let shard = (n > 1).then_some((i, n));
-                let tid = format!(
-                    "{:016x}",
-                    fingerprint(&render_key(&resolved, spp, seed, shard))
-                );
+                let tid = format!("{:016x}", fingerprint(&render.key(spp, seed, shard)));
                 let out = match shard {
                     None => PathBuf::from(format!("renders/{id}.h5")),
                     Some(_) => PathBuf::from(format!("renders/{id}.part{i}of{n}.h5")),
@@ -424,19 +482,22 @@ impl Plan {
                 }
             })
             .collect();
-        self.captures.push(CaptureJob {
-            id: id.clone(),
+        let job = CaptureJob {
+            id,
             scene,
-            medium,
+            medium: traced,
             seed,
             set,
             spp,
+            albedos: albedos.to_vec(),
             tasks,
-        });
-        Ok(id)
+        };
+        let capture = capture_id(&job);
+        self.captures.push(job);
+        Ok(capture)
     }
 
-    /// Keeps the cells `keep` accepts and the captures they use (a reduced study).
+    /// Keeps the cells `keep` accepts and the jobs they use (a reduced study).
     pub fn retain_cells(&mut self, keep: impl Fn(&Cell) -> bool) {
         self.cells.retain(keep);
         let used: std::collections::HashSet<&String> = self
@@ -444,13 +505,15 @@ impl Plan {
             .iter()
             .flat_map(|c| c.captures.iter().chain(&c.reference))
             .collect();
-        self.captures.retain(|j| used.contains(&j.id));
+        self.captures
+            .retain(|j| j.capture_ids().iter().any(|id| used.contains(id)));
     }
 
+    /// The job that writes capture `id`.
     pub fn job(&self, id: &str) -> &CaptureJob {
         self.captures
             .iter()
-            .find(|c| c.id == id)
+            .find(|c| c.capture_ids().iter().any(|k| k == id))
             .expect("cells name captures of the same plan")
     }
 
@@ -473,6 +536,10 @@ impl Plan {
                 );
                 if let Some((i, n)) = t.shard {
                     cmd.push_str(&format!(" --shard {i}/{n}"));
+                }
+                if !c.albedos.is_empty() {
+                    let a: Vec<String> = c.albedos.iter().map(|a| a.to_string()).collect();
+                    cmd.push_str(&format!(" --albedos {}", a.join(",")));
                 }
                 for s in &c.set {
                     cmd.push_str(&format!(" --set '{s}'"));
@@ -524,7 +591,8 @@ mod tests {
     }
 
     /// Cells as the paper lays them out; a capture serves every cell that needs it (Fig. 4 and the
-    /// g = 0 row of Fig. 3c reuse Fig. 3b's μt = 1 renders, every cell's reference is Fig. 3a's).
+    /// g = 0 row of Fig. 3c reuse Fig. 3b's μt = 1 renders, every cell's reference is Fig. 3a's), and
+    /// each row of albedos is one sweep.
     #[test]
     fn cells_share_captures() {
         let plan = Plan::new(&options(&[], 1, 1)).unwrap();
@@ -534,7 +602,20 @@ mod tests {
             [1, 15, 15, 3, 3],
             "cells per figure"
         );
-        assert_eq!(plan.captures.len(), 1 + 15 + 10 + 3);
+        // Fig. 3a, Fig. 3b's three rows, Fig. 3c's g = ±0.7 rows, the shelf's three media.
+        assert_eq!(plan.captures.len(), 1 + 3 + 2 + 3);
+        let ids: std::collections::HashSet<String> =
+            plan.captures.iter().flat_map(|j| j.capture_ids()).collect();
+        assert_eq!(ids.len(), 1 + 15 + 10 + 3, "distinct captures");
+        let sweeps: Vec<&CaptureJob> = plan
+            .captures
+            .iter()
+            .filter(|j| !j.albedos.is_empty())
+            .collect();
+        assert_eq!(sweeps.len(), 5);
+        assert!(sweeps.iter().all(|j| j.albedos == ALBEDOS
+            && j.medium.albedo == 0.83
+            && j.set.contains(&"medium.albedo=0.83".to_string())));
         let cell = |f: Figure, row: &str, col: &str| {
             plan.cells
                 .iter()
@@ -595,6 +676,27 @@ mod tests {
         )));
         plan.retain_cells(|_| false);
         assert!(plan.captures.is_empty());
+        // A row of Fig. 3b is one task that renders every albedo; one cell alone is a plain render.
+        let row = Plan::new(&StudyOptions {
+            cells: vec!["μt = 2".into()],
+            ..options(&[Figure::Fig3b], 1, 1)
+        })
+        .unwrap();
+        // The sweep and the reference without a medium.
+        assert_eq!(row.n_tasks(), 2);
+        let cmd = &row.task_commands(Path::new("out"))[0];
+        assert!(cmd.contains("--albedos 0.15,0.33,0.5,0.67,0.83"), "{cmd}");
+        let id = &row.captures[0].id;
+        assert_eq!(row.cells[2].captures, [format!("{id}-albedo0.5")]);
+        assert!(cmd.contains(&format!("--out out/renders/{id}.h5")), "{cmd}");
+        let one = Plan::new(&StudyOptions {
+            cells: vec!["μt = 2 α = 0.5".into()],
+            ..options(&[Figure::Fig3b], 1, 1)
+        })
+        .unwrap();
+        assert!(one.captures.iter().all(|j| j.albedos.is_empty()));
+        assert!(!one.task_commands(Path::new("out"))[0].contains("--albedos"));
+        assert_eq!(one.cells[0].captures, [one.captures[0].id.clone()]);
         assert!(Plan::new(&options(&[], 0, 1)).is_err());
         assert!(Figure::parse("fig9")
             .unwrap_err()

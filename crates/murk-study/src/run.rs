@@ -43,9 +43,23 @@ impl Observer for Silent {
     fn event(&self, _: Event) {}
 }
 
-/// The capture file of a job, relative to the study folder.
-pub fn capture_path(job: &CaptureJob) -> PathBuf {
-    PathBuf::from(format!("renders/{}.h5", job.id))
+/// The file of capture `id` (see [`CaptureJob::capture_ids`]), relative to the study folder.
+pub fn capture_path(id: &str) -> PathBuf {
+    PathBuf::from(format!("renders/{id}.h5"))
+}
+
+/// Whether every capture of `job` is in `dir`.
+fn captured(dir: &Path, job: &CaptureJob) -> bool {
+    job.capture_ids()
+        .iter()
+        .all(|id| dir.join(capture_path(id)).exists())
+}
+
+/// Whether task `t` of `job` has written its files into `dir`.
+fn task_done(dir: &Path, job: &CaptureJob, t: usize) -> bool {
+    job.outputs(&dir.join(&job.tasks[t].out))
+        .iter()
+        .all(|p| p.exists())
 }
 
 fn cpu_path(dir: &Path, job: &CaptureJob) -> PathBuf {
@@ -56,29 +70,31 @@ fn cpu_path(dir: &Path, job: &CaptureJob) -> PathBuf {
 pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
     let renders = dir.join("renders");
     std::fs::create_dir_all(&renders).map_err(|e| Error::io(&renders, e))?;
-    let missing: Vec<&CaptureJob> = plan
-        .captures
-        .iter()
-        .filter(|j| !dir.join(capture_path(j)).exists())
-        .collect();
+    let missing: Vec<&CaptureJob> = plan.captures.iter().filter(|j| !captured(dir, j)).collect();
+    let all_parts =
+        |j: &CaptureJob| j.tasks.len() > 1 && (0..j.tasks.len()).all(|t| task_done(dir, j, t));
     // Parts that another executor finished are merged before anything renders.
     for job in &missing {
-        if job.tasks.len() > 1 && job.tasks.iter().all(|t| dir.join(&t.out).exists()) {
+        if all_parts(job) {
             merge_parts(dir, job)?;
         }
     }
     let todo: Vec<(&CaptureJob, usize)> = missing
         .iter()
-        .filter(|j| !dir.join(capture_path(j)).exists())
+        .filter(|j| !captured(dir, j))
         .flat_map(|j| (0..j.tasks.len()).map(move |t| (*j, t)))
-        .filter(|(j, t)| !dir.join(&j.tasks[*t].out).exists())
+        .filter(|(j, t)| !task_done(dir, j, *t))
         .collect();
-    // The first cell that uses a capture names it (later inserts win, hence the reversal).
+    // The first cell that uses a job names it (later inserts win, hence the reversal).
     let labels: HashMap<&str, String> = plan
         .cells
         .iter()
         .rev()
-        .flat_map(|c| c.captures.iter().map(move |id| (id.as_str(), c.label())))
+        .flat_map(|c| {
+            c.captures
+                .iter()
+                .map(move |id| (plan.job(id).id.as_str(), c.label()))
+        })
         .collect();
     let started = Instant::now();
     for (k, (job, t)) in todo.iter().enumerate() {
@@ -99,7 +115,7 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
         if let (Some(a), Some(b)) = (cpu0, murk_render::bench::cpu_seconds()) {
             add_cpu(&cpu_path(dir, job), b - a)?;
         }
-        if job.tasks.len() > 1 && job.tasks.iter().all(|t| dir.join(&t.out).exists()) {
+        if all_parts(job) {
             merge_parts(dir, job)?;
         }
     }
@@ -131,28 +147,38 @@ fn run_task(plan: &Plan, dir: &Path, job: &CaptureJob, t: usize, obs: &dyn Obser
         checkpoint_every: Duration::from_secs(30),
     };
     let never = AtomicBool::new(false);
-    let cap = murk_render::Plan::new(&scene).render_until(
+    let render = if job.albedos.is_empty() {
+        murk_render::Plan::new(&scene)
+    } else {
+        murk_render::Plan::sweep(&scene, &job.albedos)?
+    };
+    let caps = render.render_all_until(
         &opt,
         &|done, total| obs.event(Event::Units { done, total }),
         obs.stop().unwrap_or(&never),
     )?;
-    murk_io::write_capture(&out, &cap)?;
+    for (path, cap) in job.outputs(&out).iter().zip(&caps) {
+        murk_io::write_capture(path, cap)?;
+    }
     let _ = std::fs::remove_file(&ckpt);
     Ok(())
 }
 
+/// Merges the shard parts of each of `job`'s captures, one capture at a time.
 fn merge_parts(dir: &Path, job: &CaptureJob) -> Result<()> {
-    let parts = job
-        .tasks
-        .iter()
-        .map(|t| {
-            let p = dir.join(&t.out);
-            Ok((p.clone(), murk_io::read_capture(&p)?))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    murk_io::write_capture(&dir.join(capture_path(job)), &merge(&parts)?)?;
-    for (p, _) in parts {
-        let _ = std::fs::remove_file(p);
+    for (k, id) in job.capture_ids().iter().enumerate() {
+        let parts = job
+            .tasks
+            .iter()
+            .map(|t| {
+                let p = job.outputs(&dir.join(&t.out)).swap_remove(k);
+                Ok((p.clone(), murk_io::read_capture(&p)?))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        murk_io::write_capture(&dir.join(capture_path(id)), &merge(&parts)?)?;
+        for (p, _) in parts {
+            let _ = std::fs::remove_file(p);
+        }
     }
     Ok(())
 }
@@ -210,7 +236,7 @@ pub struct CellResult {
 /// Reconstructs and scores every cell; the captures must exist.
 pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellResult>> {
     // Captures are read when used, one at a time (a paper-scale capture is 268 MB).
-    let load = |id: &str| murk_io::read_capture(&dir.join(capture_path(plan.job(id))));
+    let load = |id: &str| murk_io::read_capture(&dir.join(capture_path(id)));
     // Front views of the no-medium captures per (capture, λ): every cell of that scene compares with them.
     let mut references: HashMap<(String, u64), Plane> = HashMap::new();
     // Fields of captures that several cells reconstruct at the same λ (Fig. 3c's g = 0 row is Fig. 3b's
@@ -283,13 +309,16 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
                 }
             }
         }
+        // A sweep's CPU is shared equally by the captures it writes.
         let cpu_s = cell
             .captures
             .iter()
             .map(|id| {
-                std::fs::read_to_string(cpu_path(dir, plan.job(id)))
+                let job = plan.job(id);
+                std::fs::read_to_string(cpu_path(dir, job))
                     .ok()
                     .and_then(|s| s.trim().parse::<f64>().ok())
+                    .map(|s| s / job.capture_ids().len() as f64)
             })
             .sum::<Option<f64>>();
         results.push(CellResult {

@@ -30,6 +30,7 @@ impl Tracer<'_> {
             let carry = Carry {
                 beta: b,
                 opl: origin.extra_m,
+                scat: 0,
             };
             self.connect_hit(Ray { o: origin.p, d: w }, &h, carry, targets, s, out);
         }
@@ -110,6 +111,7 @@ impl Tracer<'_> {
         let carry = Carry {
             beta: carry.beta * tr,
             opl: carry.opl + h.t + extra,
+            ..carry
         };
         self.connect(at, carry, (0, targets), |_| 1.0, s, out);
     }
@@ -128,7 +130,7 @@ impl Tracer<'_> {
         out: &mut Sink,
     ) {
         let (y, seen, v) = (at.y, at.seen, at.v);
-        let (beta, opl) = (carry.beta, carry.opl);
+        let Carry { beta, opl, scat } = carry;
         for (k, tgt) in targets.iter().enumerate() {
             let v_y = tgt.p - y;
             let r2 = v_y.length_squared();
@@ -144,7 +146,7 @@ impl Tracer<'_> {
             }
             let (tr, extra) = self.transmit(y, w, r);
             let value = beta * f * tr * cos_t / (PI * r2) * mis(k);
-            self.splat(out, k0 + k, opl + r + extra + tgt.extra_m, value, s);
+            self.splat(out, k0 + k, opl + r + extra + tgt.extra_m, (value, scat), s);
         }
     }
 }

@@ -355,6 +355,7 @@ impl Tracer<'_> {
             / (PI * tl * tl)
             / (n as f64 * p_l + p_path);
         let opl = from.opl + t + tl + m.extra_path_m((t - m0) + (tl - a)) + tgt.extra_m;
-        self.splat(out, k, opl, value, s);
+        // The target-side vertex scatters once more than the path that reached `from`.
+        self.splat(out, k, opl, (value, from.scat + 1), s);
     }
 }

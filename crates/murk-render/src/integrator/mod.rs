@@ -47,11 +47,13 @@ struct Ray {
     d: DVec3,
 }
 
-/// A path's throughput and the optical path it has travelled.
+/// A path's throughput, the optical path it has travelled, and how many medium scattering events its
+/// throughput holds (the power of the albedo in it, which an albedo sweep rescales).
 #[derive(Clone, Copy)]
 struct Carry {
     beta: f64,
     opl: f64,
+    scat: i32,
 }
 
 /// A vertex to connect: where it is, what scatters there, and the start of the segment that reached
@@ -98,6 +100,7 @@ struct Start {
     v: Vertex,
     beta: f64,
     opl: f64,
+    scat: i32,
     origin: bool,
 }
 
@@ -189,18 +192,22 @@ impl<'a> Tracer<'a> {
 
     /// Adds `spp` paths from each of `origins` into `out` (per origin, `targets.len()` histograms of
     /// `bins`), unnormalised. With more than one origin (a tile), what each path adds past its first
-    /// hidden vertex is shared by all of them (`share_tail`).
+    /// hidden vertex is shared by all of them (`share_tail`). Each bin holds one value per entry of
+    /// `ratios`, the albedos of a sweep over the medium's own, side by side: a contribution whose path
+    /// scattered k times in the medium adds ratios[j]^k times itself to value j (a plain render has
+    /// the one ratio 1).
     pub fn trace(
         &self,
         origins: &[Endpoint],
         targets: &[Endpoint],
-        spp: u64,
+        (spp, ratios): (u64, &[f64]),
         s: &mut Sampler,
         out: &mut [f32],
     ) {
         let mut seg = Vec::new();
         let mut sink = Sink {
             out,
+            ratios,
             unit: targets.len() * self.scene.capture.time.bins,
             origin: 0,
             share: origins.len() > 1,
@@ -244,7 +251,16 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    fn splat(&self, out: &mut Sink, k: usize, opl: f64, value: f64, s: &mut Sampler) {
+    /// Adds `value` (whose throughput holds `scat` medium scattering events) at optical path `opl` to
+    /// target `k`'s histogram of the traced point, once per albedo of the sweep.
+    fn splat(
+        &self,
+        out: &mut Sink,
+        k: usize,
+        opl: f64,
+        (value, scat): (f64, i32),
+        s: &mut Sampler,
+    ) {
         let t = &self.scene.capture.time;
         let jitter = self.scene.settings.time_jitter;
         let opl = if jitter > 0.0 {
@@ -257,13 +273,18 @@ impl<'a> Tracer<'a> {
                 hist0: k * t.bins,
                 bin: (opl - t.start_m) / t.bin_width_m,
                 value,
+                scat,
                 w: out.w,
             });
             return;
         }
         let x = (opl - t.start_m) / t.bin_width_m;
         if x >= 0.0 && x < t.bins as f64 {
-            out.out[out.origin * out.unit + k * t.bins + x as usize] += value as f32;
+            let n = out.ratios.len();
+            let i = (out.origin * out.unit + k * t.bins + x as usize) * n;
+            for (o, r) in out.out[i..i + n].iter_mut().zip(out.ratios) {
+                *o += (value * r.powi(scat)) as f32;
+            }
         }
     }
 
@@ -383,6 +404,7 @@ impl<'a> Tracer<'a> {
             },
             beta: 1.0,
             opl: origin.extra_m,
+            scat: 0,
             origin: true,
         };
         if d.dot(origin.n) <= 0.0 {
@@ -403,6 +425,7 @@ impl<'a> Tracer<'a> {
         let mut pos = origin.p;
         let mut opl = origin.extra_m;
         let mut depth = 0u32;
+        let mut scat = 0;
         loop {
             // Fog paths wander on long after the window has closed for them: in a 1/m medium each
             // vertex adds about a metre of path.
@@ -481,7 +504,11 @@ impl<'a> Tracer<'a> {
                                     seen: from.x,
                                     v: &v,
                                 };
-                                let carry = Carry { beta: b, opl: o };
+                                let carry = Carry {
+                                    beta: b,
+                                    opl: o,
+                                    scat: scat + 1,
+                                };
                                 self.connect(at, carry, (k, &targets[k..=k]), |_| w, s, out);
                             }
                         }
@@ -491,7 +518,7 @@ impl<'a> Tracer<'a> {
                         // again.
                         if let Some((h, false)) = hit {
                             let b = beta * self.object_weight(&from, d, first_object_weight);
-                            let carry = Carry { beta: b, opl };
+                            let carry = Carry { beta: b, opl, scat };
                             self.connect_hit(Ray { o: pos, d }, &h, carry, targets, s, out);
                             connected = true;
                         }
@@ -509,12 +536,14 @@ impl<'a> Tracer<'a> {
                             pos = y;
                             opl += t + m.extra_path_m(t - m0);
                             beta *= m.albedo;
+                            scat += 1;
                             let at = At {
                                 y: pos,
                                 seen: from.x,
                                 v: &Vertex::Medium { dir: d },
                             };
-                            self.connect(at, Carry { beta, opl }, (0, targets), mis, s, out);
+                            let carry = Carry { beta, opl, scat };
+                            self.connect(at, carry, (0, targets), mis, s, out);
                             if depth >= set.max_depth {
                                 return;
                             }
@@ -528,7 +557,7 @@ impl<'a> Tracer<'a> {
                                 out.at_first = out.share;
                             }
                             let ray = Ray { o: pos, d };
-                            self.connect_object(m, ray, Carry { beta, opl }, targets, s, out);
+                            self.connect_object(m, ray, carry, targets, s, out);
                             if !self.roulette(&mut beta, depth, s) {
                                 return;
                             }
@@ -537,6 +566,7 @@ impl<'a> Tracer<'a> {
                                 v: Vertex::Medium { dir: d },
                                 beta,
                                 opl,
+                                scat,
                                 origin: false,
                             };
                             d = m.phase.sample(d, s.next(), s.next());
@@ -564,7 +594,8 @@ impl<'a> Tracer<'a> {
                     seen: from.x,
                     v: &v,
                 };
-                self.connect(at, Carry { beta: b, opl }, (0, targets), |_| 1.0, s, out);
+                let carry = Carry { beta: b, opl, scat };
+                self.connect(at, carry, (0, targets), |_| 1.0, s, out);
             }
             beta *= h.albedo;
             if beta <= 0.0 || depth >= set.max_depth || !self.roulette(&mut beta, depth, s) {
@@ -581,6 +612,7 @@ impl<'a> Tracer<'a> {
                 v,
                 beta: beta / h.albedo,
                 opl,
+                scat,
                 origin: false,
             };
             d = cosine_hemisphere(h.n, s.next(), s.next());

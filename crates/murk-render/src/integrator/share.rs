@@ -6,11 +6,13 @@ use super::*;
 /// What a path adds past its first hidden vertex, kept to be shared by the traced points of a tile: where
 /// its target's histogram starts in a traced point's histograms, optical path (jitter included) in bins
 /// from the capture's start (a replay then shifts it without a division per entry), value, and the
-/// direction that left the first vertex on the way to it (for the phase function's ratio there).
+/// direction that left the first vertex on the way to it (for the phase function's ratio there), and
+/// the medium scattering events its value holds.
 pub(super) struct Tail {
     pub(super) hist0: usize,
     pub(super) bin: f64,
     pub(super) value: f64,
+    pub(super) scat: i32,
     pub(super) w: DVec3,
 }
 
@@ -39,6 +41,36 @@ pub(super) fn replay(
     }
 }
 
+/// [`replay`] for an albedo sweep: each bin of `hists` holds one value per albedo, side by side, and
+/// entry e adds `factors[e · albedos + j]` times its value to albedo j (one cache line per entry, as in
+/// a plain render, rather than one per albedo).
+pub(super) fn replay_sweep(
+    bins: usize,
+    hists: &mut [f32],
+    tail: &[Tail],
+    (scale, shift): (f64, f64),
+    factors: &[f64],
+    weight: impl Fn(usize) -> f64,
+) {
+    let n = factors.len() / tail.len();
+    let end = bins as f64;
+    for (e, tl) in tail.iter().enumerate() {
+        let x = tl.bin + shift;
+        if x >= 0.0 && x < end {
+            // SAFETY: as in `replay`.
+            let bin: u32 = unsafe { x.to_int_unchecked() };
+            let v = tl.value * scale * weight(e);
+            let at = (tl.hist0 + bin as usize) * n;
+            for (o, f) in hists[at..at + n]
+                .iter_mut()
+                .zip(&factors[e * n..(e + 1) * n])
+            {
+                *o += (v * f) as f32;
+            }
+        }
+    }
+}
+
 /// The leg from a traced point to a path's first vertex, in the measure of that vertex (volume or area):
 /// its integrand `f`, the optical path `opl` to it and the direction `d`.
 #[derive(Clone, Copy)]
@@ -60,6 +92,8 @@ pub(super) struct First {
 /// in the work unit's buffer), or, while `recording`, the tail list shared with the rest of the tile.
 pub(super) struct Sink<'o> {
     pub(super) out: &'o mut [f32],
+    /// Each albedo of a sweep over the medium's own (one value per bin each, side by side).
+    pub(super) ratios: &'o [f64],
     /// Length of one traced point's histograms, and the point now traced.
     pub(super) unit: usize,
     pub(super) origin: usize,
@@ -75,12 +109,13 @@ pub(super) struct Sink<'o> {
 
 /// `share_tail`'s buffers, reused from path to path: each origin's leg to the first vertex and, with an
 /// anisotropic phase function, one row of the origins' shares per distinct direction leaving that vertex,
-/// with each tail entry's row.
+/// with each tail entry's row; in an albedo sweep, each entry's factor per albedo.
 #[derive(Default)]
 pub(super) struct TileScratch {
     legs: Vec<Option<Leg>>,
     shares: Vec<f64>,
     row: Vec<usize>,
+    factors: Vec<f64>,
 }
 
 impl Tracer<'_> {
@@ -164,16 +199,33 @@ impl Tracer<'_> {
         scratch: &mut TileScratch,
     ) {
         let Some(first) = sink.first else { return };
-        let TileScratch { legs, shares, row } = scratch;
+        let TileScratch {
+            legs,
+            shares,
+            row,
+            factors,
+        } = scratch;
         legs.clear();
         legs.extend(origins.iter().map(|o| self.leg(o, &first)));
         let sum_f: f64 = legs.iter().flatten().map(|l| l.f).sum();
         let (t, unit) = (&self.scene.capture.time, sink.unit);
+        // A sweep's albedo j scales an entry by ratios[j]^(its scattering events); a plain render keeps
+        // the loops below free of it.
+        let nr = sink.ratios.len();
+        if nr > 1 {
+            factors.clear();
+            for tl in &sink.tail {
+                factors.extend(sink.ratios.iter().map(|r| r.powi(tl.scat)));
+            }
+        }
         let Some(own) = legs[src].filter(|l| l.f > 0.0) else {
             // Rounding kept the source from re-joining its own vertex (a grazing or boundary leg): the
             // tail stays the source's own, unshared.
-            let hist = &mut sink.out[src * unit..(src + 1) * unit];
-            return replay(t.bins, hist, &sink.tail, 1.0, 0.0, |_| 1.0);
+            let hist = &mut sink.out[src * unit * nr..(src + 1) * unit * nr];
+            return match nr {
+                1 => replay(t.bins, hist, &sink.tail, 1.0, 0.0, |_| 1.0),
+                _ => replay_sweep(t.bins, hist, &sink.tail, (1.0, 0.0), factors, |_| 1.0),
+            };
         };
         let phase = self
             .medium()
@@ -203,12 +255,14 @@ impl Tracer<'_> {
         for (i, leg) in legs.iter().enumerate() {
             let Some(leg) = leg else { continue };
             let shift = (leg.opl - own.opl) / t.bin_width_m;
-            let hist = &mut sink.out[i * unit..(i + 1) * unit];
-            match phase {
-                Some(_) => replay(t.bins, hist, &sink.tail, 1.0, shift, |e| {
-                    shares[row[e] * n + i]
-                }),
-                None => replay(t.bins, hist, &sink.tail, leg.f / sum_f, shift, |_| 1.0),
+            let hist = &mut sink.out[i * unit * nr..(i + 1) * unit * nr];
+            let (tail, scale) = (&sink.tail, leg.f / sum_f);
+            let share = |e: usize| shares[row[e] * n + i];
+            match (phase, nr) {
+                (Some(_), 1) => replay(t.bins, hist, tail, 1.0, shift, share),
+                (Some(_), _) => replay_sweep(t.bins, hist, tail, (1.0, shift), factors, share),
+                (None, 1) => replay(t.bins, hist, tail, scale, shift, |_| 1.0),
+                (None, _) => replay_sweep(t.bins, hist, tail, (scale, shift), factors, |_| 1.0),
             }
         }
     }
