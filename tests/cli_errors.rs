@@ -220,6 +220,21 @@ fn nonsense_parameters() {
         &["reconstruct", g, "--out", d.join("v.txt").to_str().unwrap()],
         &["v.txt"],
     );
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml");
+    let r = d.join("r.h5");
+    let r = r.to_str().unwrap();
+    let sweep = |extra: &[&str], needles: &[&str]| {
+        let mut args = vec!["render", scene, "--out", r, "--grid", "4", "--spp", "1"];
+        args.extend_from_slice(extra);
+        fails(&args, needles);
+    };
+    sweep(&["--albedos", "0.5,1.5"], &["albedo 1.5", "[0, 1]"]);
+    sweep(&["--albedos", "0.5,nan"], &["albedo NaN"]);
+    sweep(&["--albedos", "0.5,zero"], &["--albedos", "zero"]);
+    sweep(
+        &["--albedos", "0.5", "--set", "medium.mu_t=0"],
+        &["scattering medium"],
+    );
     fails(
         &["synth", "--out", out, "--target", "point:0,0,-1"],
         &["not behind the wall"],

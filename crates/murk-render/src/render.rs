@@ -110,6 +110,13 @@ impl<'a> Plan<'a> {
                 "albedo {a} of the sweep: must be in [0, 1]"
             )));
         }
+        let twice = (1..albedos.len()).find(|&i| albedos[..i].contains(&albedos[i]));
+        if let Some(i) = twice {
+            return Err(Error::param(format!(
+                "albedo {} appears twice in the sweep",
+                albedos[i]
+            )));
+        }
         let mut plan = Plan::new(scene);
         murk_core::Limits::get().elements(
             "the sweep's captures",
@@ -119,11 +126,6 @@ impl<'a> Plan<'a> {
         plan.albedos = albedos.to_vec();
         plan.ratios = albedos.iter().map(|a| a / own).collect();
         Ok(plan)
-    }
-
-    /// The albedos of a sweep (empty for a plain render).
-    pub fn albedos(&self) -> &[f64] {
-        &self.albedos
     }
 
     /// Work units: tiles.
@@ -326,7 +328,7 @@ impl<'a> Plan<'a> {
         match caps.len() {
             1 => Ok(caps.remove(0)),
             n => Err(Error::param(format!(
-                "an albedo sweep renders {n} captures: use its `_all` call"
+                "an albedo sweep renders {n} captures: render_all_until or assemble_all returns them"
             ))),
         }
     }

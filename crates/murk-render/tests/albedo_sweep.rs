@@ -128,6 +128,7 @@ fn bad_sweeps_are_refused() {
     assert!(msg(&[]).contains("1 to 16"));
     assert!(msg(&[0.5, 1.5]).contains("albedo 1.5"));
     assert!(msg(&[f64::NAN]).contains("NaN"));
+    assert!(msg(&[0.5, 0.2, 0.5]).contains("albedo 0.5 appears twice"));
     let clear = scene(&["medium.mu_t=0.0".into()]);
     let e = Plan::sweep(&clear, &[0.5]).err().unwrap().to_string();
     assert!(e.contains("scattering medium"), "{e}");

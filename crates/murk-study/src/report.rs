@@ -284,7 +284,8 @@ fn esc(s: &str) -> String {
 /// The choices the study makes where the paper is silent or inconsistent.
 const CHOICES: &[&str] = &[
     "Wall spacing: the paper gives Δc = 0.11 m with 128² points, which implies a 14 m diffuser; we keep the 2 m diffuser of its Fig. 2 (Δc = 2/128 m at paper scale, 2/32 m at quick scale) and λ0 = 4Δc.",
-    "Time window: the paper's 4096 bins of 3 ps cover 3.69 m of path, less than the path to a target at 2 m and back in fog; we keep 4096 bins but of 1 mm (3.3 ps) from 3.0 m, so that the fog's tail has decayed before the window ends (the tail_share column measures it: the largest signal in the last 5 % of bins over the peak, target < 1 %).",
+    "Time window: the paper's 4096 bins of 3 ps cover 3.69 m of path, less than the path to a target at 2 m and back in fog; at paper scale we keep 4096 bins but of 1.5 mm (5 ps) from 2.0 m (quick scale: 1200 bins of 5 mm from 2.0 m), so that both window ends lie at least 6σ of the longest pulse from every voxel's paths. The tail_share column says how much fog signal is still there when the window ends: the largest signal in the last 5 % of bins over the peak.",
+    "Albedo sweeps: the five cells of a row of Fig. 3b or 3c are one render whose paths serve every albedo (the renderer's sampling does not depend on the albedo in fog); each capture equals, to float rounding, a render of that albedo alone with the same seed. The CPU column gives each cell a fifth of its row's render.",
     "Fig. 3b: the paper shows one cell twice; we render every μt × α cell.",
     "Fig. 4: the paper's file names suggest 4λ0 for its third column; its caption says 3λ0, which we use.",
     "Compensation: every cell is scored without compensation, with the paper's K(x_v) as printed (α·d mixes units) and with the physical ballistic gain e^{2μt(d_ill + d_cam)}; figures and plots use the paper's K unless the file name says otherwise.",
@@ -307,10 +308,11 @@ fn write_html(
     );
     let _ = writeln!(
         h,
-        "<h2>Parameters</h2>\n<table id=\"parameters\"><tr><th>scale</th><td>{:?}</td></tr><tr><th>seeds</th><td>{}</td></tr><tr><th>shards per capture</th><td>{}</td></tr><tr><th>captures</th><td>{}</td></tr><tr><th>render tasks</th><td>{}</td></tr>",
+        "<h2>Parameters</h2>\n<table id=\"parameters\"><tr><th>scale</th><td>{:?}</td></tr><tr><th>seeds</th><td>{}</td></tr><tr><th>shards per capture</th><td>{}</td></tr><tr><th>captures</th><td>{}</td></tr><tr><th>renders (albedo sweeps count once)</th><td>{}</td></tr><tr><th>render tasks</th><td>{}</td></tr>",
         plan.scale,
         plan.seeds,
         plan.shards,
+        plan.captures.iter().map(|j| j.capture_ids().len()).sum::<usize>(),
         plan.captures.len(),
         plan.n_tasks()
     );

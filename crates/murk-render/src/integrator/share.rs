@@ -16,6 +16,20 @@ pub(super) struct Tail {
     pub(super) w: DVec3,
 }
 
+/// The bin that entry `tl`, shifted by `shift` bins, lands in, if inside the `end` bins.
+#[inline(always)]
+fn shifted_bin(tl: &Tail, shift: f64, end: f64) -> Option<usize> {
+    let x = tl.bin + shift;
+    // SAFETY: 0 ≤ x < bins ≤ u32::MAX (NaN fails the test; scene resolution bounds bins), so truncation
+    // to u32 is exact. To usize the conversion needs a fix-up for values past i64::MAX, on the
+    // renderer's hottest loop (docs/renderer-sampling.md).
+    if x >= 0.0 && x < end {
+        Some(unsafe { x.to_int_unchecked::<u32>() } as usize)
+    } else {
+        None
+    }
+}
+
 /// Adds `tail` to one traced point's histograms `hists` (of `bins` each), scaled, shifted by `shift`
 /// bins, entry e times `weight(e)`. Every entry of every path is replayed once per point of its tile
 /// (a third of a paper-format fog render's time before this loop was trimmed to one conversion and
@@ -30,13 +44,8 @@ pub(super) fn replay(
 ) {
     let end = bins as f64;
     for (e, tl) in tail.iter().enumerate() {
-        let x = tl.bin + shift;
-        if x >= 0.0 && x < end {
-            // SAFETY: 0 ≤ x < bins ≤ u32::MAX (NaN fails the test; scene resolution bounds bins), so
-            // truncation to u32 is exact. To usize the conversion needs a fix-up for values past
-            // i64::MAX, on the renderer's hottest loop (docs/renderer-sampling.md).
-            let bin: u32 = unsafe { x.to_int_unchecked() };
-            hists[tl.hist0 + bin as usize] += (tl.value * scale * weight(e)) as f32;
+        if let Some(bin) = shifted_bin(tl, shift, end) {
+            hists[tl.hist0 + bin] += (tl.value * scale * weight(e)) as f32;
         }
     }
 }
@@ -55,16 +64,11 @@ pub(super) fn replay_sweep(
     let n = factors.len() / tail.len();
     let end = bins as f64;
     for (e, tl) in tail.iter().enumerate() {
-        let x = tl.bin + shift;
-        if x >= 0.0 && x < end {
-            // SAFETY: as in `replay`.
-            let bin: u32 = unsafe { x.to_int_unchecked() };
+        if let Some(bin) = shifted_bin(tl, shift, end) {
             let v = tl.value * scale * weight(e);
-            let at = (tl.hist0 + bin as usize) * n;
-            for (o, f) in hists[at..at + n]
-                .iter_mut()
-                .zip(&factors[e * n..(e + 1) * n])
-            {
+            let at = (tl.hist0 + bin) * n;
+            let f = &factors[e * n..(e + 1) * n];
+            for (o, f) in hists[at..at + n].iter_mut().zip(f) {
                 *o += (v * f) as f32;
             }
         }
