@@ -228,8 +228,9 @@ fn nonsense_parameters() {
         args.extend_from_slice(extra);
         fails(&args, needles);
     };
-    sweep(&["--albedos", "0.5,1.5"], &["albedo 1.5", "[0, 1]"]);
+    sweep(&["--albedos", "0.5,1.5"], &["albedo 1.5", "(0, 1]"]);
     sweep(&["--albedos", "0.5,nan"], &["albedo NaN"]);
+    sweep(&["--albedos", "0.5,0.5"], &["albedo 0.5 appears twice"]);
     sweep(&["--albedos", "0.5,zero"], &["--albedos", "zero"]);
     sweep(
         &["--albedos", "0.5", "--set", "medium.mu_t=0"],

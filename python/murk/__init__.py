@@ -187,9 +187,12 @@ def render_albedos(
 
     >>> clear, thick = murk.render_albedos("scenes/z-letter.toml", [0.15, 0.83], grid=32, spp=64)
     """
+    albedos = [float(a) for a in albedos]
+    if not albedos:
+        raise ValueError("an albedo sweep takes 1 to 16 albedos, got 0")
     path, args = _render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
                               checkpoint=checkpoint, checkpoint_every=checkpoint_every, out=out,
-                              albedos=[float(a) for a in albedos])
+                              albedos=albedos)
     return _murk.render(path, args, threads, _progress(progress, "render"))
 
 

@@ -105,10 +105,17 @@ impl<'a> Plan<'a> {
                 albedos.len()
             )));
         }
-        if let Some(a) = albedos.iter().find(|a| !(0.0..=1.0).contains(*a)) {
+        // At α = 0 a plain render takes the estimator of a medium that only absorbs, and a roulette's
+        // survival depends on the path's throughput: a sweep would not equal either render.
+        if let Some(a) = albedos.iter().find(|a| !(**a > 0.0 && **a <= 1.0)) {
             return Err(Error::param(format!(
-                "albedo {a} of the sweep: must be in [0, 1]"
+                "albedo {a} of the sweep: must be in (0, 1] (render albedo 0 alone)"
             )));
+        }
+        if scene.settings.rr_depth.is_some() {
+            return Err(Error::param(
+                "an albedo sweep needs render.rr_depth unset: Russian roulette depends on the albedo",
+            ));
         }
         let twice = (1..albedos.len()).find(|&i| albedos[..i].contains(&albedos[i]));
         if let Some(i) = twice {
@@ -307,7 +314,8 @@ impl<'a> Plan<'a> {
         progress: &(dyn Fn(usize, usize) + Sync),
         stop: &AtomicBool,
     ) -> Result<Capture> {
-        self.single(self.render_all_until(opt, progress, stop)?)
+        self.plain_only()?;
+        Ok(self.render_all_until(opt, progress, stop)?.remove(0))
     }
 
     /// As [`Plan::render_until`], with one capture per albedo of a sweep (one for a plain plan).
@@ -323,10 +331,10 @@ impl<'a> Plan<'a> {
         Ok(caps)
     }
 
-    /// The one capture of a plain plan; a sweep's several are refused rather than dropped.
-    fn single(&self, mut caps: Vec<Capture>) -> Result<Capture> {
-        match caps.len() {
-            1 => Ok(caps.remove(0)),
+    /// A sweep's several captures are refused before any work rather than dropped after it.
+    fn plain_only(&self) -> Result<()> {
+        match self.albedos.len() {
+            0 => Ok(()),
             n => Err(Error::param(format!(
                 "an albedo sweep renders {n} captures: render_all_until or assemble_all returns them"
             ))),
@@ -335,18 +343,16 @@ impl<'a> Plan<'a> {
 
     /// One empty capture per albedo, each with its `scene_info`.
     fn empty_captures(&self, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> Vec<Capture> {
-        let info = scene_info(self.scene, spp, seed, shard);
         if self.albedos.is_empty() {
-            return vec![self.empty_capture(info)];
+            return vec![self.empty_capture(scene_info(self.scene, spp, seed, shard))];
         }
+        // The sweep's lines go before the shard line, which merging strips; the scene's own text (in
+        // the info's head) may hold anything, so the head is rendered without a shard.
+        let head = scene_info(self.scene, spp, seed, None);
+        let shard = shard.map_or(String::new(), shard_line);
         self.albedos
             .iter()
             .map(|a| {
-                // Before the shard line, which merging strips.
-                let (head, shard) = match info.find(SHARD_KEY) {
-                    Some(i) => info.split_at(i),
-                    None => (&info[..], ""),
-                };
                 self.empty_capture(format!(
                     "{head}{SWEEP_KEY}{:?}\n{ALBEDO_KEY}{a:?}\n{shard}",
                     self.albedos
@@ -376,7 +382,8 @@ impl<'a> Plan<'a> {
     /// that [`Plan::render_part`] completed: `parts[i]` holds shard (i, parts.len()). A part of another
     /// render, or one with units missing, is refused naming its file.
     pub fn assemble(&self, spp: u64, seed: u64, parts: &[PathBuf]) -> Result<Capture> {
-        self.single(self.assemble_all(spp, seed, parts)?)
+        self.plain_only()?;
+        Ok(self.assemble_all(spp, seed, parts)?.remove(0))
     }
 
     /// As [`Plan::assemble`], with one capture per albedo of a sweep.
@@ -576,13 +583,17 @@ pub fn scene_info(scene: &Scene, spp: u64, seed: u64, shard: Option<(usize, usiz
         s.push_str(line);
         s.push('\n');
     }
-    if let Some((i, n)) = shard {
-        s.push_str(&format!("{SHARD_KEY}{i}/{n}\n"));
+    if let Some(shard) = shard {
+        s.push_str(&shard_line(shard));
     }
     s
 }
 
 const SHARD_KEY: &str = "shard: ";
+
+fn shard_line((i, n): (usize, usize)) -> String {
+    format!("{SHARD_KEY}{i}/{n}\n")
+}
 /// A sweep's albedos, and the one a capture of it has, in its `scene_info`.
 const SWEEP_KEY: &str = "albedo_sweep: ";
 const ALBEDO_KEY: &str = "albedo: ";

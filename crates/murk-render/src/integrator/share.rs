@@ -214,9 +214,10 @@ impl Tracer<'_> {
         let sum_f: f64 = legs.iter().flatten().map(|l| l.f).sum();
         let (t, unit) = (&self.scene.capture.time, sink.unit);
         // A sweep's albedo j scales an entry by ratios[j]^(its scattering events); a plain render keeps
-        // the loops below free of it.
+        // the loops below free of it. A sweep of one albedo is not plain: its ratio is not 1.
         let nr = sink.ratios.len();
-        if nr > 1 {
+        let plain = sink.ratios == [1.0];
+        if !plain {
             factors.clear();
             for tl in &sink.tail {
                 factors.extend(sink.ratios.iter().map(|r| r.powi(tl.scat)));
@@ -226,9 +227,9 @@ impl Tracer<'_> {
             // Rounding kept the source from re-joining its own vertex (a grazing or boundary leg): the
             // tail stays the source's own, unshared.
             let hist = &mut sink.out[src * unit * nr..(src + 1) * unit * nr];
-            return match nr {
-                1 => replay(t.bins, hist, &sink.tail, 1.0, 0.0, |_| 1.0),
-                _ => replay_sweep(t.bins, hist, &sink.tail, (1.0, 0.0), factors, |_| 1.0),
+            return match plain {
+                true => replay(t.bins, hist, &sink.tail, 1.0, 0.0, |_| 1.0),
+                false => replay_sweep(t.bins, hist, &sink.tail, (1.0, 0.0), factors, |_| 1.0),
             };
         };
         let phase = self
@@ -262,11 +263,11 @@ impl Tracer<'_> {
             let hist = &mut sink.out[i * unit * nr..(i + 1) * unit * nr];
             let (tail, scale) = (&sink.tail, leg.f / sum_f);
             let share = |e: usize| shares[row[e] * n + i];
-            match (phase, nr) {
-                (Some(_), 1) => replay(t.bins, hist, tail, 1.0, shift, share),
-                (Some(_), _) => replay_sweep(t.bins, hist, tail, (1.0, shift), factors, share),
-                (None, 1) => replay(t.bins, hist, tail, scale, shift, |_| 1.0),
-                (None, _) => replay_sweep(t.bins, hist, tail, (scale, shift), factors, |_| 1.0),
+            match (phase, plain) {
+                (Some(_), true) => replay(t.bins, hist, tail, 1.0, shift, share),
+                (Some(_), false) => replay_sweep(t.bins, hist, tail, (1.0, shift), factors, share),
+                (None, true) => replay(t.bins, hist, tail, scale, shift, |_| 1.0),
+                (None, false) => replay_sweep(t.bins, hist, tail, (scale, shift), factors, |_| 1.0),
             }
         }
     }
