@@ -162,7 +162,7 @@ window.addEventListener('load', () => {
     // 2 figures × 3 compensations, and 7 metrics plotted against λ.
     assert_eq!(images, 6 + 7, "{probe}");
     assert!(probe.contains("broken=[]"), "{probe}");
-    // parameters: 5 rows + 2 scenes; metrics: header + 4 cells.
-    assert!(probe.contains("tables=parameters:7,metrics:5"), "{probe}");
+    // parameters: 6 rows + 2 scenes; metrics: header + 4 cells.
+    assert!(probe.contains("tables=parameters:8,metrics:5"), "{probe}");
     std::fs::remove_dir_all(&d).unwrap();
 }
