@@ -591,9 +591,11 @@ pub fn scene_info(scene: &Scene, spp: u64, seed: u64, shard: Option<(usize, usiz
 
 const SHARD_KEY: &str = "shard: ";
 
+/// The last line of a shard's `scene_info`, which merging strips.
 fn shard_line((i, n): (usize, usize)) -> String {
     format!("{SHARD_KEY}{i}/{n}\n")
 }
+
 /// A sweep's albedos, and the one a capture of it has, in its `scene_info`.
 const SWEEP_KEY: &str = "albedo_sweep: ";
 const ALBEDO_KEY: &str = "albedo: ";

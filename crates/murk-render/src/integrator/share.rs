@@ -227,9 +227,10 @@ impl Tracer<'_> {
             // Rounding kept the source from re-joining its own vertex (a grazing or boundary leg): the
             // tail stays the source's own, unshared.
             let hist = &mut sink.out[src * unit * nr..(src + 1) * unit * nr];
-            return match plain {
-                true => replay(t.bins, hist, &sink.tail, 1.0, 0.0, |_| 1.0),
-                false => replay_sweep(t.bins, hist, &sink.tail, (1.0, 0.0), factors, |_| 1.0),
+            return if plain {
+                replay(t.bins, hist, &sink.tail, 1.0, 0.0, |_| 1.0)
+            } else {
+                replay_sweep(t.bins, hist, &sink.tail, (1.0, 0.0), factors, |_| 1.0)
             };
         };
         let phase = self
