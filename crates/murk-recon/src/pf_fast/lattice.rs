@@ -4,6 +4,7 @@
 use super::{c32, Plan, Workspace};
 use crate::cmul;
 use crate::fft2::{kept_lines, transpose_part};
+use crate::resample::Resampler;
 use murk_core::simd::wide;
 use rustfft::num_complex::{Complex32, Complex64};
 use std::ops::Range;
@@ -142,30 +143,31 @@ impl Plan {
     /// The field at the voxels (`ws.field`, y-major) from the convolution's x-transformed lattice
     /// rows in `ws.g` ([x][ky], rows [gnx−1, gnx−1+vx), kept lines only): along x first, still in ky
     /// (resampling along x and the inverse FFT along y commute), so only nx rows, not vx, are
-    /// transformed along y; then along y at the voxels. Off the lattice both are windowed sincs; on
-    /// it, one tap of weight 1.
-    pub(super) fn field_at_voxels(&self, ws: &mut Workspace, lines: usize) {
+    /// transformed along y; then along y at the voxels, with the resamplers `r` (x, y): off the
+    /// lattice a windowed sinc or a Kaiser–Bessel kernel ([`Plan::kernels`]), on it one tap of
+    /// weight 1.
+    pub(super) fn field_at_voxels(&self, ws: &mut Workspace, lines: usize, r: [&Resampler; 2]) {
         let (nx, fy) = (self.vol.x.n, self.fft.fy);
         wide(
             #[inline(always)]
-            || self.resample_x(ws, lines),
+            || self.resample_x(ws, lines, r[0]),
         );
         self.fft.inverse_y(&mut ws.tmp[..nx * fy], &mut ws.scratch);
         wide(
             #[inline(always)]
-            || self.resample_y(ws),
+            || self.resample_y(ws, r[1]),
         );
     }
 
     /// `ws.tmp` ([voxel x][ky]) = the taps' weighted sum of lattice rows of `ws.g`: whole rows,
     /// contiguous, so it vectorises; zeros on the skipped lines.
     #[inline(always)]
-    fn resample_x(&self, ws: &mut Workspace, lines: usize) {
+    fn resample_x(&self, ws: &mut Workspace, lines: usize, rx: &Resampler) {
         let fy = self.fft.fy;
         let x0 = self.grid.nx - 1;
         let [lo, hi] = kept_lines(fy, lines);
         for (ix, out) in ws.tmp.chunks_exact_mut(fy).enumerate() {
-            let (st, w) = (self.rx.starts[ix], self.rx.weights_of(ix));
+            let (st, w) = (rx.starts[ix], rx.weights_of(ix));
             for r in [lo.clone(), hi.clone()] {
                 let rows = w.iter().enumerate().map(|(k, &wk)| {
                     let row = (x0 + st + k) * fy;
@@ -184,23 +186,22 @@ impl Plan {
     /// more contiguous row of nx values (short per-voxel dot products measured half the resampling
     /// time).
     #[inline(always)]
-    fn resample_y(&self, ws: &mut Workspace) {
+    fn resample_y(&self, ws: &mut Workspace, ry: &Resampler) {
         let (nx, fy) = (self.vol.x.n, self.fft.fy);
         let y0 = self.grid.ny - 1;
-        if self.ry.taps == 1 {
+        if ry.taps == 1 {
             for (ix, row) in ws.tmp.chunks_exact(fy).enumerate() {
-                for (iy, &sy) in self.ry.starts.iter().enumerate() {
+                for (iy, &sy) in ry.starts.iter().enumerate() {
                     ws.field[iy * nx + ix] = row[y0 + sy];
                 }
             }
             return;
         }
-        let vy = self.ry.len;
+        let vy = ry.len;
         transpose_part(&ws.tmp[y0..], fy, 0..nx, 0..vy, &mut ws.tmp_t, nx);
         for (iy, f) in ws.field.chunks_exact_mut(nx).enumerate() {
-            let sy = self.ry.starts[iy];
-            let rows = self
-                .ry
+            let sy = ry.starts[iy];
+            let rows = ry
                 .weights_of(iy)
                 .iter()
                 .enumerate()

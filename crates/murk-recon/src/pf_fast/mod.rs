@@ -6,7 +6,7 @@
 
 use crate::cmul;
 use crate::fft2::{kept_lines, kept_spans, Fft2};
-use crate::resample::Resampler;
+use crate::resample::{KaiserBessel, Resampler};
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
 use lattice::{mirror, reach, Fold};
@@ -27,6 +27,45 @@ enum GridSide {
     Confocal,
 }
 
+/// Axis indices of per-axis pairs.
+const X: usize = 0;
+const Y: usize = 1;
+
+/// Relative aliasing the Kaiser–Bessel kernels are shaped for: below the 16-tap windowed sinc's
+/// (3e-4 at a quarter of the Nyquist band, 1e-2 at 0.77 of it) over every band they serve.
+const KB_ALIASING: f64 = 1e-4;
+
+/// A Kaiser–Bessel kernel along one axis: its resampler on the plan's lattice and the factor 1/φ̂ per
+/// FFT bin that the grid's spectra take beforehand.
+struct Kb {
+    kernel: KaiserBessel,
+    resampler: Resampler,
+    inverse: Vec<f32>,
+}
+
+impl Kb {
+    fn new(
+        kernel: &KaiserBessel,
+        positions: &[f64],
+        centre: f64,
+        sinc: &Resampler,
+        f: usize,
+    ) -> Kb {
+        let inverse = (0..f)
+            .map(|q| {
+                let omega = 2.0 * std::f64::consts::PI * q.min(f - q) as f64 / f as f64;
+                (1.0 / kernel.spectrum(omega)) as f32
+            })
+            .collect();
+        Kb {
+            kernel: kernel.clone(),
+            resampler: Resampler::kaiser_bessel(positions, centre, kernel)
+                .rebased(sinc.lo, sinc.len),
+            inverse,
+        }
+    }
+}
+
 /// Depth planes evaluated together over one time window.
 #[derive(Clone, Debug)]
 pub struct Slab {
@@ -44,6 +83,10 @@ pub struct Plan {
     side: GridSide,
     rx: Resampler,
     ry: Resampler,
+    /// Per axis (x, y), the shorter kernels that replace `rx`/`ry` for a band frequency whose lateral
+    /// band is cut along that axis (see [`Plan::kernels`]); empty on the lattice, for confocal data
+    /// (one resampling per plane after the frequency sum) and with [`Lateral::Full`].
+    kb: [Vec<Kb>; 2],
     fft: Fft2,
     /// Lattice index, within the kernel's support, of the zero offset along x and y.
     cx: i64,
@@ -88,22 +131,32 @@ impl Plan {
                 "the volume is not entirely in front of the wall plane",
             ));
         }
+        // Voxel positions in lattice units and the lattice's centre, per axis.
         let lattice = |axis: &murk_core::Axis, o: f64, d: f64, n: usize| {
-            Resampler::new(
-                &axis
-                    .values()
-                    .iter()
-                    .map(|x| (x - o) / d)
-                    .collect::<Vec<_>>(),
-                (n as f64 - 1.0) / 2.0,
-            )
+            let positions: Vec<f64> = axis.values().iter().map(|x| (x - o) / d).collect();
+            (positions, (n as f64 - 1.0) / 2.0)
         };
-        let rx = lattice(&vol.x, grid.origin.x, grid.step_x.x, grid.nx);
-        let ry = lattice(&vol.y, grid.origin.y, grid.step_y.y, grid.ny);
+        let (px, ox) = lattice(&vol.x, grid.origin.x, grid.step_x.x, grid.nx);
+        let (py, oy) = lattice(&vol.y, grid.origin.y, grid.step_y.y, grid.ny);
+        let (rx, ry) = (Resampler::new(&px, ox), Resampler::new(&py, oy));
         let fft = Fft2::new(
             next_fast_len(grid.nx + rx.len - 1),
             next_fast_len(grid.ny + ry.len - 1),
         );
+        let family = match (kind, lateral) {
+            (CaptureKind::Confocal, _) | (_, Lateral::Full) => Vec::new(),
+            _ => KaiserBessel::family(KB_ALIASING),
+        };
+        let kernels = |positions: &[f64], centre: f64, sinc: &Resampler, f: usize| {
+            if sinc.taps == 1 {
+                return Vec::new();
+            }
+            family
+                .iter()
+                .map(|kernel| Kb::new(kernel, positions, centre, sinc, f))
+                .collect()
+        };
+        let kb = [kernels(&px, ox, &rx, fft.fx), kernels(&py, oy, &ry, fft.fy)];
         if fft.fx * fft.fy > 1 << 24 {
             return Err(unsupported(&format!(
                 "the convolution would need {}×{} FFTs",
@@ -123,6 +176,7 @@ impl Plan {
             side,
             rx,
             ry,
+            kb,
             fft,
             cx,
             cy,
@@ -134,15 +188,50 @@ impl Plan {
     /// How many spectrum lines on each side of ky = 0 a plane at `dz` from the wall keeps for the
     /// kernel wavenumber `k` (rad/m; see [`Lateral`]); fy/2 keeps all.
     fn lines(&self, k: f64, dz: f64) -> usize {
-        let fy = self.fft.fy;
+        self.lines_along(Y, k, dz)
+    }
+
+    /// [`Plan::lines`] along `axis` (X or Y): the lines of the other axis' transform it keeps.
+    fn lines_along(&self, axis: usize, k: f64, dz: f64) -> usize {
+        let (step, f) = match axis {
+            X => (self.grid.step_x.x, self.fft.fx),
+            _ => (self.grid.step_y.y, self.fft.fy),
+        };
         match self.lateral {
-            Lateral::Full => fy / 2,
+            Lateral::Full => f / 2,
             Lateral::Propagating => {
                 let kappa = k.hypot(1e4f64.ln() / dz);
-                let line = kappa * self.grid.step_y.y * fy as f64 / (2.0 * std::f64::consts::PI);
-                (line.ceil() as usize + 6).min(fy / 2)
+                let line = kappa * step * f as f64 / (2.0 * std::f64::consts::PI);
+                (line.ceil() as usize + 6).min(f / 2)
             }
         }
+    }
+
+    /// Per axis, which of `kb` reads the field of wavenumber `k` on planes at `dz` or deeper: the
+    /// shortest whose band holds the lines kept along that axis, which the grid's spectra are then
+    /// cut to and divided by the kernel's spectrum along. `None`: the windowed sinc, uncut.
+    fn kernels(&self, k: f64, dz: f64) -> [Option<usize>; 2] {
+        if self.lateral == Lateral::Full {
+            return [None, None];
+        }
+        let kappa = k.hypot(1e4f64.ln() / dz);
+        [X, Y].map(|axis| {
+            let step = [self.grid.step_x.x, self.grid.step_y.y][axis];
+            let band = kappa * step / std::f64::consts::PI;
+            self.kb[axis].iter().position(|kb| kb.kernel.band >= band)
+        })
+    }
+
+    /// The resamplers that read the field of a frequency with kernels `chosen` (x, y).
+    fn resamplers(&self, chosen: [Option<usize>; 2]) -> [&Resampler; 2] {
+        let pick = |axis: usize, sinc| chosen[axis].map_or(sinc, |i| &self.kb[axis][i].resampler);
+        [pick(X, &self.rx), pick(Y, &self.ry)]
+    }
+
+    /// Whether some frequencies are read by Kaiser–Bessel kernels (see [`Plan::kernels`]).
+    #[cfg(test)]
+    pub fn reads_kaiser_bessel(&self) -> bool {
+        !self.kb[X].is_empty() && !self.kb[Y].is_empty()
     }
 
     /// Whether the kernel's spectrum is folded (see [`Fold`]).
@@ -204,13 +293,16 @@ impl Plan {
                 .map(|iz| self.vol.z.at(iz) - self.grid.origin.z)
                 .fold(f64::INFINITY, f64::min);
             for &src in &sources {
-                let hspec = self.grid_spectra(&spectra, src, dz_min, &mut grid, &pool);
+                let chosen: Vec<[Option<usize>; 2]> = (0..spectra.band.len())
+                    .map(|j| self.kernels(legs(src) * spectra.band.k(j), dz_min))
+                    .collect();
+                let hspec = self.grid_spectra(&spectra, src, dz_min, &chosen, &mut grid, &pool);
                 let out: Vec<Vec<Complex32>> = planes
                     .clone()
                     .into_par_iter()
                     .map(|iz| {
                         let mut ws = lock(&pool);
-                        let plane = self.plane(&mut ws, &spectra, hspec, src, iz);
+                        let plane = self.plane(&mut ws, &spectra, hspec, &chosen, src, iz);
                         progress.advance(1);
                         plane
                     })
@@ -309,13 +401,15 @@ impl Plan {
     }
 
     /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout, on
-    /// the lines that planes at `dz_min` or deeper keep (the others are garbage); the buffers are
-    /// reused across slabs.
+    /// the lines that planes at `dz_min` or deeper keep (the others are garbage), divided by the
+    /// spectra of the kernels `chosen` for it and cut to their bands; the buffers are reused across
+    /// slabs.
     fn grid_spectra<'b>(
         &self,
         spectra: &Part,
         src: Option<usize>,
         dz_min: f64,
+        chosen: &[[Option<usize>; 2]],
         buf: &'b mut GridBuffers,
         pool: &[Mutex<Workspace>],
     ) -> &'b [Complex32] {
@@ -373,8 +467,43 @@ impl Plan {
                         }
                     }
                 }
+                let k = legs(src) * spectra.band.k(j);
+                self.divide_by_kernels(t, chosen[j], lines, self.lines_along(X, k, dz_min));
             });
         &out[..nb * fx * fy]
+    }
+
+    /// `t` ([ky][kx], kept `lines` along y) divided by the spectra of the kernels `chosen` for it, and
+    /// zero past `lines_x` along x where a kernel is chosen for x (its band ends there).
+    fn divide_by_kernels(
+        &self,
+        t: &mut [Complex32],
+        chosen: [Option<usize>; 2],
+        lines: usize,
+        lines_x: usize,
+    ) {
+        if chosen == [None, None] {
+            return;
+        }
+        let (fx, fy) = (self.fft.fx, self.fft.fy);
+        let along_x: Vec<f32> = match chosen[X] {
+            Some(i) => (0..fx)
+                .map(|q| {
+                    if q.min(fx - q) <= lines_x {
+                        self.kb[X][i].inverse[q]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect(),
+            None => vec![1.0; fx],
+        };
+        for ky in kept_lines(fy, lines).into_iter().flatten() {
+            let y = chosen[Y].map_or(1.0, |i| self.kb[Y][i].inverse[ky]);
+            for (v, &x) in t[ky * fx..(ky + 1) * fx].iter_mut().zip(&along_x) {
+                *v *= x * y;
+            }
+        }
     }
 
     fn plane(
@@ -382,6 +511,7 @@ impl Plan {
         ws: &mut Workspace,
         spectra: &Part,
         hspec: &[Complex32],
+        chosen: &[[Option<usize>; 2]],
         src: Option<usize>,
         iz: usize,
     ) -> Vec<Complex32> {
@@ -490,7 +620,7 @@ impl Plan {
             }
             self.fft
                 .inverse_x(&mut ws.t, &mut ws.g, xs.clone(), lines, &mut ws.scratch);
-            self.field_at_voxels(ws, lines);
+            self.field_at_voxels(ws, lines, self.resamplers(chosen[j]));
             // Exact phase of the point-side leg.
             cmul::mul_add(&mut acc, &ws.field, &ws.pbase);
             cmul::mul_assign(&mut ws.pbase, &ws.pstep);
@@ -498,7 +628,7 @@ impl Plan {
         if confocal {
             self.fft
                 .inverse_x(&mut ws.spec_acc, &mut ws.g, xs, fy / 2, &mut ws.scratch);
-            self.field_at_voxels(ws, fy / 2);
+            self.field_at_voxels(ws, fy / 2, [&self.rx, &self.ry]);
             acc.copy_from_slice(&ws.field);
         }
         // The voxels' order in the volume: x-major.
