@@ -236,6 +236,24 @@ fn nonsense_parameters() {
         &["--albedos", "0.5", "--set", "medium.mu_t=0"],
         &["scattering medium"],
     );
+    // A refused sweep writes no ground truth either; a truth file named like one of its captures
+    // is refused before anything is written.
+    let truth = d.join("truth.h5");
+    let t = truth.to_str().unwrap();
+    sweep(
+        &["--albedos", "0.5,0.5", "--truth", t],
+        &["albedo 0.5 appears twice"],
+    );
+    assert!(!truth.exists(), "a refused sweep left its truth file");
+    let own = d.join("r-albedo0.5.h5");
+    sweep(
+        &["--albedos", "0.3,0.5", "--truth", own.to_str().unwrap()],
+        &[
+            "r-albedo0.5.h5",
+            "--truth and the capture name the same file",
+        ],
+    );
+    assert!(!own.exists());
     fails(
         &["synth", "--out", out, "--target", "point:0,0,-1"],
         &["not behind the wall"],

@@ -187,17 +187,14 @@ def render_albedos(
 
     >>> clear, thick = murk.render_albedos("scenes/z-letter.toml", [0.15, 0.83], grid=32, spp=64)
     """
-    albedos = [float(a) for a in albedos]
-    if not albedos:
-        raise ValueError("an albedo sweep takes 1 to 16 albedos, got 0")
     path, args = _render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
                               checkpoint=checkpoint, checkpoint_every=checkpoint_every, out=out,
-                              albedos=albedos)
+                              albedos=[float(a) for a in albedos])
     return _murk.render(path, args, threads, _progress(progress, "render"))
 
 
 def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, checkpoint_every=60.0,
-                 out=None, albedos=()) -> Tuple[str, dict]:
+                 out=None, albedos=None) -> Tuple[str, dict]:
     """The scene's path and the keywords ``_murk``'s render calls take; a scene given as TOML text
     is read as if from ``./scene.toml``."""
     path, text = os.fspath(scene), None
@@ -207,7 +204,7 @@ def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, c
                       set=_overrides(set), grid=grid, bins=bins,
                       checkpoint=None if checkpoint is None else os.fspath(checkpoint),
                       checkpoint_every=checkpoint_every, out=None if out is None else os.fspath(out),
-                      albedos=list(albedos))
+                      albedos=albedos)
 
 
 def merge(parts: Sequence[Union[Capture, str, os.PathLike]]) -> Capture:

@@ -77,7 +77,8 @@ pub struct RenderArgs {
     checkpoint: Option<PathBuf>,
     checkpoint_every: f64,
     out: Option<PathBuf>,
-    albedos: Vec<f64>,
+    /// A sweep's albedos (`murk.render_albedos`), else None.
+    albedos: Option<Vec<f64>>,
 }
 
 impl RenderArgs {
@@ -96,11 +97,7 @@ impl RenderArgs {
 
     /// The render of `scene`: plain, or a sweep over `albedos`.
     fn plan<'s>(&self, scene: &'s Scene) -> murk_core::Result<Plan<'s>> {
-        if self.albedos.is_empty() {
-            Ok(Plan::new(scene))
-        } else {
-            Plan::sweep(scene, &self.albedos)
-        }
+        Plan::with_albedos(scene, self.albedos.as_deref())
     }
 
     fn options(&self, scene: &Scene) -> RenderOptions {
@@ -134,12 +131,7 @@ pub fn render(
             t.stop(),
         )?;
         if let Some(out) = &args.out {
-            let outs: Vec<PathBuf> = match args.albedos.is_empty() {
-                true => vec![out.clone()],
-                false => (args.albedos.iter())
-                    .map(|&a| murk_render::sweep_output(out, a))
-                    .collect(),
-            };
+            let outs = murk_render::render_outputs(out, args.albedos.as_deref());
             for (o, cap) in outs.iter().zip(&caps) {
                 murk_io::write_capture(o, cap)?;
             }

@@ -3,6 +3,7 @@ import math
 import pytest
 
 import murk
+from conftest import SCENES
 
 VOL = "-0.9:0.9:5,-0.9:0.9:5,1.5:2.5:5"
 
@@ -75,3 +76,14 @@ def test_bad_render_arguments(tmp_path):
     assert one_line(e).startswith("unknown capture kind 'bogus'")
     with pytest.raises(murk.InputError):
         murk.merge([])
+
+
+@pytest.mark.parametrize("albedos, msg", [
+    ([], "an albedo sweep takes 1 to 16 albedos, got 0"),
+    ([0.5, 0.5], "albedo 0.5 appears twice in the sweep"),
+])
+def test_bad_albedo_sweeps_are_refused_by_the_renderer(albedos, msg):
+    scene = SCENES / "z-letter.toml"
+    with pytest.raises(murk.InputError) as e:
+        murk.render_albedos(scene, albedos, grid=4, spp=4)
+    assert one_line(e) == msg

@@ -3,7 +3,7 @@
 use anyhow::{bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use murk_render::{merge, Overrides, Plan, RenderOptions, Scene};
+use murk_render::{merge, render_outputs, Overrides, Plan, RenderOptions, Scene};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -62,7 +62,7 @@ pub struct RenderArgs {
     /// extension): each equals, to float rounding, a render with `--set medium.albedo=α` and the same
     /// seed, for the tracing cost of one render plus one histogram write per albedo.
     #[arg(long, value_delimiter = ',', value_name = "α,α,…")]
-    pub albedos: Vec<f64>,
+    pub albedos: Option<Vec<f64>>,
 }
 
 #[derive(Args)]
@@ -106,18 +106,24 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         bins: a.bins,
         set: a.set.clone(),
     };
-    for out in outputs(&a) {
-        murk_io::refuse_overwrite(&out, &[&a.scene])?;
+    let outs = render_outputs(&a.out, a.albedos.as_deref());
+    for out in &outs {
+        murk_io::refuse_overwrite(out, &[&a.scene])?;
     }
     if let Some(t) = &a.truth {
-        murk_io::refuse_overwrite(t, &[&a.scene, &a.out])?;
+        let inputs: Vec<&Path> = std::iter::once(a.scene.as_path())
+            .chain(outs.iter().map(PathBuf::as_path))
+            .collect();
+        murk_io::refuse_overwrite(t, &inputs)?;
         anyhow::ensure!(
-            t != &a.out,
-            "{}: --truth and --out name the same file",
+            !outs.contains(t),
+            "{}: --truth and the capture name the same file",
             t.display()
         );
     }
     let scene = Scene::load(&a.scene, &ov)?;
+    // The plan checks a sweep's albedos, so a refused sweep writes nothing, not even the truth.
+    let plan = Plan::with_albedos(&scene, a.albedos.as_deref())?;
     if let Some(t) = &a.truth {
         murk_io::write_truth_h5(t, &scene.ground_truth())?;
     }
@@ -125,31 +131,20 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         .num_threads(a.threads.unwrap_or(0))
         .build()
         .context("cannot start the worker threads")?;
-    pool.install(|| render(&a, &scene, quiet))
+    pool.install(|| render(&a, &scene, &plan, &outs, quiet))
 }
 
-/// The capture files a render writes: OUT, or one per albedo of a sweep.
-fn outputs(a: &RenderArgs) -> Vec<PathBuf> {
-    if a.albedos.is_empty() {
-        vec![a.out.clone()]
-    } else {
-        a.albedos
-            .iter()
-            .map(|&al| murk_render::sweep_output(&a.out, al))
-            .collect()
-    }
-}
-
-fn render(a: &RenderArgs, scene: &Scene, quiet: bool) -> anyhow::Result<()> {
-    let plan = if a.albedos.is_empty() {
-        Plan::new(scene)
-    } else {
-        Plan::sweep(scene, &a.albedos)?
-    };
+fn render(
+    a: &RenderArgs,
+    scene: &Scene,
+    plan: &Plan,
+    outs: &[PathBuf],
+    quiet: bool,
+) -> anyhow::Result<()> {
     let n_units = plan.shard_units(a.shard).len();
     let spp = match (a.spp, a.time_budget) {
         (Some(s), _) => s,
-        (None, Some(b)) => spp_for_budget(&plan, b, n_units)?,
+        (None, Some(b)) => spp_for_budget(plan, b, n_units)?,
         (None, None) => scene.settings.spp,
     };
     let ckpt = checkpoint_path(&a.out);
@@ -183,7 +178,6 @@ fn render(a: &RenderArgs, scene: &Scene, quiet: bool) -> anyhow::Result<()> {
     let caps = plan.render_all_until(&opt, &|done, _| bar.set_position(done as u64), &never)?;
     bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
-    let outs = outputs(a);
     for (out, cap) in outs.iter().zip(&caps) {
         murk_io::write_capture(out, cap)?;
     }

@@ -86,6 +86,14 @@ impl<'a> Plan<'a> {
         }
     }
 
+    /// A plain render of `scene` without `albedos`, else a [`Plan::sweep`] over them.
+    pub fn with_albedos(scene: &'a Scene, albedos: Option<&[f64]>) -> Result<Self> {
+        match albedos {
+            None => Ok(Self::new(scene)),
+            Some(a) => Self::sweep(scene, a),
+        }
+    }
+
     /// A plan that renders one capture per medium albedo in `albedos` from the same paths. In a
     /// scattering medium no path's sampling depends on the albedo (there is no roulette there unless
     /// `render.rr_depth` asks for it), so each contribution only scales by the albedo to the power of its
@@ -546,6 +554,14 @@ impl<'a> Plan<'a> {
             * self.scene.capture.time.bins
             * self.tile.0
             * self.tile.1
+    }
+}
+
+/// The capture files a render to `out` writes: `out`, or one per albedo of a sweep ([`sweep_output`]).
+pub fn render_outputs(out: &Path, albedos: Option<&[f64]>) -> Vec<PathBuf> {
+    match albedos {
+        None => vec![out.to_path_buf()],
+        Some(a) => a.iter().map(|&al| sweep_output(out, al)).collect(),
     }
 }
 

@@ -2,7 +2,7 @@
 //! simulate), each task keyed by the fingerprint of its resolved scene so finished work is found again.
 
 use murk_core::{Error, Result};
-use murk_render::{fingerprint, sweep_output, Overrides, Scene};
+use murk_render::{fingerprint, render_outputs, Overrides, Scene};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -200,9 +200,6 @@ impl CaptureJob {
     /// The captures the job writes: its id, or `<id>-albedo<α>` per albedo of a sweep (each named
     /// `renders/<capture id>.h5`).
     pub fn capture_ids(&self) -> Vec<String> {
-        if self.albedos.is_empty() {
-            return vec![self.id.clone()];
-        }
         let files = self.outputs(Path::new(&self.id));
         files.iter().map(|f| f.display().to_string()).collect()
     }
@@ -210,10 +207,12 @@ impl CaptureJob {
     /// The files a task whose output is `out` writes: `out`, or one per albedo of a sweep (as
     /// `murk render --albedos` names them).
     pub fn outputs(&self, out: &Path) -> Vec<PathBuf> {
-        if self.albedos.is_empty() {
-            return vec![out.to_path_buf()];
-        }
-        self.albedos.iter().map(|&a| sweep_output(out, a)).collect()
+        render_outputs(out, self.sweep())
+    }
+
+    /// The sweep's albedos, if the job is one.
+    pub fn sweep(&self) -> Option<&[f64]> {
+        (!self.albedos.is_empty()).then_some(self.albedos.as_slice())
     }
 }
 
@@ -452,16 +451,18 @@ impl Plan {
         };
         let set = Plan::overrides(opt, scene, traced);
         let resolved = load_scene(&opt.scenes_dir, scene, &set)?;
-        let render = if albedos.is_empty() {
-            murk_render::Plan::new(&resolved)
-        } else {
-            murk_render::Plan::sweep(&resolved, albedos)?
-        };
+        let sweep = (!albedos.is_empty()).then_some(albedos);
+        let render = murk_render::Plan::with_albedos(&resolved, sweep)?;
         let spp = opt.spp.unwrap_or(Format::of(scene, opt.scale).spp);
         let id = format!("{:016x}", fingerprint(&render.key(spp, seed, None)));
+        // A plain job's one capture, or the sweep's capture of this medium's albedo.
         let capture_id = |job: &CaptureJob| {
-            let k = job.albedos.iter().position(|a| *a == medium.albedo);
-            job.capture_ids()[k.unwrap_or(0)].clone()
+            let k = match job.sweep() {
+                None => 0,
+                Some(a) => (a.iter().position(|a| *a == medium.albedo))
+                    .expect("a sweep holds the albedo of every cell it serves"),
+            };
+            job.capture_ids()[k].clone()
         };
         if let Some(job) = self.captures.iter().find(|c| c.id == id) {
             return Ok(capture_id(job));

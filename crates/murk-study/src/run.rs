@@ -147,11 +147,7 @@ fn run_task(plan: &Plan, dir: &Path, job: &CaptureJob, t: usize, obs: &dyn Obser
         checkpoint_every: Duration::from_secs(30),
     };
     let never = AtomicBool::new(false);
-    let render = if job.albedos.is_empty() {
-        murk_render::Plan::new(&scene)
-    } else {
-        murk_render::Plan::sweep(&scene, &job.albedos)?
-    };
+    let render = murk_render::Plan::with_albedos(&scene, job.sweep())?;
     let caps = render.render_all_until(
         &opt,
         &|done, total| obs.event(Event::Units { done, total }),
