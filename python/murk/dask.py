@@ -8,6 +8,7 @@ reused.
 >>> from dask.distributed import Client
 >>> cap = murk.dask.render("scenes/z-letter.toml", client=Client("tcp://head:8786"),
 ...                        shards=64, workdir="/shared/scratch/z")              # a real cluster
+>>> clear, thick = murk.dask.render_albedos("scenes/z-letter.toml", [0.15, 0.83], shards=8)
 
 On a cluster the workers must see ``workdir`` (a shared file system) and the scene file.
 """
@@ -15,7 +16,7 @@ On a cluster the workers must see ``workdir`` (a shared file system) and the sce
 import os
 import shutil
 import tempfile
-from typing import Any, Dict, Optional, Sequence, Union
+from typing import Any, Dict, List, Optional, Sequence, Union
 
 import murk
 
@@ -62,24 +63,33 @@ def render_shard(
     threads=None,
     checkpoint_every=60.0,
     progress=None,
+    albedos=None,
 ) -> str:
-    """One Dask task: renders shard ``(i, n)`` of ``scene`` into the checkpoint ``part``, which holds
-    every unit of the shard when this returns (at once if it already did; an interrupted task's part
-    resumes); returns ``part``. ``progress`` as for ``murk.render``."""
+    """One Dask task: renders shard ``(i, n)`` of ``scene`` (of the sweep over ``albedos`` when
+    given) into the checkpoint ``part``, which holds every unit of the shard when this returns (at
+    once if it already did; an interrupted task's part resumes); returns ``part``. ``progress`` as
+    for ``murk.render``."""
     part = os.fspath(part)
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid,
-                                   bins=bins, checkpoint=part, checkpoint_every=checkpoint_every)
+                                   bins=bins, checkpoint=part, checkpoint_every=checkpoint_every,
+                                   albedos=_floats(albedos))
     murk._murk.render_part(path, args, threads, murk._progress(progress, "shard"))
     return part
 
 
-def assemble(scene, parts, *, spp=None, seed=0, set=None, grid=None, bins=None) -> "murk.Capture":
+def assemble(scene, parts, *, spp=None, seed=0, set=None, grid=None, bins=None, albedos=None):
     """The capture an unsharded render gives, bit for bit, from the parts ``render_shard`` completed:
-    ``parts[i]`` holds shard ``(i, len(parts))`` of ``scene`` with the same keywords. A part of another
-    render, or one with units missing, raises ``murk.FormatError`` naming its file."""
+    ``parts[i]`` holds shard ``(i, len(parts))`` of ``scene`` with the same keywords; with
+    ``albedos``, the list of the sweep's captures. A part of another render, or one with units
+    missing, raises ``murk.FormatError`` naming its file."""
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=None, set=set, grid=grid,
-                                   bins=bins)
-    return murk._murk.assemble(path, args, [os.fspath(p) for p in parts])
+                                   bins=bins, albedos=_floats(albedos))
+    caps = murk._murk.assemble(path, args, [os.fspath(p) for p in parts])
+    return caps if albedos is not None else caps[0]
+
+
+def _floats(albedos):
+    return None if albedos is None else [float(a) for a in albedos]
 
 
 def render(
@@ -106,6 +116,37 @@ def render(
     ``threads``: renderer threads per task (default: all cores of the worker, or one per worker on
     the LocalCluster). ``out``: also write the assembled capture there.
     """
+    return _render(scene, client, shards, None, spp=spp, seed=seed, set=set, grid=grid, bins=bins,
+                   workdir=workdir, out=out, threads=threads, checkpoint_every=checkpoint_every,
+                   retries=retries)
+
+
+def render_albedos(
+    scene: Union[str, os.PathLike],
+    albedos: Sequence[float],
+    client=None,
+    shards: int = 2,
+    *,
+    spp: Optional[int] = None,
+    seed: int = 0,
+    set: Union[None, Dict[str, Any], Sequence[str]] = None,
+    grid: Optional[int] = None,
+    bins: Optional[int] = None,
+    workdir: Union[None, str, os.PathLike] = None,
+    out: Union[None, str, os.PathLike] = None,
+    threads: Optional[int] = None,
+    checkpoint_every: float = 60.0,
+    retries: int = 3,
+) -> List["murk.Capture"]:
+    """:func:`render` for an albedo sweep: the captures ``murk.render_albedos(scene, albedos, ...)``
+    gives unsharded, byte for byte, one per albedo; ``out`` names them as it does."""
+    return _render(scene, client, shards, _floats(albedos), spp=spp, seed=seed, set=set, grid=grid,
+                   bins=bins, workdir=workdir, out=out, threads=threads,
+                   checkpoint_every=checkpoint_every, retries=retries)
+
+
+def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workdir, out, threads,
+            checkpoint_every, retries):
     from dask.distributed import Client
 
     scene = os.fspath(scene)
@@ -127,14 +168,21 @@ def render(
             client.submit(render_shard, scene, (i, shards),
                           os.path.abspath(os.path.join(workdir, f"part{i}.ckpt")), spp=spp,
                           seed=seed, set=set, grid=grid, bins=bins, threads=threads,
-                          checkpoint_every=checkpoint_every, retries=retries, pure=False)
+                          checkpoint_every=checkpoint_every, albedos=albedos, retries=retries,
+                          pure=False)
             for i in range(shards)
         ]
         parts = client.gather(futures)
-        cap = assemble(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins)
+        caps = assemble(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins,
+                        albedos=albedos)
+        if albedos is None:
+            if out is not None:
+                murk.write_capture(out, caps)
+            return caps
         if out is not None:
-            murk.write_capture(out, cap)
-        return cap
+            for path, cap in zip(murk._murk.render_outputs(os.fspath(out), albedos), caps):
+                murk.write_capture(path, cap)
+        return caps
     finally:
         if own:
             client.close()

@@ -166,8 +166,9 @@ pub fn render_part(
     })
 }
 
-/// The capture an unsharded render gives, bit for bit, from the parts `render_part` completed
-/// (`parts[i]` holds shard i of `len(parts)`), for the same scene, overrides, spp and seed.
+/// The captures an unsharded render gives (one, or one per albedo of a sweep), bit for bit, from
+/// the parts `render_part` completed (`parts[i]` holds shard i of `len(parts)`), for the same scene,
+/// overrides, spp, seed and albedos.
 #[pyfunction]
 #[pyo3(signature = (scene, args, parts))]
 pub fn assemble(
@@ -175,12 +176,21 @@ pub fn assemble(
     scene: PathBuf,
     args: RenderArgs,
     parts: Vec<PathBuf>,
-) -> PyResult<Capture> {
-    let cap = compute(py, None, None, |_| {
+) -> PyResult<Vec<Capture>> {
+    let caps = compute(py, None, None, |_| {
         let scene = args.scene(&scene)?;
-        Plan::new(&scene).assemble(args.options(&scene).spp, args.seed, &parts)
+        args.plan(&scene)?
+            .assemble_all(args.options(&scene).spp, args.seed, &parts)
     })?;
-    Ok(Capture { cap })
+    Ok(caps.into_iter().map(|cap| Capture { cap }).collect())
+}
+
+/// The files a render to `out` writes: `out`, or one per albedo of a sweep, named as `murk render
+/// --albedos` names them.
+#[pyfunction]
+#[pyo3(signature = (out, albedos))]
+pub fn render_outputs(out: PathBuf, albedos: Option<Vec<f64>>) -> Vec<PathBuf> {
+    murk_render::render_outputs(&out, albedos.as_deref())
 }
 
 /// The capture an unsharded render gives, from all parts of `murk render --shard i/N` (Capture

@@ -55,6 +55,19 @@ def test_two_worker_render_equals_the_unsharded_cli_render(client, want, tmp_pat
     assert (tmp_path / "z.h5").read_bytes() == want
 
 
+@needs_cli
+def test_a_sharded_sweep_equals_the_unsharded_cli_sweep(client, tmp_path):
+    cli("render", Z, "--out", tmp_path / "cli.h5", "--grid", "8", "--spp", "64", "--seed", "2",
+        "--albedos", "0.3,0.7", "--quiet")
+    caps = murk.dask.render_albedos(Z, [0.3, 0.7], client, shards=3, grid=8, spp=64, seed=2,
+                                    threads=1, out=tmp_path / "dask.h5")
+    assert len(caps) == 2
+    for a in ["0.3", "0.7"]:
+        got = (tmp_path / f"dask-albedo{a}.h5").read_bytes()
+        assert got == (tmp_path / f"cli-albedo{a}.h5").read_bytes()
+    assert (caps[0].H != caps[1].H).any()
+
+
 def test_a_killed_worker_is_retried_with_the_same_bytes(client, want, tmp_path):
     work = tmp_path / "parts"
     os.makedirs(work, exist_ok=True)
