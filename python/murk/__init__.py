@@ -189,7 +189,7 @@ def render_albedos(
     """
     path, args = _render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
                               checkpoint=checkpoint, checkpoint_every=checkpoint_every, out=out,
-                              albedos=[float(a) for a in albedos])
+                              albedos=albedos)
     return _murk.render(path, args, threads, _progress(progress, "render"))
 
 
@@ -204,7 +204,7 @@ def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, c
                       set=_overrides(set), grid=grid, bins=bins,
                       checkpoint=None if checkpoint is None else os.fspath(checkpoint),
                       checkpoint_every=checkpoint_every, out=None if out is None else os.fspath(out),
-                      albedos=albedos)
+                      albedos=None if albedos is None else [float(a) for a in albedos])
 
 
 def merge(parts: Sequence[Union[Capture, str, os.PathLike]]) -> Capture:

@@ -72,7 +72,7 @@ def render_shard(
     part = os.fspath(part)
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid,
                                    bins=bins, checkpoint=part, checkpoint_every=checkpoint_every,
-                                   albedos=_floats(albedos))
+                                   albedos=albedos)
     murk._murk.render_part(path, args, threads, murk._progress(progress, "shard"))
     return part
 
@@ -82,14 +82,16 @@ def assemble(scene, parts, *, spp=None, seed=0, set=None, grid=None, bins=None, 
     ``parts[i]`` holds shard ``(i, len(parts))`` of ``scene`` with the same keywords; with
     ``albedos``, the list of the sweep's captures. A part of another render, or one with units
     missing, raises ``murk.FormatError`` naming its file."""
-    path, args = murk._render_args(scene, spp=spp, seed=seed, shard=None, set=set, grid=grid,
-                                   bins=bins, albedos=_floats(albedos))
-    caps = murk._murk.assemble(path, args, [os.fspath(p) for p in parts])
+    caps = _assemble_all(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins,
+                         albedos=albedos)
     return caps if albedos is not None else caps[0]
 
 
-def _floats(albedos):
-    return None if albedos is None else [float(a) for a in albedos]
+def _assemble_all(scene, parts, *, spp, seed, set, grid, bins, albedos):
+    """Every capture of the render (one, or one per albedo of a sweep)."""
+    path, args = murk._render_args(scene, spp=spp, seed=seed, shard=None, set=set, grid=grid,
+                                   bins=bins, albedos=albedos)
+    return murk._murk.assemble(path, args, [os.fspath(p) for p in parts])
 
 
 def render(
@@ -140,7 +142,7 @@ def render_albedos(
 ) -> List["murk.Capture"]:
     """:func:`render` for an albedo sweep: the captures ``murk.render_albedos(scene, albedos, ...)``
     gives unsharded, byte for byte, one per albedo; ``out`` names them as it does."""
-    return _render(scene, client, shards, _floats(albedos), spp=spp, seed=seed, set=set, grid=grid,
+    return _render(scene, client, shards, list(albedos), spp=spp, seed=seed, set=set, grid=grid,
                    bins=bins, workdir=workdir, out=out, threads=threads,
                    checkpoint_every=checkpoint_every, retries=retries)
 
@@ -173,16 +175,12 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
             for i in range(shards)
         ]
         parts = client.gather(futures)
-        caps = assemble(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins,
-                        albedos=albedos)
-        if albedos is None:
-            if out is not None:
-                murk.write_capture(out, caps)
-            return caps
+        caps = _assemble_all(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins,
+                             albedos=albedos)
         if out is not None:
             for path, cap in zip(murk._murk.render_outputs(os.fspath(out), albedos), caps):
                 murk.write_capture(path, cap)
-        return caps
+        return caps if albedos is not None else caps[0]
     finally:
         if own:
             client.close()

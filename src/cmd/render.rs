@@ -131,16 +131,11 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         .num_threads(a.threads.unwrap_or(0))
         .build()
         .context("cannot start the worker threads")?;
-    pool.install(|| render(&a, &scene, &plan, &outs, quiet))
+    pool.install(|| render(&a, &plan, &outs, quiet))
 }
 
-fn render(
-    a: &RenderArgs,
-    scene: &Scene,
-    plan: &Plan,
-    outs: &[PathBuf],
-    quiet: bool,
-) -> anyhow::Result<()> {
+fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow::Result<()> {
+    let scene = plan.scene;
     let n_units = plan.shard_units(a.shard).len();
     let spp = match (a.spp, a.time_budget) {
         (Some(s), _) => s,

@@ -155,11 +155,7 @@ impl KaiserBessel {
 
     /// φ(t), t in samples: I0(β√(1 − (2t/taps)²)) / I0(β) inside the support, 0 outside.
     pub fn value(&self, t: f64) -> f64 {
-        let u = 2.0 * t / self.taps as f64;
-        if u.abs() >= 1.0 {
-            return 0.0;
-        }
-        bessel_i0(self.beta * (1.0 - u * u).sqrt()) / self.i0_beta
+        kaiser(2.0 * t / self.taps as f64, self.beta, self.i0_beta)
     }
 
     /// φ̂(ω) = ∫ φ(t)·e^{−iωt} dt, ω in radians per sample (real and even).
@@ -194,16 +190,20 @@ impl KaiserBessel {
 }
 
 fn windowed_sinc(x: f64) -> f64 {
-    let u = x / HALF_TAPS as f64;
-    if u.abs() >= 1.0 {
-        return 0.0;
-    }
     let sinc = if x.abs() < 1e-12 {
         1.0
     } else {
-        (std::f64::consts::PI * x).sin() / (std::f64::consts::PI * x)
+        (PI * x).sin() / (PI * x)
     };
-    sinc * bessel_i0(KAISER_BETA * (1.0 - u * u).sqrt()) / bessel_i0(KAISER_BETA)
+    sinc * kaiser(x / HALF_TAPS as f64, KAISER_BETA, bessel_i0(KAISER_BETA))
+}
+
+/// The Kaiser window I0(β√(1 − u²)) / I0(β) at u (1 at u = 0), zero for |u| ≥ 1; `i0_beta` = I0(β).
+fn kaiser(u: f64, beta: f64, i0_beta: f64) -> f64 {
+    if u.abs() >= 1.0 {
+        return 0.0;
+    }
+    bessel_i0(beta * (1.0 - u * u).sqrt()) / i0_beta
 }
 
 /// Modified Bessel function of the first kind, order 0 (power series: its terms peak near k = x/2, so

@@ -212,8 +212,13 @@ impl CaptureJob {
 
     /// The sweep's albedos, if the job is one.
     pub fn sweep(&self) -> Option<&[f64]> {
-        (!self.albedos.is_empty()).then_some(self.albedos.as_slice())
+        sweep(&self.albedos)
     }
+}
+
+/// A job's albedo list as a sweep: none when empty (plan.json stores a plain job's as `[]`).
+fn sweep(albedos: &[f64]) -> Option<&[f64]> {
+    (!albedos.is_empty()).then_some(albedos)
 }
 
 /// One `murk render` run: a shard of a capture.
@@ -451,8 +456,7 @@ impl Plan {
         };
         let set = Plan::overrides(opt, scene, traced);
         let resolved = load_scene(&opt.scenes_dir, scene, &set)?;
-        let sweep = (!albedos.is_empty()).then_some(albedos);
-        let render = murk_render::Plan::with_albedos(&resolved, sweep)?;
+        let render = murk_render::Plan::with_albedos(&resolved, sweep(albedos))?;
         let spp = opt.spp.unwrap_or(Format::of(scene, opt.scale).spp);
         let id = format!("{:016x}", fingerprint(&render.key(spp, seed, None)));
         // A plain job's one capture, or the sweep's capture of this medium's albedo.

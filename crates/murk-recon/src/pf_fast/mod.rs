@@ -200,8 +200,7 @@ impl Plan {
         match self.lateral {
             Lateral::Full => f / 2,
             Lateral::Propagating => {
-                let kappa = k.hypot(1e4f64.ln() / dz);
-                let line = kappa * step * f as f64 / (2.0 * std::f64::consts::PI);
+                let line = kappa(k, dz) * step * f as f64 / (2.0 * std::f64::consts::PI);
                 (line.ceil() as usize + 6).min(f / 2)
             }
         }
@@ -214,7 +213,7 @@ impl Plan {
         if self.lateral == Lateral::Full {
             return [None, None];
         }
-        let kappa = k.hypot(1e4f64.ln() / dz);
+        let kappa = kappa(k, dz);
         [X, Y].map(|axis| {
             let step = [self.grid.step_x.x, self.grid.step_y.y][axis];
             let band = kappa * step / std::f64::consts::PI;
@@ -441,7 +440,8 @@ impl Plan {
             .zip(by_freq[..nb * cells].par_chunks(cells))
             .enumerate()
             .for_each(|(j, (t, cells))| {
-                let lines = self.lines(legs(src) * spectra.band.k(j), dz_min);
+                let k = legs(src) * spectra.band.k(j);
+                let lines = self.lines(k, dz_min);
                 let mut ws = lock(pool);
                 let Workspace {
                     grid_in: a,
@@ -467,7 +467,6 @@ impl Plan {
                         }
                     }
                 }
-                let k = legs(src) * spectra.band.k(j);
                 self.divide_by_kernels(t, chosen[j], lines, self.lines_along(X, k, dz_min));
             });
         &out[..nb * fx * fy]
@@ -486,22 +485,22 @@ impl Plan {
             return;
         }
         let (fx, fy) = (self.fft.fx, self.fft.fy);
-        let along_x: Vec<f32> = match chosen[X] {
-            Some(i) => (0..fx)
-                .map(|q| {
-                    if q.min(fx - q) <= lines_x {
-                        self.kb[X][i].inverse[q]
-                    } else {
-                        0.0
-                    }
-                })
-                .collect(),
-            None => vec![1.0; fx],
-        };
+        // Along x: the kernel's 1/φ̂ on the bins within lines_x of kx = 0, zero between them.
+        let cut = lines_x.min(fx / 2);
+        let along_x = chosen[X].map(|i| &self.kb[X][i].inverse);
         for ky in kept_lines(fy, lines).into_iter().flatten() {
             let y = chosen[Y].map_or(1.0, |i| self.kb[Y][i].inverse[ky]);
-            for (v, &x) in t[ky * fx..(ky + 1) * fx].iter_mut().zip(&along_x) {
-                *v *= x * y;
+            let line = &mut t[ky * fx..(ky + 1) * fx];
+            let Some(inv) = along_x else {
+                line.iter_mut().for_each(|v| *v *= y);
+                continue;
+            };
+            for (q, v) in line.iter_mut().enumerate() {
+                *v *= if q.min(fx - q) <= cut {
+                    inv[q] * y
+                } else {
+                    0.0
+                };
             }
         }
     }
@@ -636,6 +635,12 @@ impl Plan {
         transpose::transpose(&acc, &mut out, nx, ny);
         out
     }
+}
+
+/// The largest lateral wavenumber (rad/m) the kernel of wavenumber `k` carries to a plane at `dz`
+/// within 1e-4 (see [`Lateral::Propagating`]).
+fn kappa(k: f64, dz: f64) -> f64 {
+    k.hypot(1e4f64.ln() / dz)
 }
 
 /// How many times the kernel's leg is travelled: twice for confocal data (no point-side index), whose
