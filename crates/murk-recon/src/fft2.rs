@@ -104,6 +104,11 @@ impl Fft2 {
         }
     }
 
+    /// Inverse 1-D transforms (unnormalised) along x of consecutive lines of length `fx`.
+    pub fn inverse_rows_x(&self, lines: &mut [Complex32], scratch: &mut [Complex32]) {
+        self.inv_x.process_with_scratch(lines, scratch);
+    }
+
     /// Second half of the inverse (unnormalised): along y on consecutive rows of length fy.
     pub fn inverse_y(&self, rows: &mut [Complex32], scratch: &mut [Complex32]) {
         self.inv_y.process_with_scratch(rows, scratch);

@@ -75,68 +75,113 @@ pub(super) fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
     up.copy_from_slice(&src[first..first + up.len()]);
 }
 
-impl Plan {
-    /// The kernel's spectrum at the current frequency for a symmetric support (see [`Fold`]): transforms
-    /// along y only the distinct rows |dx| ≤ cx, keeps ky ≤ min(fy/2, lines) and transforms those
-    /// columns along x, leaving those lines (kx ≤ fx/2 valid) in `ws.g` for [`Plan::folded_product`] to
-    /// unfold by mirroring (the phases live in the data).
-    pub(super) fn folded_kernel_spectrum(
-        &self,
-        ws: &mut Workspace,
-        gx: usize,
-        gy: usize,
-        my: usize,
-        lines: usize,
-    ) {
-        let (fx, fy) = (self.fft.fx, self.fft.fy);
-        let hy = (fy / 2).min(lines) + 1;
-        let rows = self.cx as usize + 1;
-        let (cx, cy) = (self.cx, self.cy);
-        let g = &mut ws.g;
-        wide(
-            #[inline(always)]
-            || {
-                for ax in 0..rows {
-                    let row = &mut g[ax * fy..(ax + 1) * fy];
-                    mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
-                    row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
-                }
-            },
-        );
-        self.fft.rows_y(&mut g[..rows * fy], &mut ws.scratch);
-        // Only the hy columns that are read.
-        transpose_part(&g[..rows * fy], fy, 0..rows, 0..hy, &mut ws.cols, rows);
-        wide(
-            #[inline(always)]
-            || {
-                for ky in 0..hy {
-                    let line = &mut g[ky * fx..(ky + 1) * fx];
-                    mirror(&mut line[..gx], &ws.cols[ky * rows..(ky + 1) * rows], cx);
-                    line[gx..]
-                        .iter_mut()
-                        .for_each(|v| *v = Complex32::default());
-                }
-            },
-        );
-        self.fft.rows_x(&mut g[..hy * fx], &mut ws.scratch);
-    }
+/// Kernel rows (y part) and spectrum lines (x part) handled per batch by [`Plan::folded_lines`]:
+/// eight complex values fill a 64-byte cache line in each column of the transposes, and a batch's
+/// buffers stay in L1.
+pub(super) const BATCH: usize = 8;
 
-    /// `ws.t` = the kernel's spectrum × `h` ([ky][kx]) on the `kept` lines, unfolding the quarter that
-    /// [`Plan::folded_kernel_spectrum`] left in `ws.g` line by line as it is multiplied (one pass over
-    /// `ws.t` instead of a copy and a product).
-    pub(super) fn folded_product(
+/// Where [`Plan::folded_lines`] puts each line of the kernel's spectrum × the grid's.
+pub(super) enum Sink {
+    /// Transformed back along x and written transposed into `ws.g` ([x][ky]) for x in the range.
+    InverseX(Range<usize>),
+    /// Added into `ws.spec_acc` ([ky][kx]), for one transform back per plane.
+    Accumulate,
+}
+
+impl Plan {
+    /// For a symmetric support (see [`Fold`]): the kernel's spectrum at the current frequency times
+    /// `h` ([ky][kx]) on the lines kept for `lines`, delivered to `sink`. Along y only the distinct
+    /// rows |dx| ≤ cx are transformed, in batches whose columns ky ≤ min(fy/2, lines) are gathered
+    /// into `ws.cols`; along x, batches of those columns are transformed, and each is unfolded into
+    /// the lines ky and fy − ky as it is multiplied, so no whole-spectrum buffer is written or read.
+    pub(super) fn folded_lines(
         &self,
         ws: &mut Workspace,
         h: &[Complex32],
-        kept: [Range<usize>; 2],
+        [gx, gy, my]: [usize; 3],
+        lines: usize,
+        sink: &Sink,
     ) {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
+        let hy = (fy / 2).min(lines) + 1;
         let hx = fx / 2 + 1;
-        for ky in kept.into_iter().flatten() {
-            let src = if ky <= fy / 2 { ky } else { fy - ky };
-            let t = &mut ws.t[ky * fx..(ky + 1) * fx];
-            unfold(t, &ws.g[src * fx..src * fx + hx]);
-            cmul::mul_assign(t, &h[ky * fx..(ky + 1) * fx]);
+        let rows = self.cx as usize + 1;
+        let (cx, cy) = (self.cx, self.cy);
+        for b0 in (0..rows).step_by(BATCH) {
+            let nb = BATCH.min(rows - b0);
+            let block = &mut ws.kbuf[..nb * fy];
+            wide(
+                #[inline(always)]
+                || {
+                    for (r, row) in block.chunks_exact_mut(fy).enumerate() {
+                        let ax = b0 + r;
+                        mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
+                        row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
+                    }
+                },
+            );
+            self.fft.rows_y(block, &mut ws.scratch);
+            // Only the hy columns that are read.
+            transpose_part(block, fy, 0..nb, 0..hy, &mut ws.cols[b0..], rows);
+        }
+        for s0 in (0..hy).step_by(BATCH) {
+            let ns = BATCH.min(hy - s0);
+            let klines = &mut ws.kbuf[..ns * fx];
+            wide(
+                #[inline(always)]
+                || {
+                    for (i, line) in klines.chunks_exact_mut(fx).enumerate() {
+                        let s = s0 + i;
+                        mirror(&mut line[..gx], &ws.cols[s * rows..(s + 1) * rows], cx);
+                        line[gx..]
+                            .iter_mut()
+                            .for_each(|v| *v = Complex32::default());
+                    }
+                },
+            );
+            self.fft.rows_x(klines, &mut ws.scratch);
+            // Lines ky = s (ascending), then the mirrored ky = fy − s (ascending, so s descending),
+            // skipping s = 0 and fy − s = s, which have no distinct mirror: two runs of consecutive
+            // ky for the transposes.
+            let mut mirrored = [0; BATCH];
+            let mut nm = 0;
+            for s in (s0..s0 + ns).rev().filter(|&s| s > 0 && fy - s > s) {
+                mirrored[nm] = s;
+                nm += 1;
+            }
+            let mirrored = &mirrored[..nm];
+            let n = ns + nm;
+            let batch = (s0..s0 + ns).map(|s| (s, s));
+            for (i, (ky, s)) in batch
+                .chain(mirrored.iter().map(|&s| (fy - s, s)))
+                .enumerate()
+            {
+                let t = &mut ws.tlines[i * fx..(i + 1) * fx];
+                unfold(t, &klines[(s - s0) * fx..(s - s0) * fx + hx]);
+                cmul::mul_assign(t, &h[ky * fx..(ky + 1) * fx]);
+            }
+            let first_mirrored = mirrored.first().map_or(fy, |&s| fy - s);
+            let runs = [(s0, 0..ns), (first_mirrored, ns..n)];
+            match sink {
+                Sink::InverseX(xs) => {
+                    self.fft
+                        .inverse_rows_x(&mut ws.tlines[..n * fx], &mut ws.scratch);
+                    for (ky0, run) in runs {
+                        let part = &ws.tlines[run.start * fx..run.end * fx];
+                        transpose_part(part, fx, 0..run.len(), xs.clone(), &mut ws.g[ky0..], fy);
+                    }
+                }
+                Sink::Accumulate => {
+                    for (ky0, run) in runs {
+                        let acc = &mut ws.spec_acc[ky0 * fx..(ky0 + run.len()) * fx];
+                        let part = &ws.tlines[run.start * fx..run.end * fx];
+                        wide(
+                            #[inline(always)]
+                            || acc.iter_mut().zip(part).for_each(|(a, t)| *a += t),
+                        );
+                    }
+                }
+            }
         }
     }
 

@@ -9,7 +9,7 @@ use crate::fft2::{kept_lines, kept_spans, Fft2};
 use crate::resample::{KaiserBessel, Resampler};
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
-use lattice::{mirror, reach, Fold};
+use lattice::{mirror, reach, Fold, Sink, BATCH};
 use murk_core::simd::wide;
 use murk_core::{Axis, Capture, CaptureKind, DVec3, Error, RegularGrid, Result, Volume};
 use rayon::prelude::*;
@@ -572,8 +572,14 @@ impl Plan {
         let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
             let lines = self.lines(legs * band.k(j), dz);
+            let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
             if self.fold.is_some() {
-                self.folded_kernel_spectrum(ws, gx, gy, my, lines);
+                let sink = match confocal {
+                    true => Sink::Accumulate,
+                    false => Sink::InverseX(xs.clone()),
+                };
+                self.folded_lines(ws, h, [gx, gy, my], lines, &sink);
+                cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             } else {
                 wide(
                     #[inline(always)]
@@ -592,33 +598,30 @@ impl Plan {
                 );
                 self.fft
                     .forward_lines(&mut ws.g, gx, &mut ws.t, lines, &mut ws.scratch);
-            }
-            cmul::mul_assign(&mut ws.tcur, &ws.tstep);
-            let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
-            // Lines of ws.t outside the kept ones are left as they are: nothing reads them.
-            if self.fold.is_some() {
-                self.folded_product(ws, h, kept_lines(fy, lines));
-            } else {
+                cmul::mul_assign(&mut ws.tcur, &ws.tstep);
+                // Lines of ws.t outside the kept ones are left as they are: nothing reads them.
                 for span in kept_spans(fy, lines, fx) {
-                    cmul::mul_assign(&mut ws.t[span.clone()], &h[span]);
+                    cmul::mul_assign(&mut ws.t[span.clone()], &h[span.clone()]);
+                    if confocal {
+                        wide(
+                            #[inline(always)]
+                            || {
+                                ws.spec_acc[span.clone()]
+                                    .iter_mut()
+                                    .zip(&ws.t[span])
+                                    .for_each(|(a, t)| *a += t)
+                            },
+                        );
+                    }
+                }
+                if !confocal {
+                    self.fft
+                        .inverse_x(&mut ws.t, &mut ws.g, xs.clone(), lines, &mut ws.scratch);
                 }
             }
             if confocal {
-                for span in kept_spans(fy, lines, fx) {
-                    wide(
-                        #[inline(always)]
-                        || {
-                            ws.spec_acc[span.clone()]
-                                .iter_mut()
-                                .zip(&ws.t[span.clone()])
-                                .for_each(|(a, t)| *a += t)
-                        },
-                    );
-                }
                 continue;
             }
-            self.fft
-                .inverse_x(&mut ws.t, &mut ws.g, xs.clone(), lines, &mut ws.scratch);
             self.field_at_voxels(ws, lines, self.resamplers(chosen[j]));
             // Exact phase of the point-side leg.
             cmul::mul_add(&mut acc, &ws.field, &ws.pbase);
@@ -694,6 +697,10 @@ struct Workspace {
     spec_acc: Vec<Complex32>,
     /// Folded kernel spectrum: the y-transformed distinct rows, transposed.
     cols: Vec<Complex32>,
+    /// Folded kernel spectrum: a batch of rows along y, then of lines along x.
+    kbuf: Vec<Complex32>,
+    /// Folded kernel spectrum: a batch of lines of the product (both halves of the spectrum).
+    tlines: Vec<Complex32>,
     /// Point-side phase per voxel and its per-frequency step (f32 recurrence, as for the kernel).
     pbase: Vec<Complex32>,
     pstep: Vec<Complex32>,
@@ -722,6 +729,8 @@ impl Workspace {
                 Some(_) => vec![Complex32::default(); (fy / 2 + 1) * (plan.cx as usize + 1)],
                 None => Vec::new(),
             },
+            kbuf: vec![Complex32::default(); BATCH * fx.max(fy)],
+            tlines: vec![Complex32::default(); 2 * BATCH * fx],
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
