@@ -18,6 +18,7 @@ pub mod spectrum;
 pub use compensation::Compensation;
 pub use pf_fast::Slab;
 
+use rayon::prelude::*;
 use murk_core::{Capture, CaptureKind, DVec3, Error, Reconstruction, Result, Volume};
 use rustfft::num_complex::Complex32;
 
@@ -432,7 +433,7 @@ pub fn intensity(
     let confocal = cap.kind() == CaptureKind::Confocal;
     let (point, aperture) = compensation_points(cap);
     field
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(i, u)| {
             let (ix, iy, iz) = volume.unravel(i);

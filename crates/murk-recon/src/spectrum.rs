@@ -258,7 +258,9 @@ pub fn spectra<'w>(cap: &Capture, windows: &'w [Window]) -> Spectra<'w> {
         offsets.push(stride);
         stride += w.band.len();
     }
-    let mut spec = murk_core::buffer::filled(cap.n_hist() * stride, Complex32::new(0.0, 0.0));
+    // Zero pages from the OS, first touched by the threads that write the rows (a window with no
+    // data leaves its part zero).
+    let mut spec: Vec<Complex32> = murk_core::buffer::zeroed(cap.n_hist() * stride);
     let ffts: Vec<_> = {
         let mut planner = RealFftPlanner::<f32>::new();
         windows

@@ -277,7 +277,12 @@ impl Plan {
         let sources = self.sources();
         let (slabs, windows) = self.slabs(sigma_m, wavelength_m)?;
         progress.start((sources.len() * nz) as u64);
-        let mut field = murk_core::buffer::filled(nx * ny * nz, Complex64::default());
+        let nxy = nx * ny;
+        // Zero pages from the OS, first touched by the threads that write them.
+        let mut field: Vec<Complex32> = murk_core::buffer::zeroed(nxy * nz);
+        // With several point-side sources, a slab's planes summed over them in f64 ([xy][plane])
+        // before the one rounding to f32.
+        let mut sum: Vec<Complex64> = Vec::new();
         let all = crate::spectrum::spectra(data, &windows);
         let mut grid = GridBuffers::default();
         // One workspace per worker thread for the whole run (planes of every slab reuse them).
@@ -286,6 +291,11 @@ impl Plan {
             .collect();
         for (k, planes) in slabs.iter().enumerate() {
             let spectra = all.part(k);
+            let np = planes.len();
+            if sources.len() > 1 {
+                sum.clear();
+                murk_core::buffer::grow(&mut sum, nxy * np, Complex64::default());
+            }
             // The shallowest plane keeps the most lines: grid spectra on its lines serve all.
             let dz_min = planes
                 .clone()
@@ -306,17 +316,33 @@ impl Plan {
                         plane
                     })
                     .collect();
-                for (iz, plane) in planes.clone().zip(&out) {
-                    for (ixy, v) in plane.iter().enumerate() {
-                        field[ixy * nz + iz] += Complex64::new(v.re as f64, v.im as f64);
-                    }
+                // Voxel-major in both, so each voxel's run of planes is written contiguously.
+                if sources.len() == 1 {
+                    field.par_chunks_mut(nz).enumerate().for_each(|(ixy, col)| {
+                        for (d, plane) in col[planes.clone()].iter_mut().zip(&out) {
+                            *d = plane[ixy];
+                        }
+                    });
+                } else {
+                    sum.par_chunks_mut(np).enumerate().for_each(|(ixy, s)| {
+                        for (a, plane) in s.iter_mut().zip(&out) {
+                            let v = plane[ixy];
+                            *a += Complex64::new(v.re as f64, v.im as f64);
+                        }
+                    });
                 }
             }
+            if sources.len() > 1 {
+                field
+                    .par_chunks_mut(nz)
+                    .zip(sum.par_chunks(np))
+                    .for_each(|(col, s)| {
+                        for (d, a) in col[planes.clone()].iter_mut().zip(s) {
+                            *d = c32(*a);
+                        }
+                    });
+            }
         }
-        let field = field
-            .iter()
-            .map(|u| Complex32::new(u.re as f32, u.im as f32))
-            .collect();
         let slabs = slabs
             .into_iter()
             .zip(windows)
