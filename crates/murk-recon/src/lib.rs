@@ -18,8 +18,8 @@ pub mod spectrum;
 pub use compensation::Compensation;
 pub use pf_fast::Slab;
 
-use rayon::prelude::*;
 use murk_core::{Capture, CaptureKind, DVec3, Error, Reconstruction, Result, Volume};
+use rayon::prelude::*;
 use rustfft::num_complex::Complex32;
 
 /// Virtual wavelength λ of the phasor pulse.

@@ -562,9 +562,18 @@ impl Plan {
         let (mx, my) = (reach(cx, gx), reach(cy, gy));
         ws.tcur.clear();
         ws.tstep.clear();
+        // On a square lattice the table is symmetric (bit for bit: the same products, summed
+        // commutatively), so its lower half is copied from rows already computed.
+        let square = mx == my && dxs == dys;
         for ax in 0..mx {
             let dx = ax as f64 * dxs;
             for ay in 0..my {
+                if square && ay < ax {
+                    let mirrored = ay * my + ax;
+                    ws.tcur.push(ws.tcur[mirrored]);
+                    ws.tstep.push(ws.tstep[mirrored]);
+                    continue;
+                }
                 let dy = ay as f64 * dys;
                 let r = (dx * dx + dy * dy + dz * dz).sqrt();
                 let amp = amplitude(self.falloff, r).powf(legs);
