@@ -63,6 +63,27 @@ fn unfold(dst: &mut [Complex32], src: &[Complex32]) {
     debug_assert!(n - src.len() < src.len());
 }
 
+/// Each line of `lines` (`len` values each) = [`mirror`] of the next `stride` values of `src` over
+/// its first g, zero after, for `[g, c]`: a batch of the kernel's distinct rows or columns laid out
+/// for the FFT.
+fn mirror_lines(
+    lines: &mut [Complex32],
+    len: usize,
+    src: &[Complex32],
+    stride: usize,
+    [g, c]: [usize; 2],
+) {
+    wide(
+        #[inline(always)]
+        || {
+            for (line, s) in lines.chunks_exact_mut(len).zip(src.chunks_exact(stride)) {
+                mirror(&mut line[..g], s, c as i64);
+                line[g..].iter_mut().for_each(|v| *v = Complex32::default());
+            }
+        },
+    );
+}
+
 /// `dst[q] = src[|q − c|]`: a reversed run down to |·| = 0, then a forward run.
 #[inline(always)]
 pub(super) fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
@@ -107,18 +128,16 @@ impl Plan {
         let hx = fx / 2 + 1;
         let rows = self.cx as usize + 1;
         let (cx, cy) = (self.cx, self.cy);
+        debug_assert!(cx >= 0 && cy >= 0, "a folded support is centred inside it");
         for b0 in (0..rows).step_by(BATCH) {
             let nb = BATCH.min(rows - b0);
             let block = &mut ws.kbuf[..nb * fy];
-            wide(
-                #[inline(always)]
-                || {
-                    for (r, row) in block.chunks_exact_mut(fy).enumerate() {
-                        let ax = b0 + r;
-                        mirror(&mut row[..gy], &ws.tcur[ax * my..(ax + 1) * my], cy);
-                        row[gy..].iter_mut().for_each(|v| *v = Complex32::default());
-                    }
-                },
+            mirror_lines(
+                block,
+                fy,
+                &ws.tcur[b0 * my..(b0 + nb) * my],
+                my,
+                [gy, cy as usize],
             );
             self.fft.rows_y(block, &mut ws.scratch);
             // Only the hy columns that are read.
@@ -127,18 +146,8 @@ impl Plan {
         for s0 in (0..hy).step_by(BATCH) {
             let ns = BATCH.min(hy - s0);
             let klines = &mut ws.kbuf[..ns * fx];
-            wide(
-                #[inline(always)]
-                || {
-                    for (i, line) in klines.chunks_exact_mut(fx).enumerate() {
-                        let s = s0 + i;
-                        mirror(&mut line[..gx], &ws.cols[s * rows..(s + 1) * rows], cx);
-                        line[gx..]
-                            .iter_mut()
-                            .for_each(|v| *v = Complex32::default());
-                    }
-                },
-            );
+            let columns = &ws.cols[s0 * rows..(s0 + ns) * rows];
+            mirror_lines(klines, fx, columns, rows, [gx, cx as usize]);
             self.fft.rows_x(klines, &mut ws.scratch);
             // Lines ky = s (ascending), then the mirrored ky = fy − s (ascending, so s descending),
             // skipping s = 0 and fy − s = s, which have no distinct mirror: two runs of consecutive
