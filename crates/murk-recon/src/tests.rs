@@ -126,9 +126,9 @@ fn point_found_for_every_capture_kind_fast_and_exact() {
     }
 }
 
-#[test]
-fn exhaustive_point_found() {
-    let layout = CaptureLayout {
+/// An empty exhaustive capture: 8 × 8 points on a 1 m wall, `bins` of 4 mm from 0.
+fn exhaustive_8x8(bins: usize) -> Capture {
+    CaptureLayout {
         kind: LayoutKind::Exhaustive,
         wall_size_m: 1.0,
         grid: 8,
@@ -136,12 +136,18 @@ fn exhaustive_point_found() {
         time: TimeAxis {
             start_m: 0.0,
             bin_width_m: 0.004,
-            bins: 700,
+            bins,
         },
         laser_xyz: None,
         sensor_xyz: None,
-    };
-    let mut cap = layout.empty_capture().unwrap();
+    }
+    .empty_capture()
+    .unwrap()
+}
+
+#[test]
+fn exhaustive_point_found() {
+    let mut cap = exhaustive_8x8(700);
     add_first_bounce(
         &mut cap,
         &Target::Point {
@@ -163,6 +169,33 @@ fn exhaustive_point_found() {
     let exact = run(&cap, &vol, PfForm::Exact);
     assert_localised(&fast, "exhaustive fast");
     assert!(rel_l2(&fast.intensity, &exact.intensity) < 1e-2);
+}
+
+/// An exhaustive capture over a depth range that splits into several slabs: the sum over its 64
+/// point-side sources restarts with each slab.
+#[test]
+fn exhaustive_fast_equals_exact_over_several_slabs() {
+    let cap = random_capture_of(exhaustive_8x8(1500));
+    let c = 0.5 - 0.5 / 8.0;
+    let vol = Volume {
+        x: Axis::new(-c, c, 8),
+        y: Axis::new(-c, c, 8),
+        z: Axis::new(0.2, 2.6, 25),
+    };
+    let params = PfParams::default();
+    let fast = field(&cap, &vol, &params, PfForm::Fast, &NoProgress).unwrap();
+    let slabs = fast.info.slabs.len();
+    assert!(slabs >= 2, "{slabs} slab");
+    let exact = field(&cap, &vol, &params, PfForm::Exact, &NoProgress).unwrap();
+    let norm = |v: &[Complex32]| v.iter().map(|u| u.norm_sqr() as f64).sum::<f64>().sqrt();
+    let diff: Vec<Complex32> = fast
+        .values
+        .iter()
+        .zip(&exact.values)
+        .map(|(a, b)| a - b)
+        .collect();
+    let err = norm(&diff) / norm(&exact.values);
+    assert!(err < 1e-3, "{slabs} slabs: relative L2 {err}");
 }
 
 #[test]
@@ -300,7 +333,11 @@ fn oracle(cap: &Capture, vol: &Volume, params: &PfParams) -> Vec<Complex64> {
 
 /// Random-looking data (not a point), so every voxel and frequency is exercised.
 fn random_capture() -> Capture {
-    let mut cap = capture(LayoutKind::SinglePointSensorGrid, 0.05, true);
+    random_capture_of(capture(LayoutKind::SinglePointSensorGrid, 0.05, true))
+}
+
+/// `cap` with deterministic pseudo-random histograms.
+fn random_capture_of(mut cap: Capture) -> Capture {
     for (i, v) in cap.h.iter_mut().enumerate() {
         *v = ((i * 7919 % 1000) as f32 / 1000.0 - 0.5) * 0.01;
     }
@@ -476,6 +513,16 @@ fn fast_matches_frequency_domain_oracle_on_centred_volumes() {
                 z: Axis::new(0.45, 0.65, 2),
             },
             1e-3,
+        ),
+        // Odd FFT lengths along both axes (45 × 75: 14 on-lattice columns, 44 rows reaching 6 past
+        // each edge of the wall), so no line ky = fy/2 exists and the last batch is partial.
+        (
+            Volume {
+                x: Axis::new(-c + 9.0 * d, c - 9.0 * d, 14),
+                y: Axis::new(-c - 6.0 * d, c + 6.0 * d, 44),
+                z: Axis::new(0.5, 0.6, 2),
+            },
+            2e-4,
         ),
     ] {
         assert!(

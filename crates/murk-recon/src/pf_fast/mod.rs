@@ -721,6 +721,7 @@ struct Workspace {
     /// The grid's spectrum at one frequency, zero-padded: rows x ≥ the grid's stay zero.
     grid_in: Vec<Complex32>,
     g: Vec<Complex32>,
+    /// The unfolded kernel's spectrum, then its product with the grid's ([ky][kx]).
     t: Vec<Complex32>,
     scratch: Vec<Complex32>,
     /// Kernel value at the current frequency and its per-frequency phase step, per distinct
@@ -751,21 +752,22 @@ impl Workspace {
     fn new(plan: &Plan) -> Self {
         let (fx, fy) = (plan.fft.fx, plan.fft.fy);
         let nv = plan.vol.x.n * plan.vol.y.n;
+        // Buffers of one path only (the unfolded spectrum, or the folded one's batches) stay empty
+        // on the other.
+        let folds = plan.fold.is_some();
+        let only = |used: bool, n: usize| vec![Complex32::default(); if used { n } else { 0 }];
         Workspace {
             grid_in: vec![Complex32::default(); fx * fy],
             g: vec![Complex32::default(); fx * fy],
-            t: vec![Complex32::default(); fx * fy],
+            t: only(!folds, fx * fy),
             scratch: plan.fft.scratch(),
             tcur: Vec::new(),
             tstep: Vec::new(),
             spec_acc: vec![Complex32::default(); fx * fy],
             // Folded kernel spectrum: the distinct rows' columns ky ≤ fy/2, the most it keeps.
-            cols: match plan.fold {
-                Some(_) => vec![Complex32::default(); (fy / 2 + 1) * (plan.cx as usize + 1)],
-                None => Vec::new(),
-            },
-            kbuf: vec![Complex32::default(); BATCH * fx.max(fy)],
-            tlines: vec![Complex32::default(); 2 * BATCH * fx],
+            cols: only(folds, (fy / 2 + 1) * (plan.cx as usize + 1)),
+            kbuf: only(folds, BATCH * fx.max(fy)),
+            tlines: only(folds, 2 * BATCH * fx),
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
             field: vec![Complex32::default(); nv],
