@@ -268,10 +268,10 @@ impl Plan {
 /// `out` = Σ weight·row over `rows`, over the interleaved (re, im) floats: plain f32 loops vectorise
 /// without the shuffles that LLVM puts around a product of complex values by a real one. Blocks of
 /// 32 floats are summed over all rows in registers and stored once (a pass per row, reading and
-/// writing `out` each time, took 1.5× as long).
+/// writing `out` each time, took 1.5× as long); the rest in blocks of 8 (one AVX register), so that
+/// only the last few floats are summed one at a time.
 #[inline(always)]
 fn weighted_sum<'r>(out: &mut [Complex32], rows: impl Iterator<Item = (&'r [Complex32], f32)>) {
-    const BLOCK: usize = 32;
     const MAX_ROWS: usize = 2 * crate::resample::HALF_TAPS as usize;
     let out = floats_mut(out);
     let n = out.len();
@@ -282,23 +282,25 @@ fn weighted_sum<'r>(out: &mut [Complex32], rows: impl Iterator<Item = (&'r [Comp
         count += 1;
     }
     let taps = &taps[..count];
-    let full = n - n % BLOCK;
-    for c in (0..full).step_by(BLOCK) {
-        let mut acc = [0f32; BLOCK];
+    let wide_end = n - n % 32;
+    let narrow_end = n - n % 8;
+    summed_blocks::<32>(out, taps, 0..wide_end);
+    summed_blocks::<8>(out, taps, wide_end..narrow_end);
+    summed_blocks::<1>(out, taps, narrow_end..n);
+}
+
+/// [`weighted_sum`] over `range` (a multiple of `B` floats), `B` floats at a time.
+#[inline(always)]
+fn summed_blocks<const B: usize>(out: &mut [f32], taps: &[(&[f32], f32)], range: Range<usize>) {
+    for c in range.step_by(B) {
+        let mut acc = [0f32; B];
         for &(row, w) in taps {
-            let src: &[f32; BLOCK] = row[c..c + BLOCK].try_into().expect("a block of the row");
+            let src: &[f32; B] = row[c..c + B].try_into().expect("a block of the row");
             for (a, g) in acc.iter_mut().zip(src) {
                 *a += g * w;
             }
         }
-        out[c..c + BLOCK].copy_from_slice(&acc);
-    }
-    let tail = &mut out[full..];
-    tail.iter_mut().for_each(|v| *v = 0.0);
-    for &(row, w) in taps {
-        for (x, g) in tail.iter_mut().zip(&row[full..]) {
-            *x += g * w;
-        }
+        out[c..c + B].copy_from_slice(&acc);
     }
 }
 
