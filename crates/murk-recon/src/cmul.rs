@@ -30,6 +30,14 @@ pub fn mul_add(dst: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {
     tail2(&mut dst[..n], &a[..n], &b[..n]);
 }
 
+/// `a[i] += b[i]`.
+pub fn add_assign(a: &mut [Complex32], b: &[Complex32]) {
+    murk_core::simd::wide(
+        #[inline(always)]
+        || a.iter_mut().zip(b).for_each(|(a, b)| *a += b),
+    );
+}
+
 fn tail(d: &mut [Complex32], b: &[Complex32]) {
     d.iter_mut().zip(b).for_each(|(d, b)| *d *= b);
 }

@@ -149,28 +149,21 @@ impl Plan {
             let columns = &ws.cols[s0 * rows..(s0 + ns) * rows];
             mirror_lines(klines, fx, columns, rows, [gx, cx as usize]);
             self.fft.rows_x(klines, &mut ws.scratch);
-            // Lines ky = s (ascending), then the mirrored ky = fy − s (ascending, so s descending),
-            // skipping s = 0 and fy − s = s, which have no distinct mirror: two runs of consecutive
-            // ky for the transposes.
-            let mut mirrored = [0; BATCH];
-            let mut nm = 0;
-            for s in (s0..s0 + ns).rev().filter(|&s| s > 0 && fy - s > s) {
-                mirrored[nm] = s;
-                nm += 1;
-            }
-            let mirrored = &mirrored[..nm];
-            let n = ns + nm;
+            // Lines ky = s (ascending), then the mirrored ky = fy − s for the s with a distinct
+            // mirror (0 < s < fy − s), s descending so ky ascends: two runs of consecutive ky for
+            // the transposes.
+            let mirrored = s0.max(1)..(s0 + ns).min(fy.div_ceil(2));
+            let n = ns + mirrored.len();
             let batch = (s0..s0 + ns).map(|s| (s, s));
             for (i, (ky, s)) in batch
-                .chain(mirrored.iter().map(|&s| (fy - s, s)))
+                .chain(mirrored.clone().rev().map(|s| (fy - s, s)))
                 .enumerate()
             {
                 let t = &mut ws.tlines[i * fx..(i + 1) * fx];
                 unfold(t, &klines[(s - s0) * fx..(s - s0) * fx + hx]);
                 cmul::mul_assign(t, &h[ky * fx..(ky + 1) * fx]);
             }
-            let first_mirrored = mirrored.first().map_or(fy, |&s| fy - s);
-            let runs = [(s0, 0..ns), (first_mirrored, ns..n)];
+            let runs = [(s0, 0..ns), (fy + 1 - mirrored.end, ns..n)];
             match sink {
                 Sink::InverseX(xs) => {
                     self.fft
@@ -183,11 +176,7 @@ impl Plan {
                 Sink::Accumulate => {
                     for (ky0, run) in runs {
                         let acc = &mut ws.spec_acc[ky0 * fx..(ky0 + run.len()) * fx];
-                        let part = &ws.tlines[run.start * fx..run.end * fx];
-                        wide(
-                            #[inline(always)]
-                            || acc.iter_mut().zip(part).for_each(|(a, t)| *a += t),
-                        );
+                        cmul::add_assign(acc, &ws.tlines[run.start * fx..run.end * fx]);
                     }
                 }
             }

@@ -280,8 +280,8 @@ impl Plan {
         let nxy = nx * ny;
         // Zero pages from the OS, first touched by the threads that write them.
         let mut field: Vec<Complex32> = murk_core::buffer::zeroed(nxy * nz);
-        // With several point-side sources, a slab's planes summed over them in f64 ([xy][plane])
-        // before the one rounding to f32.
+        // A slab's planes summed over the point-side sources in f64 ([xy][plane], so each voxel's
+        // run of planes is contiguous) before the one rounding to f32.
         let mut sum: Vec<Complex64> = Vec::new();
         let all = crate::spectrum::spectra(data, &windows);
         let mut grid = GridBuffers::default();
@@ -292,16 +292,13 @@ impl Plan {
         for (k, planes) in slabs.iter().enumerate() {
             let spectra = all.part(k);
             let np = planes.len();
-            if sources.len() > 1 {
-                sum.clear();
-                murk_core::buffer::grow(&mut sum, nxy * np, Complex64::default());
-            }
+            murk_core::buffer::grow(&mut sum, nxy * np, Complex64::default());
             // The shallowest plane keeps the most lines: grid spectra on its lines serve all.
             let dz_min = planes
                 .clone()
                 .map(|iz| self.vol.z.at(iz) - self.grid.origin.z)
                 .fold(f64::INFINITY, f64::min);
-            for &src in &sources {
+            for (i, &src) in sources.iter().enumerate() {
                 let chosen: Vec<[Option<usize>; 2]> = (0..spectra.band.len())
                     .map(|j| self.kernels(legs(src) * spectra.band.k(j), dz_min))
                     .collect();
@@ -316,32 +313,22 @@ impl Plan {
                         plane
                     })
                     .collect();
-                // Voxel-major in both, so each voxel's run of planes is written contiguously.
-                if sources.len() == 1 {
-                    field.par_chunks_mut(nz).enumerate().for_each(|(ixy, col)| {
-                        for (d, plane) in col[planes.clone()].iter_mut().zip(&out) {
-                            *d = plane[ixy];
-                        }
-                    });
-                } else {
-                    sum.par_chunks_mut(np).enumerate().for_each(|(ixy, s)| {
-                        for (a, plane) in s.iter_mut().zip(&out) {
-                            let v = plane[ixy];
-                            *a += Complex64::new(v.re as f64, v.im as f64);
-                        }
-                    });
-                }
+                // The first source sets the sum, so it needs no zeroing between slabs.
+                sum.par_chunks_mut(np).enumerate().for_each(|(ixy, s)| {
+                    for (a, plane) in s.iter_mut().zip(&out) {
+                        let v = Complex64::new(plane[ixy].re as f64, plane[ixy].im as f64);
+                        *a = if i == 0 { v } else { *a + v };
+                    }
+                });
             }
-            if sources.len() > 1 {
-                field
-                    .par_chunks_mut(nz)
-                    .zip(sum.par_chunks(np))
-                    .for_each(|(col, s)| {
-                        for (d, a) in col[planes.clone()].iter_mut().zip(s) {
-                            *d = c32(*a);
-                        }
-                    });
-            }
+            field
+                .par_chunks_mut(nz)
+                .zip(sum.par_chunks(np))
+                .for_each(|(col, s)| {
+                    for (d, a) in col[planes.clone()].iter_mut().zip(s) {
+                        *d = c32(*a);
+                    }
+                });
         }
         let slabs = slabs
             .into_iter()
@@ -614,7 +601,6 @@ impl Plan {
                     false => Sink::InverseX(xs.clone()),
                 };
                 self.folded_lines(ws, h, [gx, gy, my], lines, &sink);
-                cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             } else {
                 wide(
                     #[inline(always)]
@@ -633,20 +619,11 @@ impl Plan {
                 );
                 self.fft
                     .forward_lines(&mut ws.g, gx, &mut ws.t, lines, &mut ws.scratch);
-                cmul::mul_assign(&mut ws.tcur, &ws.tstep);
                 // Lines of ws.t outside the kept ones are left as they are: nothing reads them.
                 for span in kept_spans(fy, lines, fx) {
                     cmul::mul_assign(&mut ws.t[span.clone()], &h[span.clone()]);
                     if confocal {
-                        wide(
-                            #[inline(always)]
-                            || {
-                                ws.spec_acc[span.clone()]
-                                    .iter_mut()
-                                    .zip(&ws.t[span])
-                                    .for_each(|(a, t)| *a += t)
-                            },
-                        );
+                        cmul::add_assign(&mut ws.spec_acc[span.clone()], &ws.t[span]);
                     }
                 }
                 if !confocal {
@@ -654,6 +631,8 @@ impl Plan {
                         .inverse_x(&mut ws.t, &mut ws.g, xs.clone(), lines, &mut ws.scratch);
                 }
             }
+            // The kernel's table at the next frequency.
+            cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             if confocal {
                 continue;
             }
