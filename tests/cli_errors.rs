@@ -443,6 +443,46 @@ fn outputs_never_replace_inputs() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// Output paths that cannot be written, or that name the capture twice, are refused before a render
+/// starts, and so is a checkpoint interval no `Duration` can hold.
+#[test]
+fn render_refuses_bad_outputs_up_front() {
+    let d = dir("outs");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml");
+    let at = |name: &str| d.join(name).to_str().unwrap().to_string();
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", scene, "--grid", "8", "--spp", "1"];
+        args.extend_from_slice(extra);
+        args.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let run = |extra: &[&str], needles: &[&str]| {
+        let args = render(extra);
+        fails(
+            &args.iter().map(String::as_str).collect::<Vec<_>>(),
+            needles,
+        );
+    };
+    run(&["--out", d.to_str().unwrap()], &["is a folder"]);
+    run(&["--out", &at("no/such/q.h5")], &["does not exist"]);
+    let spelled = format!(
+        "{}/../{}/q.h5",
+        d.display(),
+        d.file_name().unwrap().to_str().unwrap()
+    );
+    run(
+        &["--out", &at("q.h5"), "--truth", &spelled],
+        &["the same file"],
+    );
+    for every in ["inf", "1e300", "NaN"] {
+        run(
+            &["--out", &at("q.h5"), "--checkpoint-every", every],
+            &["one year"],
+        );
+    }
+    no_leftovers(&d, &[]);
+    std::fs::remove_dir_all(&d).ok();
+}
+
 /// clap's whole message, on one line: which argument is missing, which values are valid.
 #[test]
 fn usage_errors_say_what_is_wrong() {

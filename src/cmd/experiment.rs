@@ -16,7 +16,7 @@ pub enum StudyArg {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ScaleArg {
-    /// 32² laser points, ~1 000 bins (minutes on a laptop).
+    /// 64² laser points, 1 200 bins (minutes on a laptop).
     Quick,
     /// The paper's 128² laser points × 4096 bins (CPU-hours).
     Paper,
@@ -53,8 +53,8 @@ pub struct ExperimentArgs {
     /// Render tasks per capture (for spreading one capture over several machines).
     #[arg(long, default_value_t = 1)]
     pub shards: usize,
-    /// Paths per laser point (default: the scale's: quick 512 for the Z, 256 for the shelf).
-    #[arg(long)]
+    /// Paths per laser point (default: the scale's: quick 256 for the Z, 128 for the shelf).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub spp: Option<u64>,
     /// Folder with z-letter.toml and shelf.toml.
     #[arg(long, default_value = "scenes")]

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 #[derive(Args)]
 #[command(after_help = "Examples:\n  \
 murk render scenes/t-wall-medium.toml --out fog.h5 --spp 64\n  \
-murk render scenes/z-letter.toml --out z.h5 --grid 32 --bins 1024 --set medium.albedo=0.83 --set medium.g=0.7\n  \
+murk render scenes/z-letter.toml --out z.h5 --grid 32 --bins 1024 --set capture.bin_width=0.0036 --set medium.albedo=0.83 --set medium.g=0.7\n  \
 murk render scenes/shelf.toml --out shelf.h5 --truth shelf-truth.h5\n  \
 murk render scenes/z-letter.toml --out part0.h5 --shard 0/4   # then murk merge part*.h5 --out z.h5\n  \
 murk render scenes/z-letter.toml --out z.h5 --resume          # continue from z.h5.ckpt\n  \
@@ -53,7 +53,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "i/N", value_parser = parse_shard)]
     pub shard: Option<(usize, usize)>,
     /// Seconds between checkpoints (OUT.ckpt); 0 disables them.
-    #[arg(long, default_value_t = 60.0, value_name = "SECONDS")]
+    #[arg(long, default_value_t = 60.0, value_name = "SECONDS", value_parser = parse_seconds)]
     pub checkpoint_every: f64,
     /// Continue from OUT.ckpt left by an interrupted run with the same scene, spp, seed and shard.
     #[arg(long)]
@@ -94,6 +94,19 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
+/// A checkpoint interval: finite, 0 ≤ s ≤ one year (a `Duration` cannot hold every float).
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    const YEAR_S: f64 = 365.0 * 86_400.0;
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    if !(0.0..=YEAR_S).contains(&v) {
+        return Err(format!("need 0 ≤ seconds ≤ {YEAR_S} (one year), got {s}"));
+    }
+    Ok(v)
+}
+
 fn checkpoint_path(out: &Path) -> PathBuf {
     let mut p = out.as_os_str().to_owned();
     p.push(".ckpt");
@@ -108,15 +121,17 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let outs = render_outputs(&a.out, a.albedos.as_deref());
     for out in &outs {
+        murk_io::check_output(out)?;
         murk_io::refuse_overwrite(out, &[&a.scene])?;
     }
     if let Some(t) = &a.truth {
         let inputs: Vec<&Path> = std::iter::once(a.scene.as_path())
             .chain(outs.iter().map(PathBuf::as_path))
             .collect();
+        murk_io::check_output(t)?;
         murk_io::refuse_overwrite(t, &inputs)?;
         anyhow::ensure!(
-            !outs.contains(t),
+            !outs.iter().any(|o| murk_io::same_target(o, t)),
             "{}: --truth and the capture name the same file",
             t.display()
         );
@@ -157,8 +172,12 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         spp,
         seed: a.seed,
         shard: a.shard,
-        checkpoint: (a.checkpoint_every > 0.0).then(|| ckpt.clone()),
-        checkpoint_every: Duration::from_secs_f64(a.checkpoint_every.max(0.0)),
+        // With checkpoints off, --resume still reads an existing one (adding to it only at the end).
+        checkpoint: (a.checkpoint_every > 0.0 || (a.resume && ckpt.exists())).then(|| ckpt.clone()),
+        checkpoint_every: match a.checkpoint_every {
+            s if s > 0.0 => Duration::from_secs_f64(s),
+            _ => Duration::MAX,
+        },
     };
     let bar = ProgressBar::new(n_units as u64);
     if quiet || !std::io::stderr().is_terminal() {

@@ -94,6 +94,45 @@ pub fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
     Ok(())
 }
 
+/// Refuses, before any work is done, an output path that cannot be written: an existing folder, or a
+/// file in a folder that does not exist (otherwise a long render fails only when it writes).
+pub fn check_output(out: &Path) -> Result<()> {
+    if out.is_dir() {
+        return Err(Error::param(format!(
+            "{}: is a folder; the output must be a file path",
+            out.display()
+        )));
+    }
+    let parent = folder_of(out);
+    if !parent.is_dir() {
+        return Err(Error::param(format!(
+            "{}: the folder {} does not exist",
+            out.display(),
+            parent.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name the same file, whether or not it exists yet (`./x`, `d/../x` and `x`
+/// are one file): each path's folder is resolved, then the file names compared.
+pub fn same_target(a: &Path, b: &Path) -> bool {
+    let resolved = |p: &Path| {
+        let folder = std::fs::canonicalize(folder_of(p)).unwrap_or_else(|_| folder_of(p));
+        p.file_name().map(|name| folder.join(name))
+    };
+    file_id(a).is_ok_and(|id| file_id(b).is_ok_and(|other| other == id))
+        || matches!((resolved(a), resolved(b)), (Some(x), Some(y)) if x == y)
+}
+
+/// The folder a file path lies in (`.` for a bare name).
+fn folder_of(p: &Path) -> std::path::PathBuf {
+    match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    }
+}
+
 fn file_id(p: &Path) -> std::io::Result<(u64, u64)> {
     #[cfg(unix)]
     {

@@ -640,6 +640,12 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
                 "not a shard of `murk render --shard` (no `shard: i/N` in scene_info)",
             )
         })?;
+        if n == 0 || i >= n {
+            return Err(Error::format(
+                path,
+                format!("shard {i}/{n} in scene_info: need 0 ≤ i < N"),
+            ));
+        }
         Ok((base, i, n))
     };
     let (base, _, n) = split(p0, first)?;

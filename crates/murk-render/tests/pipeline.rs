@@ -73,6 +73,14 @@ fn seeded_render_is_bitwise_reproducible() {
         .unwrap_err()
         .to_string()
         .contains("missing"));
+    // A part whose scene_info claims an impossible shard is refused, naming it (not an index panic).
+    for bad in ["4/4", "5/4", "0/0"] {
+        let mut forged = parts.clone();
+        let info = &mut forged[3].1.scene_info;
+        *info = info.replace("3/4", bad);
+        let err = merge(&forged).unwrap_err().to_string();
+        assert!(err.contains("part3") && err.contains(bad), "{bad}: {err}");
+    }
 
     // A checkpoint cut in the middle of a record (a kill) resumes to the same numbers.
     let dir = std::env::temp_dir().join(format!("murk-render-ckpt-{}", std::process::id()));

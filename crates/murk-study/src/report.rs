@@ -283,7 +283,7 @@ fn esc(s: &str) -> String {
 
 /// The choices the study makes where the paper is silent or inconsistent.
 const CHOICES: &[&str] = &[
-    "Wall spacing: the paper gives Δc = 0.11 m with 128² points, which implies a 14 m diffuser; we keep the 2 m diffuser of its Fig. 2 (Δc = 2/128 m at paper scale, 2/32 m at quick scale) and λ0 = 4Δc.",
+    "Wall spacing: the paper gives Δc = 0.11 m with 128² points, which implies a 14 m diffuser; we keep the 2 m diffuser of its Fig. 2 (Δc = 2/128 m at paper scale, 2/64 m at quick scale) and λ0 = 4Δc.",
     "Time window: the paper's 4096 bins of 3 ps cover 3.69 m of path, less than the path to a target at 2 m and back in fog; at paper scale we keep 4096 bins but of 1.5 mm (5 ps) from 2.0 m (quick scale: 1200 bins of 5 mm from 2.0 m), so that both window ends lie at least 6σ of the longest pulse from every voxel's paths. The tail_share column says how much fog signal is still there when the window ends: the largest signal in the last 5 % of bins over the peak.",
     "Albedo sweeps: the five cells of a row of Fig. 3b or 3c are one render whose paths serve every albedo (the renderer's sampling does not depend on the albedo in fog); each capture equals, to float rounding, a render of that albedo alone with the same seed. The CPU column gives each cell a fifth of its row's render.",
     "Fig. 3b: the paper shows one cell twice; we render every μt × α cell.",
