@@ -53,14 +53,6 @@ impl Reconstruction {
         (self.volume.centre(ix, iy, iz).to_array(), v)
     }
 
-    /// Maximum along depth, [nx][ny] row-major.
-    pub fn max_projection(&self) -> Vec<f32> {
-        self.intensity
-            .chunks(self.volume.z.n)
-            .map(|c| c.iter().copied().fold(f32::MIN, f32::max))
-            .collect()
-    }
-
     /// The capture, the method's rows, the volume, the peak and the time as (key, value) rows: what
     /// `murk reconstruct` prints and records next to the volume.
     pub fn summary(&self, capture: &str, kind: CaptureKind, secs: f64) -> Vec<(String, String)> {

@@ -221,7 +221,10 @@ impl std::str::FromStr for Gate {
             "off" => Gate::Off,
             "auto" => Gate::Auto,
             t => match t.parse::<f64>() {
-                Ok(p) if p.is_finite() => Gate::At(p),
+                Ok(p) if p.is_finite() => {
+                    murk_core::Limits::get().length(&format!("gate '{t}'"), p)?;
+                    Gate::At(p)
+                }
                 _ => {
                     return Err(Error::param(format!(
                         "gate '{t}': expected a path in metres, auto or off"
@@ -372,6 +375,13 @@ impl Plan {
             return Err(Error::param(
                 "the capture's points or time axis differ from the ones the plan was made for",
             ));
+        }
+        if let Some(open_m) = self.open_m.filter(|&g| g >= cap.time.end_m()) {
+            // Every bin would be gated away: a volume of zeros would look like a result.
+            return Err(Error::param(format!(
+                "the gate at {open_m:.3} m opens after the capture's window ends ({:.3} m): nothing would be left",
+                cap.time.end_m()
+            )));
         }
         let gated = apply_gate(&mut cap, self.open_m, self.edge_m);
         let mut end = handle_end(&mut cap, self.window_end, self.edge_m);

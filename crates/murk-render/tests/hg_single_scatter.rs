@@ -4,7 +4,7 @@
 //! z ∈ [0.001, 3] m, no hidden objects and `max_depth = 1`: the histogram is single scattering alone,
 //! H(L) = ∫ (cos_l / π r_l²) T_l σs p_g(cos θ) T_s (cos_s / π r_s²) δ(L − r_l − r_s) dV
 //! in murk's normalisation (unit-power laser spot of intensity cos/π, SPAD importance cos/π, see
-//! `integrator.rs`; a bin holds the integral of H over its path lengths, as in `correctness.rs`). The
+//! `integrator/mod.rs`; a bin holds the integral of H over its path lengths, as in `correctness.rs`). The
 //! reference integrates that over the ellipsoids r_l + r_s = L with its own HG formula, so a wrong phase
 //! sign, angle convention or normalisation in any of the renderer's medium techniques moves the sums of
 //! whole time windows: with x_l = x_s every path scatters straight back, where the sign of g matters

@@ -343,12 +343,12 @@ pub fn median(values: &[f64]) -> f64 {
 }
 
 /// Mean and sample standard deviation (n − 1 denominator) of the finite values: `(NaN, NaN)` for
-/// none, a standard deviation of 0 for one.
+/// none, and a NaN standard deviation for one (a spread of one value is undefined, not zero).
 pub fn mean_std(values: &[f64]) -> (f64, f64) {
     let m = moments(values.iter().copied().filter(|v| v.is_finite()));
     match m.n {
         0 => (f64::NAN, f64::NAN),
-        1 => (m.mean, 0.0),
+        1 => (m.mean, f64::NAN),
         n => (m.mean, (m.m2 / (n - 1) as f64).sqrt()),
     }
 }
@@ -756,7 +756,8 @@ mod tests {
         let (mean, std) = mean_std(&[2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0, f64::NAN]);
         assert_close(mean, 5.0, 1e-12);
         assert_close(std, (32.0f64 / 7.0).sqrt(), 1e-12);
-        assert_eq!(mean_std(&[3.5]), (3.5, 0.0));
+        let (one, spread) = mean_std(&[3.5]);
+        assert!(one == 3.5 && spread.is_nan(), "{one} ± {spread}");
         let (mean, std) = mean_std(&[f64::NEG_INFINITY]);
         assert!(mean.is_nan() && std.is_nan());
     }

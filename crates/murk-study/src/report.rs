@@ -367,7 +367,10 @@ fn write_html(
         );
         for m in &METRICS {
             let (mean, sd) = stat(&r.by_compensation[1].1, m.get);
-            let _ = write!(h, "<td>{} ± {}</td>", num(mean), num(sd));
+            let _ = match sd.is_nan() {
+                true => write!(h, "<td>{}</td>", num(mean)),
+                false => write!(h, "<td>{} ± {}</td>", num(mean), num(sd)),
+            };
         }
         h.push_str("</tr>\n");
     }

@@ -227,10 +227,11 @@ impl Plan {
         [pick(X, &self.rx), pick(Y, &self.ry)]
     }
 
-    /// Whether some frequencies are read by Kaiser–Bessel kernels (see [`Plan::kernels`]).
+    /// Whether the field of wavenumber `k` on planes at `dz` is read by Kaiser–Bessel kernels along
+    /// both axes (see [`Plan::kernels`]).
     #[cfg(test)]
-    pub fn reads_kaiser_bessel(&self) -> bool {
-        !self.kb[X].is_empty() && !self.kb[Y].is_empty()
+    pub fn reads_kaiser_bessel(&self, k: f64, dz: f64) -> bool {
+        self.kernels(k, dz).iter().all(Option::is_some)
     }
 
     /// Whether the kernel's spectrum is folded (see [`Fold`]).
