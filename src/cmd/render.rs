@@ -88,9 +88,7 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
             .parse()
             .map_err(|_| format!("'{n}' is not a shard count"))?,
     );
-    if n == 0 || i >= n {
-        return Err(format!("need 0 ≤ i < N, got {i}/{n}"));
-    }
+    murk_render::check_shard(i, n)?;
     Ok((i, n))
 }
 

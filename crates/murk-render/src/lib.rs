@@ -25,7 +25,8 @@ pub use integrator::{Endpoint, Sampler, Tracer};
 pub use medium::{Medium, Phase};
 pub use overrides::Overrides;
 pub use render::{
-    fingerprint, merge, render_key, render_outputs, scene_info, sweep_output, Plan, RenderOptions,
+    check_shard, fingerprint, merge, render_key, render_outputs, scene_info, sweep_output, Plan,
+    RenderOptions,
 };
 pub use scene::{
     CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, ObjectDef, Relay, RelayDef, RelayKind,

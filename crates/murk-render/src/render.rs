@@ -460,9 +460,7 @@ impl<'a> Plan<'a> {
             return Err(Error::param("spp must be at least 1"));
         }
         if let Some((i, n)) = opt.shard {
-            if n == 0 || i >= n {
-                return Err(Error::param(format!("shard {i}/{n}: need 0 ≤ i < N")));
-            }
+            check_shard(i, n).map_err(Error::param)?;
         }
         let units = self.shard_units(opt.shard);
         let total = units.len();
@@ -616,6 +614,14 @@ fn shard_line((i, n): (usize, usize)) -> String {
 const SWEEP_KEY: &str = "albedo_sweep: ";
 const ALBEDO_KEY: &str = "albedo: ";
 
+/// The one rule for shard `i` of `n` (render, merge and the CLI's parser): 0 ≤ i < n.
+pub fn check_shard(i: usize, n: usize) -> std::result::Result<(), String> {
+    match n > 0 && i < n {
+        true => Ok(()),
+        false => Err(format!("shard {i}/{n}: need 0 ≤ i < N")),
+    }
+}
+
 /// Sums shard parts into the capture an unsharded render gives, bit for bit: shards own disjoint
 /// histograms, so each sum adds exact zeros.
 pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
@@ -640,12 +646,7 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
                 "not a shard of `murk render --shard` (no `shard: i/N` in scene_info)",
             )
         })?;
-        if n == 0 || i >= n {
-            return Err(Error::format(
-                path,
-                format!("shard {i}/{n} in scene_info: need 0 ≤ i < N"),
-            ));
-        }
+        check_shard(i, n).map_err(|e| Error::format(path, format!("{e} in scene_info")))?;
         Ok((base, i, n))
     };
     let (base, _, n) = split(p0, first)?;
