@@ -448,7 +448,22 @@ fn outputs_never_replace_inputs() {
     fails(&["reconstruct", g, "--out", &other], &["replace the input"]);
     fails(&["merge", g, "--out", g], &["replace the input"]);
     assert_eq!(std::fs::read(&good).unwrap(), before);
-    no_leftovers(&d, &["good.h5"]);
+    // --png naming a file is refused before anything is reconstructed or written.
+    let note = d.join("note.txt");
+    std::fs::write(&note, "keep").unwrap();
+    let v = d.join("v.npy");
+    fails(
+        &[
+            "reconstruct",
+            g,
+            "--out",
+            v.to_str().unwrap(),
+            "--png",
+            note.to_str().unwrap(),
+        ],
+        &["note.txt", "--png needs a folder"],
+    );
+    no_leftovers(&d, &["good.h5", "note.txt"]);
     std::fs::remove_dir_all(&d).ok();
 }
 
@@ -488,6 +503,24 @@ fn render_refuses_bad_outputs_up_front() {
             &["one year"],
         );
     }
+    // Magnitudes that would run for ever or start more threads than the OS holds.
+    run(
+        &["--out", &at("q.h5"), "--threads", "100000"],
+        &["at most 1024"],
+    );
+    for budget in ["1e300", "0", "inf"] {
+        let args = ["render", scene, "--grid", "8", "--out", &at("q.h5")];
+        fails(
+            &[&args[..], &["--time-budget", budget]].concat(),
+            &["one year"],
+        );
+    }
+    let mut args = render(&["--out", &at("q.h5")]);
+    args[5] = "2000000000000".into(); // --spp beyond 2^40
+    fails(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["--spp", "2000000000000"],
+    );
     no_leftovers(&d, &[]);
     std::fs::remove_dir_all(&d).ok();
 }

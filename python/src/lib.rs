@@ -103,7 +103,7 @@ pub(crate) fn compute<T: Send>(
     let pool = match threads {
         Some(n) => Some(
             rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
+                .num_threads(murk_core::Limits::threads(n).map_err(to_py)?)
                 .build()
                 .map_err(|e| error("Error", format!("cannot start {n} worker threads: {e}")))?,
         ),

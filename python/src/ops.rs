@@ -12,7 +12,6 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
-use std::time::Duration;
 
 /// The keywords of `murk.synth`, which are `murk synth`'s flags.
 #[derive(FromPyObject)]
@@ -100,14 +99,14 @@ impl RenderArgs {
         Plan::with_albedos(scene, self.albedos.as_deref())
     }
 
-    fn options(&self, scene: &Scene) -> RenderOptions {
-        RenderOptions {
+    fn options(&self, scene: &Scene) -> murk_core::Result<RenderOptions> {
+        Ok(RenderOptions {
             spp: self.spp.unwrap_or(scene.settings.spp),
             seed: self.seed,
             shard: self.shard,
             checkpoint: self.checkpoint.clone(),
-            checkpoint_every: Duration::from_secs_f64(self.checkpoint_every.max(0.0)),
-        }
+            checkpoint_every: murk_render::checkpoint_interval(self.checkpoint_every)?,
+        })
     }
 }
 
@@ -125,21 +124,16 @@ pub fn render(
 ) -> PyResult<Vec<Capture>> {
     let caps = compute(py, progress, threads, |t: &Ticker| {
         let scene = args.scene(&scene)?;
-        let caps = args.plan(&scene)?.render_all_until(
-            &args.options(&scene),
+        let outs = args.out.as_deref().map_or(Vec::new(), |out| {
+            murk_render::render_outputs(out, args.albedos.as_deref())
+        });
+        let caps = args.plan(&scene)?.render_stored(
+            &args.options(&scene)?,
+            &outs,
+            &|path, cap| murk_io::write_capture(path, cap),
             &|done, total| t.count(done as u64, total as u64),
             t.stop(),
         )?;
-        if let Some(out) = &args.out {
-            let outs = murk_render::render_outputs(out, args.albedos.as_deref());
-            for (o, cap) in outs.iter().zip(&caps) {
-                murk_io::write_capture(o, cap)?;
-            }
-        }
-        if let Some(c) = &args.checkpoint {
-            // The capture is complete; a stale checkpoint would only mislead a later resume.
-            let _ = std::fs::remove_file(c);
-        }
         Ok(caps)
     })?;
     Ok(caps.into_iter().map(|cap| Capture { cap }).collect())
@@ -159,7 +153,7 @@ pub fn render_part(
     compute(py, progress, threads, |t: &Ticker| {
         let scene = args.scene(&scene)?;
         args.plan(&scene)?.render_part(
-            &args.options(&scene),
+            &args.options(&scene)?,
             &|done, total| t.count(done as u64, total as u64),
             t.stop(),
         )
@@ -180,7 +174,7 @@ pub fn assemble(
     let caps = compute(py, None, None, |_| {
         let scene = args.scene(&scene)?;
         args.plan(&scene)?
-            .assemble_all(args.options(&scene).spp, args.seed, &parts)
+            .assemble_all(args.options(&scene)?.spp, args.seed, &parts)
     })?;
     Ok(caps.into_iter().map(|cap| Capture { cap }).collect())
 }

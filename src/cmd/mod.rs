@@ -7,3 +7,12 @@ pub mod progress;
 pub mod reconstruct;
 pub mod render;
 pub mod synth;
+
+/// A `--threads` count murk will start (0: one per core).
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a thread count"))?;
+    murk_core::Limits::threads(n).map_err(|e| e.to_string())
+}

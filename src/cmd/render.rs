@@ -1,12 +1,15 @@
 //! `murk render` and `murk merge`: Monte Carlo captures of scene files (see `scenes/`).
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use murk_render::{merge, render_outputs, Overrides, Plan, RenderOptions, Scene};
+use murk_render::{
+    checkpoint_interval, checkpoint_path, merge, render_outputs, Overrides, Plan, RenderOptions,
+    Scene,
+};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 #[derive(Args)]
 #[command(after_help = "Examples:\n  \
@@ -23,16 +26,16 @@ pub struct RenderArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Paths per traced wall point (per laser point for a laser grid); default: the scene's [render] spp.
-    #[arg(long, conflicts_with = "time_budget")]
+    #[arg(long, conflicts_with = "time_budget", value_parser = clap::value_parser!(u64).range(1..=murk_render::MAX_SPP))]
     pub spp: Option<u64>,
     /// Pick the spp that fits this many seconds (measured on a short pilot run, then rendered deterministically).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_budget)]
     pub time_budget: Option<f64>,
     /// Random seed; a seeded render gives identical bytes for any --threads and any sharding.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cmd::parse_threads)]
     pub threads: Option<usize>,
     /// Override the grid with N × N points.
     #[arg(long, value_name = "N")]
@@ -92,23 +95,25 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
-/// A checkpoint interval: finite, 0 ≤ s ≤ one year (a `Duration` cannot hold every float).
+/// A time budget: 0 < seconds ≤ one year.
+fn parse_budget(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= murk_render::MAX_SECONDS => Ok(v),
+        _ => Err(format!(
+            "need 0 < seconds ≤ {} (one year), got {s}",
+            murk_render::MAX_SECONDS
+        )),
+    }
+}
+
+/// A checkpoint interval in seconds, as the library takes it.
 fn parse_seconds(s: &str) -> Result<f64, String> {
-    const YEAR_S: f64 = 365.0 * 86_400.0;
     let v: f64 = s
         .trim()
         .parse()
         .map_err(|_| format!("'{s}' is not a number of seconds"))?;
-    if !(0.0..=YEAR_S).contains(&v) {
-        return Err(format!("need 0 ≤ seconds ≤ {YEAR_S} (one year), got {s}"));
-    }
+    murk_render::checkpoint_interval(v).map_err(|e| e.to_string())?;
     Ok(v)
-}
-
-fn checkpoint_path(out: &Path) -> PathBuf {
-    let mut p = out.as_os_str().to_owned();
-    p.push(".ckpt");
-    PathBuf::from(p)
 }
 
 pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
@@ -148,12 +153,10 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
 }
 
 fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow::Result<()> {
-    let scene = plan.scene;
-    let n_units = plan.shard_units(a.shard).len();
     let spp = match (a.spp, a.time_budget) {
         (Some(s), _) => s,
-        (None, Some(b)) => spp_for_budget(plan, b, n_units)?,
-        (None, None) => scene.settings.spp,
+        (None, Some(b)) => plan.spp_for_budget(b, a.shard)?,
+        (None, None) => plan.scene.settings.spp,
     };
     let ckpt = checkpoint_path(&a.out);
     if !a.resume && ckpt.exists() {
@@ -171,13 +174,10 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         seed: a.seed,
         shard: a.shard,
         // With checkpoints off, --resume still reads an existing one (adding to it only at the end).
-        checkpoint: (a.checkpoint_every > 0.0 || (a.resume && ckpt.exists())).then(|| ckpt.clone()),
-        checkpoint_every: match a.checkpoint_every {
-            s if s > 0.0 => Duration::from_secs_f64(s),
-            _ => Duration::MAX,
-        },
+        checkpoint: (a.checkpoint_every > 0.0 || (a.resume && ckpt.exists())).then_some(ckpt),
+        checkpoint_every: checkpoint_interval(a.checkpoint_every)?,
     };
-    let bar = ProgressBar::new(n_units as u64);
+    let bar = ProgressBar::new(plan.shard_units(a.shard).len() as u64);
     if quiet || !std::io::stderr().is_terminal() {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
@@ -187,16 +187,15 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
     );
     let t0 = Instant::now();
     let never = std::sync::atomic::AtomicBool::new(false);
-    let caps = plan.render_all_until(&opt, &|done, _| bar.set_position(done as u64), &never)?;
+    plan.render_stored(
+        &opt,
+        outs,
+        &|out, cap| murk_io::write_capture(out, cap),
+        &|done, _| bar.set_position(done as u64),
+        &never,
+    )?;
     bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
-    for (out, cap) in outs.iter().zip(&caps) {
-        murk_io::write_capture(out, cap)?;
-    }
-    if opt.checkpoint.is_some() {
-        // The capture is safely written; a stale checkpoint would only mislead a later --resume.
-        let _ = std::fs::remove_file(&ckpt);
-    }
     if !quiet {
         let points = plan.shard_points(a.shard);
         let paths = points as f64 * spp as f64;
@@ -211,28 +210,6 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         );
     }
     Ok(())
-}
-
-/// Times a few units at low spp and returns the spp that fills 90 % of `budget_s` for `n_units`.
-fn spp_for_budget(plan: &Plan, budget_s: f64, n_units: usize) -> anyhow::Result<u64> {
-    if !(budget_s.is_finite() && budget_s > 0.0) {
-        bail!("--time-budget must be a positive number of seconds, got {budget_s}");
-    }
-    let threads = rayon::current_num_threads();
-    let pilot: Vec<usize> = (0..threads * 2)
-        .map(|k| k * plan.n_units() / (threads * 2))
-        .collect();
-    let pilot_spp = 8;
-    let t0 = Instant::now();
-    use rayon::prelude::*;
-    pilot.par_iter().for_each(|&u| {
-        plan.render_unit(u, pilot_spp, u64::MAX);
-    });
-    // CPU seconds per unit (a tile of traced points) and sample.
-    let per_unit_spp =
-        t0.elapsed().as_secs_f64() * threads as f64 / (pilot.len() as f64 * pilot_spp as f64);
-    let spp = (0.9 * budget_s * threads as f64 / (n_units as f64 * per_unit_spp)).floor();
-    Ok((spp as u64).max(1))
 }
 
 pub fn run_merge(a: MergeArgs, quiet: bool) -> anyhow::Result<()> {

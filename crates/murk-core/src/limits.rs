@@ -15,6 +15,20 @@ pub struct Limits {
 }
 
 impl Limits {
+    /// Most worker threads murk starts: far above any machine's cores, far below what the OS can run.
+    pub const MAX_THREADS: usize = 1024;
+
+    /// A worker thread count `n` (0: one per core) that murk will start.
+    pub fn threads(n: usize) -> Result<usize> {
+        if n > Self::MAX_THREADS {
+            return Err(Error::Limits(format!(
+                "{n} worker threads; murk starts at most {}",
+                Self::MAX_THREADS
+            )));
+        }
+        Ok(n)
+    }
+
     pub fn get() -> Limits {
         let max_bytes = std::env::var("MURK_MAX_BYTES")
             .ok()

@@ -27,6 +27,33 @@ pub struct RenderOptions {
     pub checkpoint_every: Duration,
 }
 
+/// Longest interval or budget in seconds that murk takes: one year (a `Duration` cannot hold every
+/// float, and anything longer is a typo).
+pub const MAX_SECONDS: f64 = 365.0 * 86_400.0;
+
+/// Most paths per traced point one render takes: 2^40 (about 10⁷ CPU-years at a million paths per
+/// second per point; more is a typo, and would overflow the per-pixel path counts).
+pub const MAX_SPP: u64 = 1 << 40;
+
+/// The interval between checkpoint appends, from seconds: 0 appends only when the render stops or
+/// ends. Refuses negative, non-finite and longer-than-a-year values.
+pub fn checkpoint_interval(seconds: f64) -> Result<Duration> {
+    match seconds {
+        0.0 => Ok(Duration::MAX),
+        s if s > 0.0 && s <= MAX_SECONDS => Ok(Duration::from_secs_f64(s)),
+        s => Err(Error::param(format!(
+            "a checkpoint interval needs 0 ≤ seconds ≤ {MAX_SECONDS} (one year), got {s}"
+        ))),
+    }
+}
+
+/// The checkpoint a render to `out` keeps: `out` with `.ckpt` appended.
+pub fn checkpoint_path(out: &Path) -> PathBuf {
+    let mut p = out.as_os_str().to_owned();
+    p.push(".ckpt");
+    PathBuf::from(p)
+}
+
 /// The mapping from work units to wall points and histograms.
 pub struct Plan<'a> {
     pub scene: &'a Scene,
@@ -305,28 +332,21 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// Renders (this shard of) the capture. `progress(done, total)` is called after each batch of units.
+    /// Renders (this shard of) the capture of a plain plan. `progress(done, total)` is called after
+    /// each batch of units.
     pub fn render(
         &self,
         opt: &RenderOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<Capture> {
-        self.render_until(opt, progress, &AtomicBool::new(false))
-    }
-
-    /// As [`Plan::render`], but no unit starts once `stop` is set (the Python module's Ctrl-C): the
-    /// call then returns an error, and the checkpoint keeps every unit finished before it.
-    pub fn render_until(
-        &self,
-        opt: &RenderOptions,
-        progress: &(dyn Fn(usize, usize) + Sync),
-        stop: &AtomicBool,
-    ) -> Result<Capture> {
         self.plain_only()?;
-        Ok(self.render_all_until(opt, progress, stop)?.remove(0))
+        Ok(self
+            .render_all_until(opt, progress, &AtomicBool::new(false))?
+            .remove(0))
     }
 
-    /// As [`Plan::render_until`], with one capture per albedo of a sweep (one for a plain plan).
+    /// One capture per albedo of a sweep (one for a plain plan). No unit starts once `stop` is set
+    /// (Ctrl-C): the call then returns an error, and the checkpoint keeps every unit finished before it.
     pub fn render_all_until(
         &self,
         opt: &RenderOptions,
@@ -337,6 +357,53 @@ impl<'a> Plan<'a> {
         self.run(opt, progress, stop, Some(&mut caps))?;
         caps.iter_mut().for_each(|c| self.finish(c));
         Ok(caps)
+    }
+
+    /// As [`Plan::render_all_until`], then writes capture k to `outs[k]` with `write` (none when `outs`
+    /// is empty) and removes `opt.checkpoint`: once the captures are stored, a stale checkpoint could
+    /// only mislead a later resume. An interrupted or failed render keeps its checkpoint.
+    pub fn render_stored(
+        &self,
+        opt: &RenderOptions,
+        outs: &[PathBuf],
+        write: &dyn Fn(&Path, &Capture) -> Result<()>,
+        progress: &(dyn Fn(usize, usize) + Sync),
+        stop: &AtomicBool,
+    ) -> Result<Vec<Capture>> {
+        let caps = self.render_all_until(opt, progress, stop)?;
+        for (out, cap) in outs.iter().zip(&caps) {
+            write(out, cap)?;
+        }
+        if let Some(ckpt) = &opt.checkpoint {
+            // Failing to remove it is harmless: its header still matches only this render.
+            let _ = std::fs::remove_file(ckpt);
+        }
+        Ok(caps)
+    }
+
+    /// The spp that fills 90 % of `budget_s` seconds for the units of `shard` on the current rayon
+    /// pool, timed on a short pilot run of a few units at 8 spp.
+    pub fn spp_for_budget(&self, budget_s: f64, shard: Option<(usize, usize)>) -> Result<u64> {
+        if !(budget_s.is_finite() && budget_s > 0.0 && budget_s <= MAX_SECONDS) {
+            return Err(Error::param(format!(
+                "a time budget needs 0 < seconds ≤ {MAX_SECONDS} (one year), got {budget_s}"
+            )));
+        }
+        let n_units = self.shard_units(shard).len();
+        let threads = rayon::current_num_threads();
+        let pilot: Vec<usize> = (0..threads * 2)
+            .map(|k| k * self.n_units() / (threads * 2))
+            .collect();
+        let pilot_spp = 8;
+        let t0 = Instant::now();
+        pilot.par_iter().for_each(|&u| {
+            self.render_unit(u, pilot_spp, u64::MAX);
+        });
+        // CPU seconds per unit (a tile of traced points) and sample.
+        let per_unit_spp =
+            t0.elapsed().as_secs_f64() * threads as f64 / (pilot.len() as f64 * pilot_spp as f64);
+        let spp = (0.9 * budget_s * threads as f64 / (n_units as f64 * per_unit_spp)).floor();
+        Ok((spp as u64).clamp(1, MAX_SPP))
     }
 
     /// A sweep's several captures are refused before any work rather than dropped after it.
@@ -456,8 +523,11 @@ impl<'a> Plan<'a> {
         stop: &AtomicBool,
         mut h: Option<&mut [Capture]>,
     ) -> Result<()> {
-        if opt.spp == 0 {
-            return Err(Error::param("spp must be at least 1"));
+        if !(1..=MAX_SPP).contains(&opt.spp) {
+            return Err(Error::param(format!(
+                "spp must be between 1 and {MAX_SPP}, got {}",
+                opt.spp
+            )));
         }
         if let Some((i, n)) = opt.shard {
             check_shard(i, n).map_err(Error::param)?;
@@ -737,10 +807,11 @@ fn read_checkpoint(
     };
     let mut bytes = Vec::new();
     f.read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
-    if bytes.is_empty() {
+    let header = header(key, unit_len);
+    // Empty, or cut inside this render's own header by a kill: nothing was recorded yet.
+    if header.starts_with(&bytes) {
         return Ok(Some(0));
     }
-    let header = header(key, unit_len);
     if !bytes.starts_with(&header) {
         return Err(Error::format(path, refusal(&bytes, key)));
     }
@@ -828,6 +899,7 @@ fn refusal(bytes: &[u8], key: &str) -> String {
                 diffs.join("; ")
             }
         }
+        None if bytes.starts_with(MAGIC) => "its header is cut short or damaged".to_string(),
         None => "it is not a checkpoint of this murk version".to_string(),
     };
     format!("checkpoint of a different render ({what}); delete it or drop --resume")

@@ -108,6 +108,23 @@ fn seeded_render_is_bitwise_reproducible() {
         .unwrap_err()
         .to_string()
         .contains("different render"));
+    // Cut inside its header (a kill as the render started), it holds nothing and starts afresh;
+    // a damaged header is refused as such, not as another murk version's.
+    let header_len = std::fs::read(&ck).unwrap().len() as u64 - 6 * (8 + 4 * 2 * 64);
+    let f = std::fs::OpenOptions::new().write(true).open(&ck).unwrap();
+    f.set_len(20).unwrap();
+    drop(f);
+    let fresh = plan.render(&opts(None, Some(ck.clone())), &|_, _| {});
+    assert_eq!(fresh.unwrap().h, one.h);
+    let mut bytes = std::fs::read(&ck).unwrap();
+    assert_eq!(bytes.len() as u64, header_len + 6 * (8 + 4 * 2 * 64));
+    bytes[24..32].copy_from_slice(&u64::MAX.to_le_bytes());
+    std::fs::write(&ck, &bytes).unwrap();
+    let e = plan
+        .render(&opts(None, Some(ck.clone())), &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("header is cut short or damaged"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -200,7 +217,7 @@ fn checkpoint_parts_assemble_bitwise() {
     let ck = dir.join("stopped.ckpt");
     let stop = AtomicBool::new(false);
     let r = with_threads(1, || {
-        plan.render_until(
+        plan.render_all_until(
             &long(&ck),
             &|done, _| stop.store(done >= 2, Ordering::Relaxed),
             &stop,
@@ -481,4 +498,65 @@ fn shards_partition_the_units_evenly() {
             );
         }
     }
+}
+
+/// `render_stored` hands each capture to the writer and then removes the checkpoint; a failed write
+/// keeps it, so a resume finds every unit. Absurd spp and checkpoint intervals are refused in one line.
+#[test]
+fn stored_renders_drop_their_checkpoint_only_once_written() {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Mutex;
+    let s = scene();
+    let plan = Plan::new(&s);
+    let never = AtomicBool::new(false);
+    let dir = std::env::temp_dir().join(format!("murk-render-stored-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let ck = dir.join("s.ckpt");
+    let out = dir.join("s.h5");
+    let written = Mutex::new(Vec::new());
+    let caps = plan
+        .render_stored(
+            &opts(None, Some(ck.clone())),
+            std::slice::from_ref(&out),
+            &|p, c| {
+                written.lock().unwrap().push((p.to_path_buf(), c.h.clone()));
+                Ok(())
+            },
+            &|_, _| {},
+            &never,
+        )
+        .unwrap();
+    let written = written.into_inner().unwrap();
+    assert_eq!(written.len(), 1);
+    assert_eq!((&written[0].0, &written[0].1), (&out, &caps[0].h));
+    assert!(!ck.exists(), "the checkpoint outlived the stored capture");
+
+    let failed = plan.render_stored(
+        &opts(None, Some(ck.clone())),
+        std::slice::from_ref(&out),
+        &|p, _| Err(murk_core::Error::io(p, std::io::Error::other("disk full"))),
+        &|_, _| {},
+        &never,
+    );
+    assert!(failed.unwrap_err().to_string().contains("disk full"));
+    assert!(ck.exists(), "a failed write removed the checkpoint");
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    let mut huge = opts(None, None);
+    huge.spp = murk_render::MAX_SPP + 1;
+    let e = plan.render(&huge, &|_, _| {}).unwrap_err().to_string();
+    assert!(e.contains("spp must be between 1 and"), "{e}");
+    assert_eq!(
+        murk_render::checkpoint_interval(0.0).unwrap(),
+        Duration::MAX
+    );
+    assert_eq!(
+        murk_render::checkpoint_interval(1.5).unwrap(),
+        Duration::from_millis(1500)
+    );
+    for bad in [-1.0, f64::NAN, f64::INFINITY, 1e300] {
+        assert!(murk_render::checkpoint_interval(bad).is_err(), "{bad}");
+    }
+    assert!(plan.spp_for_budget(f64::INFINITY, None).is_err());
+    assert!(plan.spp_for_budget(0.0, None).is_err());
 }

@@ -137,26 +137,21 @@ fn run_task(plan: &Plan, dir: &Path, job: &CaptureJob, t: usize, obs: &dyn Obser
     let task = &job.tasks[t];
     let scene = crate::plan::load_scene(&plan.scenes_dir, job.scene, &job.set)?;
     let out = dir.join(&task.out);
-    let mut ckpt = out.as_os_str().to_owned();
-    ckpt.push(".ckpt");
     let opt = RenderOptions {
         spp: job.spp,
         seed: job.seed,
         shard: task.shard,
-        checkpoint: Some(PathBuf::from(&ckpt)),
+        checkpoint: Some(murk_render::checkpoint_path(&out)),
         checkpoint_every: Duration::from_secs(30),
     };
     let never = AtomicBool::new(false);
-    let render = murk_render::Plan::with_albedos(&scene, job.sweep())?;
-    let caps = render.render_all_until(
+    murk_render::Plan::with_albedos(&scene, job.sweep())?.render_stored(
         &opt,
+        &job.outputs(&out),
+        &|path, cap| murk_io::write_capture(path, cap),
         &|done, total| obs.event(Event::Units { done, total }),
         obs.stop().unwrap_or(&never),
     )?;
-    for (path, cap) in job.outputs(&out).iter().zip(&caps) {
-        murk_io::write_capture(path, cap)?;
-    }
-    let _ = std::fs::remove_file(&ckpt);
     Ok(())
 }
 
@@ -276,7 +271,7 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
         }
         for (seed, (id, ref_id)) in cell.captures.iter().zip(&cell.reference).enumerate() {
             let cap = load(id)?;
-            tails.push(tail_share(&cap));
+            tails.push(cap.end_level());
             let field_key = (id.clone(), cell.lambda_factor.to_bits());
             let field = match shared_fields.get(&field_key) {
                 Some(f) => f.clone(),
@@ -339,25 +334,6 @@ fn pf_field(cap: &Capture, volume: &Volume, lambda_factor: f64) -> Result<Vec<Co
         ..PfParams::default()
     };
     Ok(murk_recon::field(cap, volume, &params, PfForm::Fast, &NoProgress)?.values)
-}
-
-/// The largest signal in the last 5 % of bins over the peak, both of the histograms' sum.
-pub fn tail_share(cap: &Capture) -> f64 {
-    let nt = cap.time.bins;
-    let mut sum = vec![0f64; nt];
-    for h in cap.h.chunks_exact(nt) {
-        sum.iter_mut().zip(h).for_each(|(s, v)| *s += *v as f64);
-    }
-    let peak = sum.iter().cloned().fold(0.0, f64::max);
-    let tail = sum[nt - nt.div_ceil(20)..]
-        .iter()
-        .cloned()
-        .fold(0.0, f64::max);
-    if peak > 0.0 {
-        tail / peak
-    } else {
-        f64::NAN
-    }
 }
 
 /// A truth lattice in the front view's layout (+x on the left, +y up).
