@@ -22,10 +22,10 @@ import murk
 
 
 # Dask's monitors (stack profiler every 10 ms, event-loop ticks every 20 ms, memory and system
-# sampling) kept an idle 2-worker LocalCluster at 0.14 cores, 7 % of a 2-core machine that the renders
-# need; with these values it idles at 0.02. The profiler and system samples feed the dashboard, which
-# murk's LocalCluster does not start; the ticks only warn of a blocked event loop; the memory monitor's
-# spill, pause and terminate checks run every second instead of ten times a second.
+# sampling) take CPU from the renders on small machines (docs/python.md gives the measurement). The
+# profiler and system samples feed the dashboard, which murk's LocalCluster does not start; the ticks
+# only warn of a blocked event loop; the memory monitor's spill, pause and terminate checks run every
+# second instead of ten times a second.
 QUIET_MONITORS = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.tick.interval": "1s",
@@ -40,8 +40,8 @@ def local_cluster(monitors=QUIET_MONITORS, **kwargs):
 
     Dask's nannies set ``MALLOC_TRIM_THRESHOLD_`` in their workers to hand freed Python memory back
     to the system; any fixed threshold also turns off glibc's adaptive mmap threshold, so the
-    renderer's large buffers are mapped and unmapped on every use, which cost it 4-8 % here. Its
-    workers run without it."""
+    renderer's large buffers would be mapped and unmapped on every use. Its workers run without
+    it."""
     import dask
     from dask.distributed import LocalCluster
 

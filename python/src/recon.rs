@@ -102,7 +102,7 @@ impl Args {
                 ],
             )?,
         };
-        let (thickness_m, mu_a, mu_s_prime, n) = self.slab;
+        let (thickness_m, mu_a_per_m, mu_s_prime_per_m, n) = self.slab;
         Ok(Options {
             wavelength,
             cycles: self.cycles,
@@ -131,8 +131,8 @@ impl Args {
             )?,
             slab: SlabParams {
                 thickness_m,
-                mu_a,
-                mu_s_prime,
+                mu_a_per_m,
+                mu_s_prime_per_m,
                 n,
                 ..Default::default()
             },

@@ -173,8 +173,8 @@ impl SlabArgs {
     pub fn slab(&self) -> SlabParams {
         SlabParams {
             thickness_m: self.slab_thickness,
-            mu_a: self.slab_mua,
-            mu_s_prime: self.slab_musp,
+            mu_a_per_m: self.slab_mua,
+            mu_s_prime_per_m: self.slab_musp,
             n: self.slab_n,
             ..Default::default()
         }

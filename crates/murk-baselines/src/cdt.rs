@@ -20,9 +20,9 @@ use rayon::prelude::*;
 pub struct SlabParams {
     pub thickness_m: f64,
     /// Absorption coefficient μa (1/m).
-    pub mu_a: f64,
+    pub mu_a_per_m: f64,
     /// Reduced scattering coefficient μs′ (1/m).
-    pub mu_s_prime: f64,
+    pub mu_s_prime_per_m: f64,
     /// Refractive index (light moves at c/n inside).
     pub n: f64,
     /// Extrapolation length of the boundary condition (m).
@@ -33,8 +33,8 @@ impl Default for SlabParams {
     fn default() -> Self {
         SlabParams {
             thickness_m: 0.0254,
-            mu_a: 0.53,
-            mu_s_prime: 262.0,
+            mu_a_per_m: 0.53,
+            mu_s_prime_per_m: 262.0,
             n: 1.12,
             ze_m: 0.0036,
         }
@@ -110,12 +110,12 @@ impl SlabParams {
     /// K(ρ, t) = a(t)·exp(−ρ²/(4Dvt)): returns (a(t), 4Dvt), the part shared by all ρ.
     fn temporal(&self, t: f64) -> (f64, f64) {
         let v = SPEED_OF_LIGHT_M_PER_S / self.n;
-        let d_coef = 1.0 / (3.0 * (self.mu_a + self.mu_s_prime));
+        let d_coef = 1.0 / (3.0 * (self.mu_a_per_m + self.mu_s_prime_per_m));
         let four_dvt = 4.0 * d_coef * v * t;
         if t <= 0.0 {
             return (0.0, 1.0);
         }
-        let z0 = 1.0 / self.mu_s_prime;
+        let z0 = 1.0 / self.mu_s_prime_per_m;
         let (d, ze) = (self.thickness_m, self.ze_m);
         let dipoles: f64 = (-20..=20)
             .map(|i| {
@@ -127,17 +127,17 @@ impl SlabParams {
             .sum();
         let a = (4.0 * std::f64::consts::PI * d_coef * v).powf(-1.5)
             * t.powf(-2.5)
-            * (-self.mu_a * v * t).exp()
+            * (-self.mu_a_per_m * v * t).exp()
             * dipoles;
         (a, four_dvt)
     }
 
     fn validate(&self) -> Result<()> {
-        let ok = [self.thickness_m, self.mu_s_prime, self.n]
+        let ok = [self.thickness_m, self.mu_s_prime_per_m, self.n]
             .iter()
             .all(|v| v.is_finite() && *v > 0.0)
-            && self.mu_a.is_finite()
-            && self.mu_a >= 0.0
+            && self.mu_a_per_m.is_finite()
+            && self.mu_a_per_m >= 0.0
             && self.ze_m.is_finite()
             && self.ze_m >= 0.0;
         if ok {
@@ -239,7 +239,7 @@ impl CdtPlan {
             "slab",
             format!(
                 "{} m, μa {} /m, μs′ {} /m, n {}, ze {} m",
-                s.thickness_m, s.mu_a, s.mu_s_prime, s.n, s.ze_m
+                s.thickness_m, s.mu_a_per_m, s.mu_s_prime_per_m, s.n, s.ze_m
             ),
         )
         .row("snr", p.snr)

@@ -1,5 +1,5 @@
 //! `murk bench --render`: the renderer's efficiency on the T-letter scenes of docs/benchmarks.md, next to
-//! mitransient 1.3.1 (its figures recorded on this machine in §7.4, or rendered in the same run), and
+//! mitransient 1.3.1 (its figures recorded in docs/benchmarks.md, or rendered in the same run), and
 //! the paper-format Z-letter capture.
 
 use crate::say;
@@ -60,7 +60,7 @@ const CASES: [Case; 3] = [
         mitransient: (0.058, 2.64),
         mit_args: &["--mode", "nlos", "--capture", "single"],
     },
-    // §7.4 gives the confocal error over all bins only; compared over all bins.
+    // mitransient's recorded confocal error is over all bins only; compared over all bins.
     Case {
         file: "t-wall-confocal.toml",
         spp: 1000,

@@ -195,8 +195,8 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
         ))
     })?;
     h.resize(tal_h.len(), 0.0);
-    // tal's [t][histogram] to murk's [histogram][t], blocked (an element-wise strided copy of the
-    // paper format's 268 MB took about a second).
+    // tal's [t][histogram] to murk's [histogram][t], blocked: an element-wise copy would stride
+    // through memory once per value.
     transpose::transpose(&tal_h, &mut h, n_hist, bins);
     drop(tal_h);
 

@@ -168,7 +168,9 @@ fn exhaustive_point_found() {
     let fast = run(&cap, &vol, PfForm::Fast);
     let exact = run(&cap, &vol, PfForm::Exact);
     assert_localised(&fast, "exhaustive fast");
-    assert!(rel_l2(&fast.intensity, &exact.intensity) < 1e-2);
+    // Measured 4.5e-5.
+    let e = rel_l2(&fast.intensity, &exact.intensity);
+    assert!(e < 1e-3, "relative L2 {e}");
 }
 
 /// An exhaustive capture over a depth range that splits into several slabs: the sum over its 64
@@ -244,7 +246,12 @@ fn fast_equals_exact_for_smaller_larger_finer_and_offset_volumes() {
             let fast = run(&cap, vol, PfForm::Fast);
             let exact = run(&cap, vol, PfForm::Exact);
             let e = rel_l2(&fast.intensity, &exact.intensity);
-            assert!(e <= 1e-2, "{kind:?}, {what}: relative L2 {e}");
+            // Measured at most 1.5e-3 (laser grid) and 8.1e-3 (confocal).
+            let tol = match kind {
+                LayoutKind::Confocal => 1e-2,
+                _ => 5e-3,
+            };
+            assert!(e <= tol, "{kind:?}, {what}: relative L2 {e}");
         }
     }
 }
@@ -283,8 +290,9 @@ fn deep_volumes_split_into_slabs_that_match_the_exact_form() {
         "{slabs:?} against {} frequencies",
         info.frequencies
     );
+    // Measured 1.5e-3.
     let e = rel_l2(&fast.intensity, &exact.intensity);
-    assert!(e <= 1e-2, "relative L2 {e}");
+    assert!(e <= 5e-3, "relative L2 {e}");
 }
 
 /// The frequency-domain voxel sum (docs/reconstruction.md), the slowest and most literal form.

@@ -57,7 +57,7 @@ impl Phase {
 /// only stretches optical paths inside it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Medium {
-    pub sigma_t: f64,
+    pub sigma_t_per_m: f64,
     pub albedo: f64,
     pub phase: Phase,
     pub ior: f64,
@@ -65,13 +65,13 @@ pub struct Medium {
 }
 
 impl Medium {
-    pub fn sigma_s(&self) -> f64 {
-        self.sigma_t * self.albedo
+    pub fn sigma_s_per_m(&self) -> f64 {
+        self.sigma_t_per_m * self.albedo
     }
 
     /// Fraction of light that crosses `len_m` of the medium unscattered and unabsorbed.
     pub fn transmittance(&self, len_m: f64) -> f64 {
-        (-self.sigma_t * len_m).exp()
+        (-self.sigma_t_per_m * len_m).exp()
     }
 
     /// Density of a free flight ending after `len_m` (σt·e^{−σt·len}).
@@ -82,12 +82,12 @@ impl Medium {
     /// [`Medium::transmittance`] and [`Medium::free_flight_pdf`] after `len_m`, from one exponential.
     pub fn transmittance_and_pdf(&self, len_m: f64) -> (f64, f64) {
         let tr = self.transmittance(len_m);
-        (tr, self.sigma_t * tr)
+        (tr, self.sigma_t_per_m * tr)
     }
 
     /// A free-flight distance drawn from [`Medium::free_flight_pdf`] with the uniform number `u`.
     pub fn sample_distance(&self, u: f64) -> f64 {
-        -(1.0 - u).ln() / self.sigma_t
+        -(1.0 - u).ln() / self.sigma_t_per_m
     }
 
     /// Optical path that `len_m` of geometric path inside the medium adds beyond `len_m` itself.
@@ -97,7 +97,7 @@ impl Medium {
 
     /// Whether it scatters light (not only absorbs it).
     pub fn scatters(&self) -> bool {
-        self.sigma_s() > 0.0
+        self.sigma_s_per_m() > 0.0
     }
     /// Length of the segment `o + t·d`, t ∈ [0, t_max], inside the medium (d must be unit).
     pub fn overlap(&self, o: DVec3, d: DVec3, t_max: f64) -> f64 {

@@ -106,7 +106,7 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
             "CDT".to_string(),
             format!(
                 "slab {} m, μa {} /m, μs′ {} /m, n {}, ze {} m; Wiener snr per scene; 2.0 m of path at 128 samples",
-                slab.thickness_m, slab.mu_a, slab.mu_s_prime, slab.n, slab.ze_m
+                slab.thickness_m, slab.mu_a_per_m, slab.mu_s_prime_per_m, slab.n, slab.ze_m
             ),
         ),
         (

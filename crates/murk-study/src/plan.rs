@@ -106,7 +106,9 @@ impl SceneKind {
 /// A homogeneous medium; μt = 0 is none.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MediumParams {
-    pub mu_t: f64,
+    /// Extinction coefficient μt (1/m); `mu_t` in plan.json.
+    #[serde(rename = "mu_t")]
+    pub mu_t_per_m: f64,
     pub albedo: f64,
     pub g: f64,
 }
@@ -248,8 +250,14 @@ pub struct Cell {
 }
 
 impl Cell {
+    /// The figure, row and column, e.g. `fig3b μt = 1 α = 0.5` (empty parts left out).
     pub fn label(&self) -> String {
-        format!("{} {} {}", self.figure.name(), self.row, self.col)
+        [self.figure.name(), &self.row, &self.col]
+            .iter()
+            .filter(|p| !p.is_empty())
+            .copied()
+            .collect::<Vec<_>>()
+            .join(" ")
     }
 }
 
@@ -313,11 +321,15 @@ impl Plan {
             captures: Vec::new(),
         };
         let none = MediumParams {
-            mu_t: 0.0,
+            mu_t_per_m: 0.0,
             albedo: 0.5,
             g: 0.0,
         };
-        let fog = |mu_t, albedo, g| MediumParams { mu_t, albedo, g };
+        let fog = |mu_t, albedo, g| MediumParams {
+            mu_t_per_m: mu_t,
+            albedo,
+            g,
+        };
         let wanted = |f: Figure| opt.only.is_empty() || opt.only.contains(&f);
         let mut cells: Vec<(Figure, String, String, SceneKind, MediumParams, f64)> = Vec::new();
         let z = SceneKind::ZLetter;
@@ -364,7 +376,10 @@ impl Plan {
                 } else {
                     format!("μt = {mu_t}")
                 };
-                let m = MediumParams { mu_t, ..none };
+                let m = MediumParams {
+                    mu_t_per_m: mu_t,
+                    ..none
+                };
                 cells.push((Figure::Fig5, String::new(), c, SceneKind::Shelf, m, 1.0));
             }
         }
@@ -385,8 +400,8 @@ impl Plan {
         // Cells whose fog differs only in albedo share one render, an albedo sweep: its paths do not
         // depend on the albedo, so the tracing is paid once per row (docs/study.md).
         let mut sweeps: Vec<((SceneKind, u64, u64), Vec<f64>)> = Vec::new();
-        for (.., scene, m, _) in cells.iter().filter(|c| c.4.mu_t > 0.0) {
-            let key = (*scene, m.mu_t.to_bits(), m.g.to_bits());
+        for (.., scene, m, _) in cells.iter().filter(|c| c.4.mu_t_per_m > 0.0) {
+            let key = (*scene, m.mu_t_per_m.to_bits(), m.g.to_bits());
             match sweeps.iter_mut().find(|(k, _)| *k == key) {
                 Some((_, a)) if !a.contains(&m.albedo) => a.push(m.albedo),
                 Some(_) => {}
@@ -397,7 +412,7 @@ impl Plan {
             .iter_mut()
             .for_each(|(_, a)| a.sort_by(f64::total_cmp));
         let sweep_of = |scene: SceneKind, m: MediumParams| -> Vec<f64> {
-            let key = (scene, m.mu_t.to_bits(), m.g.to_bits());
+            let key = (scene, m.mu_t_per_m.to_bits(), m.g.to_bits());
             sweeps
                 .iter()
                 .find(|(k, a)| *k == key && a.len() > 1)
@@ -433,7 +448,7 @@ impl Plan {
             format!("capture.bins={}", f.bins),
             format!("capture.bin_width={}", fmt_num(f.bin_width_m)),
             format!("capture.start={}", fmt_num(f.start_m)),
-            format!("medium.mu_t={}", fmt_num(m.mu_t)),
+            format!("medium.mu_t={}", fmt_num(m.mu_t_per_m)),
             format!("medium.albedo={}", fmt_num(m.albedo)),
             format!("medium.g={}", fmt_num(m.g)),
         ]

@@ -101,7 +101,7 @@ fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
                 c.row,
                 c.col,
                 c.scene,
-                c.medium.mu_t,
+                c.medium.mu_t_per_m,
                 c.medium.albedo,
                 c.medium.g,
                 c.lambda_factor,
@@ -214,7 +214,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             Figure::Fig3b,
             "vs-mu_t-by-albedo",
             "μt (1/m)",
-            |r| r.cell.medium.mu_t,
+            |r| r.cell.medium.mu_t_per_m,
             |r| r.cell.col.clone(),
         ),
         (
@@ -235,7 +235,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             Figure::Fig5,
             "vs-mu_t",
             "μt (1/m)",
-            |r| r.cell.medium.mu_t,
+            |r| r.cell.medium.mu_t_per_m,
             |_| "shelf, α = 0.5".into(),
         ),
     ];
@@ -262,7 +262,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
                 .iter_mut()
                 .for_each(|s| s.points.sort_by(|a, b| a.0.total_cmp(&b.0)));
             let plot = LinePlot {
-                title: format!("{}: {} {x_label}", fig.name(), m.label),
+                title: format!("{}: {} vs {x_label}", fig.name(), m.label),
                 x_label: x_label.into(),
                 y_label: m.label.into(),
                 series,

@@ -181,10 +181,12 @@ fn compensation(name: &str, cell: &Cell) -> Compensation {
     let m = cell.medium;
     match name {
         "paper" => Compensation::Paper {
-            mu_t_per_m: m.mu_t,
+            mu_t_per_m: m.mu_t_per_m,
             albedo: m.albedo,
         },
-        "ballistic" => Compensation::Ballistic { mu_t_per_m: m.mu_t },
+        "ballistic" => Compensation::Ballistic {
+            mu_t_per_m: m.mu_t_per_m,
+        },
         _ => Compensation::None,
     }
 }

@@ -44,7 +44,7 @@ fn reduced_study_shows_what_the_paper_claims() {
     let r = results(&dir);
     let find = |fig: Figure, col: &str, mu_t: f64| {
         r.iter()
-            .find(|c| c.cell.figure == fig && c.cell.col == col && c.cell.medium.mu_t == mu_t)
+            .find(|c| c.cell.figure == fig && c.cell.col == col && c.cell.medium.mu_t_per_m == mu_t)
             .unwrap()
     };
     let clear = find(Figure::Fig3a, "", 0.0);

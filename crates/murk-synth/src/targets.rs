@@ -127,7 +127,7 @@ pub fn z_letter_outline() -> Vec<[f64; 2]> {
     ]
 }
 
-/// The letter T of the project's benchmark scene (mitransient.md §7.2): bar 0.5 × 0.1 m centred at
+/// The letter T of the project's benchmark scene (docs/benchmarks.md, `scenes/t-wall-*.toml`): bar 0.5 × 0.1 m centred at
 /// (0, 0.20), stem 0.1 × 0.4 m centred at (0, −0.05).
 pub fn t_letter_outline() -> Vec<[f64; 2]> {
     vec![

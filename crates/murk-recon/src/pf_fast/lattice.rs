@@ -226,8 +226,7 @@ impl Plan {
 
     /// `ws.field` ([y][x]) from the rows of `ws.tmp` ([voxel x][lattice y] after the inverse along
     /// y): a gather on the lattice, else the taps' weighted sum of transposed rows, so each tap is one
-    /// more contiguous row of nx values (short per-voxel dot products measured half the resampling
-    /// time).
+    /// more contiguous row of nx values, which vectorises where short per-voxel dot products do not.
     #[inline(always)]
     fn resample_y(&self, ws: &mut Workspace, ry: &Resampler) {
         let (nx, fy) = (self.vol.x.n, self.fft.fy);
@@ -256,9 +255,9 @@ impl Plan {
 
 /// `out` = Σ weight·row over `rows`, over the interleaved (re, im) floats: plain f32 loops vectorise
 /// without the shuffles that LLVM puts around a product of complex values by a real one. Blocks of
-/// 32 floats are summed over all rows in registers and stored once (a pass per row, reading and
-/// writing `out` each time, took 1.5× as long); the rest in blocks of 8 (one AVX register), so that
-/// only the last few floats are summed one at a time.
+/// 32 floats are summed over all rows in registers and stored once, rather than read and written
+/// once per row; the rest in blocks of 8 (one AVX register), so that only the last few floats are
+/// summed one at a time.
 #[inline(always)]
 fn weighted_sum<'r>(out: &mut [Complex32], rows: impl Iterator<Item = (&'r [Complex32], f32)>) {
     const MAX_ROWS: usize = 2 * crate::resample::HALF_TAPS as usize;

@@ -365,11 +365,10 @@ impl Plan {
         let threads = rayon::current_num_threads().max(1);
         let n = (self.fft.fx * self.fft.fy) as f64;
         let fft2 = n * n.log2();
-        // Costs per frequency, relative to one FFT2, as measured on the Z-letter bench: a plane (kernel
-        // spectrum, inverse FFT, resampling; confocal planes skip the per-frequency inverse), and the
-        // grid's spectra (gather, forward FFT2) per source. A histogram's transform costs about its
-        // n·log2 n. Since the lateral cut made planes cheaper, 1.2 and 1.8 for a plane chose 3 slabs
-        // instead of 4 and measured the same as 2.5.
+        // Costs per frequency, relative to one FFT2: a plane (kernel spectrum, inverse FFT,
+        // resampling; confocal planes skip the per-frequency inverse), and the grid's spectra
+        // (gather, forward FFT2) per source; a histogram's transform costs about its n·log2 n. The
+        // constants are fitted to the Z-letter bench (docs/benchmarks.md, "Constants of the fast PF").
         let per_plane = if matches!(self.side, GridSide::Confocal) {
             1.5
         } else {

@@ -349,7 +349,7 @@ impl Tracer<'_> {
         let p_l = p_dir * peq / (tl * tl);
         // Integrand (volume measure) over the sum of densities: the balance-weighted estimate.
         let value = from.beta * f * m.transmittance((t - m0) + (tl - a)) / t2
-            * m.sigma_s()
+            * m.sigma_s_per_m()
             * m.phase.eval(-w.dot(wl))
             * cos_l
             / (PI * tl * tl)

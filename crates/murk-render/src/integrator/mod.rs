@@ -468,7 +468,7 @@ impl<'a> Tracer<'a> {
             if let Some(m) = self.medium() {
                 if let Some((m0, m1)) = m.region.clip(pos, d, t_hit) {
                     medium_len = m1 - m0;
-                    let sigma_s = m.sigma_s();
+                    let sigma_s = m.sigma_s_per_m();
                     if sigma_s > 0.0 {
                         // Connections from distances drawn toward each target (equiangular, and uniform in the
                         // capture's time window), MIS-combined (balance heuristic) with each other, with the

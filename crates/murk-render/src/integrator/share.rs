@@ -31,9 +31,8 @@ fn shifted_bin(tl: &Tail, shift: f64, end: f64) -> Option<usize> {
 }
 
 /// Adds `tail` to one traced point's histograms `hists` (of `bins` each), scaled, shifted by `shift`
-/// bins, entry e times `weight(e)`. Every entry of every path is replayed once per point of its tile
-/// (a third of a paper-format fog render's time before this loop was trimmed to one conversion and
-/// one bounds check per entry).
+/// bins, entry e times `weight(e)`. Every entry of every path is replayed once per point of its tile,
+/// which makes this the renderer's innermost loop: one conversion and one bounds check per entry.
 pub(super) fn replay(
     bins: usize,
     hists: &mut [f32],
@@ -161,7 +160,7 @@ impl Tracer<'_> {
                 let tr = m.transmittance(t - m0);
                 let opl = o.extra_m + t + m.extra_path_m(t - m0);
                 Some(Leg {
-                    f: g * tr * m.sigma_s(),
+                    f: g * tr * m.sigma_s_per_m(),
                     opl,
                     d: w,
                 })

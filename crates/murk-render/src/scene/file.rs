@@ -179,7 +179,8 @@ impl Default for RenderDef {
 #[serde(deny_unknown_fields)]
 pub struct MediumDef {
     /// Extinction coefficient μt (1/m).
-    pub mu_t: f64,
+    #[serde(rename = "mu_t")]
+    pub mu_t_per_m: f64,
     /// Single-scattering albedo α = μs/μt.
     pub albedo: f64,
     /// Henyey–Greenstein anisotropy.

@@ -260,10 +260,10 @@ impl MediumDef {
     /// The medium, or `None` where it does not attenuate (μt = 0).
     pub(super) fn resolve(&self, bad: Bad) -> Result<Option<Medium>> {
         let m = self;
-        if !(m.mu_t.is_finite() && m.mu_t >= 0.0) {
+        if !(m.mu_t_per_m.is_finite() && m.mu_t_per_m >= 0.0) {
             return Err(bad(
                 "medium.mu_t",
-                format!("must be ≥ 0 (1/m), got {}", m.mu_t),
+                format!("must be ≥ 0 (1/m), got {}", m.mu_t_per_m),
             ));
         }
         check_albedo(m.albedo, "medium.albedo", bad)?;
@@ -291,8 +291,8 @@ impl MediumDef {
                 format!("z = {} reaches behind the relay surface (z = 0)", m.min[2]),
             ));
         }
-        Ok((m.mu_t > 0.0).then(|| Medium {
-            sigma_t: m.mu_t,
+        Ok((m.mu_t_per_m > 0.0).then(|| Medium {
+            sigma_t_per_m: m.mu_t_per_m,
             albedo: m.albedo,
             phase: Phase::new(m.g),
             ior: m.ior,
