@@ -76,6 +76,18 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
     }
     let csv = std::fs::read_to_string(d.join("metrics.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4 * 3, "{csv}");
+    // Every row has the header's fields, the IoUs' thresholds included (values in 0..1).
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let at = header
+        .iter()
+        .position(|h| *h == "iou_best_threshold")
+        .unwrap();
+    for row in csv.lines().skip(1) {
+        let fields: Vec<&str> = row.split(',').collect();
+        assert_eq!(fields.len(), header.len(), "{row}");
+        let t: f64 = fields[at].parse().unwrap();
+        assert!(t > 0.0 && t < 1.0, "{row}");
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }
 

@@ -63,11 +63,6 @@ fn correlation(a: &[f32], b: &[f32]) -> f64 {
     sab / (saa * sbb).sqrt()
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 /// (depth error of the object, correlation of the front views) of `cut` against `full`, over the
 /// columns where the whole capture's front view is at least 30 % of its maximum.
 fn compare(full: &Path, cut: &Path) -> (f64, f64) {
@@ -80,7 +75,7 @@ fn compare(full: &Path, cut: &Path) -> (f64, f64) {
     let (cm, cd) = views(&c, z_max);
     let top = fm.iter().cloned().fold(f32::MIN, f32::max);
     let mask: Vec<usize> = (0..fm.len()).filter(|&i| fm[i] >= 0.3 * top).collect();
-    let depth = |d: &[f64]| median(mask.iter().map(|&i| d[i]).collect());
+    let depth = |d: &[f64]| murk_core::median(&mask.iter().map(|&i| d[i]).collect::<Vec<_>>());
     ((depth(&cd) - depth(&fd)).abs(), correlation(&fm, &cm))
 }
 

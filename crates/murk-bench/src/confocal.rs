@@ -56,7 +56,7 @@ pub fn run(
             rec = Some(solve(&cap).with_context(|| format!("murk {name}"))?);
             secs.push(t.elapsed().as_secs_f64());
         }
-        let murk_s = median(secs);
+        let murk_s = median(&secs);
         let murk_err = peak_error_m(&rec.expect("runs ≥ 1"));
         let murk_mib = murk_peak_rss_mib(&file, name, &scratch.0)?;
         let mut line = format!(

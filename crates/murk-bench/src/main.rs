@@ -77,7 +77,7 @@ pub struct BenchArgs {
     pub tal_bench: Option<PathBuf>,
 }
 
-pub use murk_render::bench::median;
+pub use murk_core::median;
 
 /// `python` ready to import y-tal, with `$MURK_TAL_PYTHONPATH` in front of `PYTHONPATH` (as in
 /// tests/interop_baselines.rs) so a checkout of y-tal's git HEAD, which has lct, can shadow the
@@ -317,7 +317,7 @@ fn paper_case(
         info.slabs.len(),
         info.frequencies_per_plane(),
         info.frequencies,
-        median(times.clone()),
+        median(&times),
         times.iter().map(|t| (t * 1000.0).round() / 1000.0).collect::<Vec<_>>(),
         synth_s,
         p[2],
@@ -388,7 +388,7 @@ print(json.dumps({{"times": times, "version": tal.__version__}}))
         .arg(&script)
         .output()
         .with_context(|| python.display().to_string())?;
-    let murk_med = median(murk_times);
+    let murk_med = median(&murk_times);
     if !out.status.success() {
         say(
             quiet,
@@ -415,7 +415,7 @@ print(json.dumps({{"times": times, "version": tal.__version__}}))
     if times.is_empty() {
         bail!("could not parse tal's timing output: {line}");
     }
-    let tal_med = median(times);
+    let tal_med = median(&times);
     say(quiet, format!(
         "64×64×512 single-laser capture → 32 planes of 64×64 (λ = σ = 0.06 m): y-tal pf_dev median {tal_med:.3} s, murk fast PF median {murk_med:.4} s: {:.0}× faster",
         tal_med / murk_med

@@ -20,7 +20,7 @@ fn median_secs(runs: usize, mut f: impl FnMut() -> anyhow::Result<()>) -> anyhow
         f()?;
         secs.push(t0.elapsed().as_secs_f64());
     }
-    Ok(crate::median(secs))
+    Ok(crate::median(&secs))
 }
 
 pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
@@ -99,7 +99,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
             quiet,
             format!(
                 "{name:>14}: median over scenes {:.1} ms (worst {:.1} ms)",
-                crate::median(secs.clone()) * 1e3,
+                crate::median(&secs) * 1e3,
                 secs.iter().copied().fold(0.0, f64::max) * 1e3
             ),
         );

@@ -2,11 +2,12 @@
 //! mitransient 1.3.1 (its figures recorded in docs/benchmarks.md, or rendered in the same run), and
 //! the paper-format Z-letter capture.
 
+use crate::median;
 use crate::say;
 use crate::{json_line, json_numbers, Scratch};
 use anyhow::{bail, Context};
 use murk_core::TimeAxis;
-use murk_render::bench::{median, peak_rss_mib, rel_l2, split_rel_l2, timed_render, window_mask};
+use murk_render::bench::{peak_rss_mib, rel_l2, split_rel_l2, timed_render, window_mask};
 use murk_render::{Overrides, Plan, Scene};
 use std::path::Path;
 use std::process::Command;
@@ -121,9 +122,9 @@ fn t_case(
         rows.push((e, r.cpu_s, r.paths / r.cpu_s));
     }
     let (e, cpu, rate) = (
-        median(rows.iter().map(|r| r.0).collect()),
-        median(rows.iter().map(|r| r.1).collect()),
-        median(rows.iter().map(|r| r.2).collect()),
+        median(&rows.iter().map(|r| r.0).collect::<Vec<_>>()),
+        median(&rows.iter().map(|r| r.1).collect::<Vec<_>>()),
+        median(&rows.iter().map(|r| r.2).collect::<Vec<_>>()),
     );
     let ((em, cm), source) = match mit {
         Some(m) => (mitransient_live(m, c, &mask, quiet)?, "measured now"),
@@ -236,8 +237,8 @@ fn paper_format(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
             Ok((e, (a.cpu_s + b.cpu_s) / (a.paths + b.paths)))
         })
         .collect::<anyhow::Result<_>>()?;
-    let e = median(pairs.iter().map(|p| p.0).collect());
-    let cpu_per_path = median(pairs.iter().map(|p| p.1).collect());
+    let e = median(&pairs.iter().map(|p| p.0).collect::<Vec<_>>());
+    let cpu_per_path = median(&pairs.iter().map(|p| p.1).collect::<Vec<_>>());
     let spp6 = SPP as f64 * (e / 0.06).powi(2);
     let cpu6 = cpu_per_path * plan.n_points() as f64 * spp6;
     // Peak memory of a whole render at 1 spp (the histograms do not grow with spp).

@@ -31,5 +31,20 @@ pub use reconstruction::Reconstruction;
 pub use truth::GroundTruth;
 pub use volume::{Axis, Volume};
 
+/// Median of the finite values (the mean of the middle two for an even count); NaN if none.
+pub fn median(values: &[f64]) -> f64 {
+    let mut finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    if finite.is_empty() {
+        return f64::NAN;
+    }
+    finite.sort_by(f64::total_cmp);
+    let mid = finite.len() / 2;
+    if finite.len() % 2 == 1 {
+        finite[mid]
+    } else {
+        (finite[mid - 1] + finite[mid]) / 2.0
+    }
+}
+
 /// Speed of light in vacuum (m/s), the constant y-tal uses to convert paths to seconds.
 pub const SPEED_OF_LIGHT_M_PER_S: f64 = 299_792_458.0;

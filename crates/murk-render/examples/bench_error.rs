@@ -3,7 +3,8 @@
 //!
 //! `cargo run --release -p murk-render --example bench_error -- SCENE.toml SPP REF_SPP RUNS [WIN_START WIN_END]`
 
-use murk_render::bench::{median, rel_l2, timed_render, window_mask};
+use murk_core::median;
+use murk_render::bench::{rel_l2, timed_render, window_mask};
 use murk_render::{Overrides, Plan, Scene};
 use std::path::Path;
 
@@ -39,7 +40,7 @@ fn main() {
             )
         })
         .collect();
-    let med = |k: fn(&(f64, f64, f64, f64)) -> f64| median(rows.iter().map(k).collect());
+    let med = |k: fn(&(f64, f64, f64, f64)) -> f64| median(&rows.iter().map(k).collect::<Vec<_>>());
     println!(
         "{}: {} points × {spp} spp, {runs} runs (median): object-window [{}, {}] m relL2 {:.4}, CPU {:.2} s, wall {:.2} s, {:.2} M paths/CPU-s",
         a[1],

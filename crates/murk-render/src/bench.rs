@@ -91,8 +91,3 @@ pub fn split_rel_l2(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
     let var = diff / 2.0;
     (var / (mean - var / 2.0)).sqrt()
 }
-
-pub fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}

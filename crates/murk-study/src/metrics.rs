@@ -327,20 +327,7 @@ fn dft(line: &[(f64, f64)]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Median of the finite values (the mean of the middle two for an even count); NaN if none.
-pub fn median(values: &[f64]) -> f64 {
-    let mut finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
-    if finite.is_empty() {
-        return f64::NAN;
-    }
-    finite.sort_by(f64::total_cmp);
-    let mid = finite.len() / 2;
-    if finite.len() % 2 == 1 {
-        finite[mid]
-    } else {
-        (finite[mid - 1] + finite[mid]) / 2.0
-    }
-}
+pub use murk_core::median;
 
 /// Mean and sample standard deviation (n − 1 denominator) of the finite values: `(NaN, NaN)` for
 /// none, and a NaN standard deviation for one (a spread of one value is undefined, not zero).

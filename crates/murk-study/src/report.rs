@@ -89,7 +89,8 @@ fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
     for m in &METRICS {
         let _ = write!(s, ",{0},{0}_sd", m.column);
     }
-    s.push('\n');
+    // The thresholds behind the two IoUs (relative to each image's maximum; mean over seeds).
+    s.push_str(",iou_best_threshold,iou_otsu_threshold\n");
     for r in results {
         let c = &r.cell;
         let tail = metrics::mean_std(&r.tail_share).0;
@@ -114,7 +115,12 @@ fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
                 let (mean, sd) = stat(scores, m.get);
                 let _ = write!(s, ",{},{}", num(mean), num(sd));
             }
-            s.push('\n');
+            let _ = writeln!(
+                s,
+                ",{},{}",
+                num(stat(scores, |x| x.iou.best_threshold as f64).0),
+                num(stat(scores, |x| x.iou.otsu_threshold as f64).0)
+            );
         }
     }
     murk_io::write_atomic(path, |w| w.write_all(s.as_bytes()).map_err(io(path)))

@@ -38,7 +38,13 @@ pub struct GridLayout {
     pub title_band: u32,
     /// Label text size (pixels); the title is drawn somewhat larger.
     pub font_px: u32,
+    /// Top edge of the colour bar under the cells (from `left`, as wide as the cells, `font_px`
+    /// high), with "0" and [`BAR_TOP_LABEL`] under its ends.
+    pub bar_top: u32,
 }
+
+/// What the top of the colour bar stands for: every cell is normalised to its own maximum.
+pub const BAR_TOP_LABEL: &str = "max of each cell";
 
 impl GridLayout {
     /// Top-left corner of the cell at (`row`, `col`).
@@ -139,8 +145,11 @@ pub fn grid_layout(grid: &FigureGrid, cell_px: u32) -> Result<GridLayout> {
     let (left, top) = (margin + row_band, margin + title_band + col_band);
     let cells_w = cols as u32 * (cell_px + gap) - gap;
     let cells_h = rows as u32 * (cell_px + gap) - gap;
-    let width = (left + cells_w + margin).max(text_width(&grid.title, title_px)? + 2 * margin);
-    let height = top + cells_h + margin;
+    let bar_labels_w = text_width(BAR_TOP_LABEL, font_px)? + text_width("0", font_px)? + font_px;
+    let width = (left + cells_w.max(bar_labels_w) + margin)
+        .max(text_width(&grid.title, title_px)? + 2 * margin);
+    let bar_top = top + cells_h + font_px;
+    let height = bar_top + font_px * 5 / 2 + margin;
     if width > MAX_SIDE || height > MAX_SIDE {
         return Err(Error::Limits(format!(
             "figure grid of {rows} × {cols} cells of {cell_px} px would be {width} × {height} px (limit {MAX_SIDE})"
@@ -157,6 +166,7 @@ pub fn grid_layout(grid: &FigureGrid, cell_px: u32) -> Result<GridLayout> {
         top,
         title_band,
         font_px,
+        bar_top,
     })
 }
 
@@ -185,6 +195,18 @@ fn paint_plane(buf: &mut [u8], width: u32, origin: (u32, u32), cell_px: u32, pla
                 colour(v / norm)
             };
             let i = (((oy + y) * width + ox + x) * 3) as usize;
+            buf[i..i + 3].copy_from_slice(&c);
+        }
+    }
+}
+
+/// The colour map from 0 (left) to 1 (right), as wide as the cells.
+fn paint_bar(buf: &mut [u8], lay: &GridLayout) {
+    let w = lay.cols * (lay.cell_px + lay.gap) - lay.gap;
+    for x in 0..w {
+        let c = colour(x as f32 / (w - 1).max(1) as f32);
+        for y in lay.bar_top..lay.bar_top + lay.font_px {
+            let i = ((y * lay.width + lay.left + x) * 3) as usize;
             buf[i..i + 3].copy_from_slice(&c);
         }
     }
@@ -237,6 +259,7 @@ pub fn write_grid_png(path: &Path, grid: &FigureGrid, cell_px: u32) -> Result<()
             }
         }
     }
+    paint_bar(&mut buf, &lay);
     draw_labels(&mut buf, grid, &lay).map_err(|e| draw_error(path, e))?;
 
     let (rows, cols) = (lay.rows as usize, lay.cols as usize);
@@ -295,6 +318,16 @@ fn draw_labels(
         let x = lay.left as i32 - (lay.font_px as i32 / 2);
         let style = label.pos(Pos::new(HPos::Right, VPos::Center));
         root.draw(&Text::new(text.as_str(), (x, y as i32 + half), style))
+            .map_err(err)?;
+    }
+    let bar_w = lay.cols * (lay.cell_px + lay.gap) - lay.gap;
+    let y = (lay.bar_top + lay.font_px * 2) as i32;
+    for (text, x, h) in [
+        ("0", lay.left, HPos::Left),
+        (BAR_TOP_LABEL, lay.left + bar_w, HPos::Right),
+    ] {
+        let style = label.pos(Pos::new(h, VPos::Center));
+        root.draw(&Text::new(text, (x as i32, y), style))
             .map_err(err)?;
     }
     root.present().map_err(err)
@@ -408,9 +441,22 @@ mod tests {
             lay.width,
             lay.left + 3 * cell + 2 * lay.gap + lay.font_px / 2 + 4
         );
+        // Under the cells, the colour bar and its labels.
+        assert_eq!(lay.bar_top, lay.top + 2 * cell + lay.gap + lay.font_px);
         assert_eq!(
             lay.height,
-            lay.top + 2 * cell + lay.gap + lay.font_px / 2 + 4
+            lay.bar_top + lay.font_px * 5 / 2 + lay.font_px / 2 + 4
+        );
+        let bar_y = lay.bar_top + lay.font_px / 2;
+        let bar_w = 3 * cell + 2 * lay.gap;
+        assert_eq!(img.at(lay.left, bar_y), colour(0.0));
+        assert_eq!(img.at(lay.left + bar_w - 1, bar_y), colour(1.0));
+        let under = lay.bar_top + lay.font_px;
+        let zero_ink = img.ink(lay.left, lay.left + lay.font_px, under, lay.height);
+        let max_ink = img.ink(lay.left + bar_w / 2, lay.left + bar_w, under, lay.height);
+        assert!(
+            zero_ink > 5 && max_ink > 50,
+            "bar labels: {zero_ink}, {max_ink}"
         );
         assert!(
             lay.left > 40,
@@ -493,10 +539,10 @@ mod tests {
         let img = decode(&path);
         let margin = lay.font_px / 2 + 4;
         assert_eq!((lay.left, lay.top), (margin, margin));
-        assert_eq!(
-            (img.width, img.height),
-            (2 * margin + 2 * 32 + lay.gap, 2 * margin + 32)
-        );
+        // The cells, then the colour bar; the bar's labels set the width of so small a grid.
+        assert_eq!(lay.bar_top, margin + 32 + lay.font_px);
+        assert_eq!(img.height, lay.bar_top + lay.font_px * 5 / 2 + margin);
+        assert!(img.width > 2 * margin + 2 * 32 + lay.gap);
         let layout = &img
             .texts
             .iter()

@@ -119,6 +119,8 @@ fn draw<DB: DrawingBackend>(
         .configure_mesh()
         .x_desc(plot.x_label.as_str())
         .y_desc(plot.y_label.as_str())
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
         .label_style((FAMILY, 14))
         .axis_desc_style((FAMILY, 17))
         .light_line_style(TRANSPARENT)
@@ -217,9 +219,31 @@ pub fn write_plot_png(path: &Path, plot: &LinePlot) -> Result<()> {
     .map_err(|e| name_target(path, e))
 }
 
+/// plotters' own tick text, without the sign of a key point that rounds to zero ("-0.0").
+fn tick(v: &f64) -> String {
+    let text = plotters::data::float::FloatPrettyPrinter {
+        allow_scientific: false,
+        min_decimal: 1,
+        max_decimal: 5,
+    }
+    .print(*v);
+    match text.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
+        _ => text,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ticks_never_read_minus_zero() {
+        assert_eq!(tick(&-0.0), "0.0");
+        assert_eq!(tick(&-1e-17), "0.0");
+        assert_eq!(tick(&-0.25), "-0.25");
+        assert_eq!(tick(&1.5), "1.5");
+    }
     use std::path::PathBuf;
 
     fn tmp_dir(name: &str) -> PathBuf {
