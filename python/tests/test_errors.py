@@ -87,3 +87,17 @@ def test_bad_albedo_sweeps_are_refused_by_the_renderer(albedos, msg):
     with pytest.raises(murk.InputError) as e:
         murk.render_albedos(scene, albedos, grid=4, spp=4)
     assert one_line(e) == msg
+
+
+def test_absurd_render_magnitudes(tmp_path):
+    scene = SCENES / "z-letter.toml"
+    with pytest.raises(murk.LimitError) as e:
+        murk.render(scene, grid=4, spp=1, threads=100000)
+    assert "at most 1024" in one_line(e)
+    for every in (math.inf, math.nan, -1.0, 1e300):
+        with pytest.raises(murk.InputError) as e:
+            murk.render(scene, grid=4, spp=1, checkpoint=tmp_path / "c.ckpt", checkpoint_every=every)
+        assert "one year" in one_line(e)
+    with pytest.raises(murk.InputError) as e:
+        murk.render(scene, grid=4, spp=2**41)
+    assert "spp must be between 1 and" in one_line(e)

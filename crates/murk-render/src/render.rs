@@ -31,8 +31,8 @@ pub struct RenderOptions {
 /// float, and anything longer is a typo).
 pub const MAX_SECONDS: f64 = 365.0 * 86_400.0;
 
-/// Most paths per traced point one render takes: 2^40 (about 10⁷ CPU-years at a million paths per
-/// second per point; more is a typo, and would overflow the per-pixel path counts).
+/// Most paths per traced point one render takes: 2^40 ≈ 1.1·10¹², far beyond any converged render;
+/// more is a typo that would run for ever.
 pub const MAX_SPP: u64 = 1 << 40;
 
 /// The interval between checkpoint appends, from seconds: 0 appends only when the render stops or
