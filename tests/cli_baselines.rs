@@ -4,30 +4,21 @@
 //! the folder exists).
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn murk(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_murk"))
-        .args(args)
-        .output()
-        .expect("run murk")
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::murk;
 
 fn ok(args: &[&str]) -> String {
-    let out = murk(args);
-    assert!(
-        out.status.success(),
-        "murk {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
+    let (code, out, err) = murk(args);
+    assert_eq!(code, 0, "murk {args:?} failed:\n{err}");
+    out
 }
 
 /// One-line error, exit code 1, no panic.
 fn fails(args: &[&str]) -> String {
-    let out = murk(args);
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(out.status.code(), Some(1), "murk {args:?}: {err}");
+    let (code, _, err) = murk(args);
+    assert_eq!(code, 1, "murk {args:?}: {err}");
     assert!(
         err.starts_with("murk: error: ") && err.trim_end().lines().count() == 1,
         "{err}"

@@ -4,17 +4,12 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+#[path = "common/cli.rs"]
+mod cli;
+
+/// murk with `--quiet`: a failure must still say, on its one line, what went wrong.
 fn murk(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_murk"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .expect("run murk");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
+    cli::murk(&[args, &["--quiet"]].concat())
 }
 
 fn dir(tag: &str) -> PathBuf {

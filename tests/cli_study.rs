@@ -8,18 +8,9 @@ fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn murk(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_murk"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .expect("run murk");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
+#[path = "common/cli.rs"]
+mod cli;
+use cli::murk;
 
 fn dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("murk-study-{tag}-{}", std::process::id()));

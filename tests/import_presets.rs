@@ -2,9 +2,10 @@
 //! the generic form reads a `.npy` scan with a flip and a time origin, and wrong combinations fail
 //! with one line. The presets' layouts are tested on synthetic files in `murk_io::import`.
 
-mod common;
+#[path = "common/cli.rs"]
+mod cli;
 
-use common::murk;
+use cli::murk;
 use murk_io::import::Preset;
 use std::path::{Path, PathBuf};
 

@@ -20,19 +20,16 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod common;
-use common::python;
+#[path = "common/cli.rs"]
+mod cli;
+#[path = "common/tal.rs"]
+mod tal;
+use tal::python;
 
+/// Runs murk and insists that it succeeds.
 fn murk(args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_murk"))
-        .args(args)
-        .output()
-        .expect("run murk");
-    assert!(
-        out.status.success(),
-        "murk {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (code, _, err) = cli::murk(args);
+    assert_eq!(code, 0, "murk {args:?}: {err}");
 }
 
 /// Runs `tal.reconstruct.<method>.solve(read_capture(cap), **kwargs)` and writes |result| as .npy

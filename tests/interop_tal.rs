@@ -12,8 +12,9 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod common;
-use common::python;
+#[path = "common/tal.rs"]
+mod tal;
+use tal::python;
 
 fn run_python(py: &Path, script: &str, args: &[&Path]) -> String {
     let out = Command::new(py)

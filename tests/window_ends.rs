@@ -2,8 +2,9 @@
 //! default) the depth and the picture of a cut capture stay those of the whole one, while keeping the
 //! step (`keep`) puts a false surface at the far end; captures whose window is not cut are unchanged.
 
-mod common;
-use common::murk;
+#[path = "common/cli.rs"]
+mod cli;
+use cli::murk;
 use std::path::{Path, PathBuf};
 
 fn ok(args: &[&str]) -> String {
