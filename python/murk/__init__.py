@@ -153,8 +153,8 @@ def render(
     current folder). set: overrides as ``murk render --set`` takes them, as a dict
     (``{"medium.albedo": 0.8}``) or ``["medium.albedo=0.8"]``. shard: ``(i, n)`` renders part i of n
     for ``murk.merge``. checkpoint: a file to append finished work to and to resume from (removed
-    once the render completes); checkpoint_every: seconds between its appends (0: only when the
-    render stops or ends). out: also write the capture there (atomically). progress: True for
+    once the render completes); checkpoint_every: seconds between its appends (0: after every
+    unit). out: also write the capture there (atomically). progress: True for
     a tqdm bar or a callable ``(done, total)``.
 
     >>> cap = murk.render("scenes/z-letter.toml", grid=32, spp=64, set={"medium.albedo": 0.83})

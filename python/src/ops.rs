@@ -123,10 +123,20 @@ pub fn render(
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<Capture>> {
     let caps = compute(py, progress, threads, |t: &Ticker| {
-        let scene = args.scene(&scene)?;
         let outs = args.out.as_deref().map_or(Vec::new(), |out| {
             murk_render::render_outputs(out, args.albedos.as_deref())
         });
+        // Before the render: an output that cannot be written, or that is the scene file itself.
+        let file: Vec<&Path> = args
+            .text
+            .is_none()
+            .then_some(scene.as_path())
+            .into_iter()
+            .collect();
+        for out in &outs {
+            murk_io::check_output(out, &file)?;
+        }
+        let scene = args.scene(&scene)?;
         let caps = args.plan(&scene)?.render_stored(
             &args.options(&scene)?,
             &outs,

@@ -101,3 +101,16 @@ def test_absurd_render_magnitudes(tmp_path):
     with pytest.raises(murk.InputError) as e:
         murk.render(scene, grid=4, spp=2**41)
     assert "spp must be between 1 and" in one_line(e)
+
+
+def test_render_outputs_checked_before_rendering(tmp_path):
+    scene = tmp_path / "z.toml"
+    scene.write_text((SCENES / "z-letter.toml").read_text())
+    before = scene.read_bytes()
+    with pytest.raises(murk.InputError) as e:
+        murk.render(scene, grid=4, spp=1, out=scene)
+    assert "replace the input" in one_line(e)
+    assert scene.read_bytes() == before
+    with pytest.raises(murk.InputError) as e:
+        murk.render(scene, grid=4, spp=1, out=tmp_path / "no" / "such" / "c.h5")
+    assert "does not exist" in one_line(e)

@@ -237,10 +237,8 @@ impl ReconstructArgs {
 
 pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     murk_io::check_volume_path(&a.out)?;
-    murk_io::check_output(&a.out)?;
-    murk_io::refuse_overwrite(&a.out, &[&a.file])?;
+    murk_io::check_output(&a.out, &[&a.file])?;
     if let Some(png) = &a.png {
-        murk_io::refuse_overwrite(png, &[&a.file])?;
         // Refused before the reconstruction, so that a bad --png leaves no volume behind either.
         anyhow::ensure!(
             !png.exists() || png.is_dir(),

@@ -4,12 +4,12 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use murk_render::{
-    checkpoint_interval, checkpoint_path, merge, render_outputs, Overrides, Plan, RenderOptions,
+    checkpoint_path, merge, output_checkpoint, render_outputs, Overrides, Plan, RenderOptions,
     Scene,
 };
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 #[derive(Args)]
 #[command(after_help = "Examples:\n  \
@@ -124,15 +124,13 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let outs = render_outputs(&a.out, a.albedos.as_deref());
     for out in &outs {
-        murk_io::check_output(out)?;
-        murk_io::refuse_overwrite(out, &[&a.scene])?;
+        murk_io::check_output(out, &[&a.scene])?;
     }
     if let Some(t) = &a.truth {
         let inputs: Vec<&Path> = std::iter::once(a.scene.as_path())
             .chain(outs.iter().map(PathBuf::as_path))
             .collect();
-        murk_io::check_output(t)?;
-        murk_io::refuse_overwrite(t, &inputs)?;
+        murk_io::check_output(t, &inputs)?;
         anyhow::ensure!(
             !outs.iter().any(|o| murk_io::same_target(o, t)),
             "{}: --truth and the capture name the same file",
@@ -158,24 +156,19 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         (None, Some(b)) => plan.spp_for_budget(b, a.shard)?,
         (None, None) => plan.scene.settings.spp,
     };
-    let ckpt = checkpoint_path(&a.out);
-    if !a.resume && ckpt.exists() {
-        std::fs::remove_file(&ckpt)
-            .with_context(|| format!("cannot remove the old checkpoint {}", ckpt.display()))?;
-    }
-    if a.resume && !ckpt.exists() && !quiet {
+    if a.resume && !checkpoint_path(&a.out).exists() && !quiet {
         eprintln!(
             "murk: no checkpoint at {}; starting from scratch",
-            ckpt.display()
+            checkpoint_path(&a.out).display()
         );
     }
+    let ckpt = output_checkpoint(&a.out, a.resume, a.checkpoint_every)?;
     let opt = RenderOptions {
         spp,
         seed: a.seed,
         shard: a.shard,
-        // With checkpoints off, --resume still reads an existing one (adding to it only at the end).
-        checkpoint: (a.checkpoint_every > 0.0 || (a.resume && ckpt.exists())).then_some(ckpt),
-        checkpoint_every: checkpoint_interval(a.checkpoint_every)?,
+        checkpoint: ckpt.as_ref().map(|c| c.0.clone()),
+        checkpoint_every: ckpt.map_or(Duration::MAX, |c| c.1),
     };
     let bar = ProgressBar::new(plan.shard_units(a.shard).len() as u64);
     if quiet || !std::io::stderr().is_terminal() {
@@ -214,7 +207,7 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
 
 pub fn run_merge(a: MergeArgs, quiet: bool) -> anyhow::Result<()> {
     let inputs: Vec<&Path> = a.parts.iter().map(|p| p.as_path()).collect();
-    murk_io::refuse_overwrite(&a.out, &inputs)?;
+    murk_io::check_output(&a.out, &inputs)?;
     let parts = a
         .parts
         .iter()

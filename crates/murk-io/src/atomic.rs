@@ -79,7 +79,7 @@ fn temp_sibling(path: &Path) -> Result<PathBuf> {
 
 /// Refuses an output that is one of the inputs (the same file, whatever path names it): the
 /// atomic rename would replace the input with the result.
-pub fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
+fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
     let Ok(out_id) = file_id(out) else {
         return Ok(()); // no file there yet, so it is no input
     };
@@ -95,9 +95,10 @@ pub fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
     Ok(())
 }
 
-/// Refuses, before any work is done, an output path that cannot be written: an existing folder, or a
-/// file in a folder that does not exist (otherwise a long render fails only when it writes).
-pub fn check_output(out: &Path) -> Result<()> {
+/// Refuses, before any work is done, an output path that cannot be written (an existing folder, or a
+/// file in a folder that does not exist: otherwise a long render fails only when it writes) or that
+/// names one of `inputs`.
+pub fn check_output(out: &Path, inputs: &[&Path]) -> Result<()> {
     if out.is_dir() {
         return Err(Error::param(format!(
             "{}: is a folder; the output must be a file path",
@@ -112,7 +113,7 @@ pub fn check_output(out: &Path) -> Result<()> {
             parent.display()
         )));
     }
-    Ok(())
+    refuse_overwrite(out, inputs)
 }
 
 /// Whether `a` and `b` name the same file, whether or not it exists yet (`./x`, `d/../x` and `x`

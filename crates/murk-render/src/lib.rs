@@ -25,8 +25,9 @@ pub use integrator::{Endpoint, Sampler, Tracer};
 pub use medium::{Medium, Phase};
 pub use overrides::Overrides;
 pub use render::{
-    check_shard, checkpoint_interval, checkpoint_path, fingerprint, merge, render_key,
-    render_outputs, scene_info, sweep_output, Plan, RenderOptions, MAX_SECONDS, MAX_SPP,
+    check_shard, checkpoint_interval, checkpoint_path, fingerprint, merge, output_checkpoint,
+    render_key, render_outputs, scene_info, sweep_output, Plan, RenderOptions, MAX_SECONDS,
+    MAX_SPP,
 };
 pub use scene::{
     CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, ObjectDef, Relay, RelayDef, RelayKind,

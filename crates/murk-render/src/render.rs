@@ -35,12 +35,11 @@ pub const MAX_SECONDS: f64 = 365.0 * 86_400.0;
 /// more is a typo that would run for ever.
 pub const MAX_SPP: u64 = 1 << 40;
 
-/// The interval between checkpoint appends, from seconds: 0 appends only when the render stops or
-/// ends. Refuses negative, non-finite and longer-than-a-year values.
+/// The interval between checkpoint appends, from seconds (0: after every unit). Refuses negative,
+/// non-finite and longer-than-a-year values.
 pub fn checkpoint_interval(seconds: f64) -> Result<Duration> {
     match seconds {
-        0.0 => Ok(Duration::MAX),
-        s if s > 0.0 && s <= MAX_SECONDS => Ok(Duration::from_secs_f64(s)),
+        s if (0.0..=MAX_SECONDS).contains(&s) => Ok(Duration::from_secs_f64(s)),
         s => Err(Error::param(format!(
             "a checkpoint interval needs 0 ≤ seconds ≤ {MAX_SECONDS} (one year), got {s}"
         ))),
@@ -52,6 +51,27 @@ pub fn checkpoint_path(out: &Path) -> PathBuf {
     let mut p = out.as_os_str().to_owned();
     p.push(".ckpt");
     PathBuf::from(p)
+}
+
+/// The checkpoint file and interval of a render to `out`, as `murk render` keeps them: without
+/// `resume` an old `out.ckpt` is removed first, so the render starts afresh; `every_s` = 0 keeps no
+/// checkpoint, except that `resume` still reads an existing one (then appending to it only if the
+/// render is stopped or cannot store its captures).
+pub fn output_checkpoint(
+    out: &Path,
+    resume: bool,
+    every_s: f64,
+) -> Result<Option<(PathBuf, Duration)>> {
+    let every = checkpoint_interval(every_s)?;
+    let path = checkpoint_path(out);
+    if !resume && path.exists() {
+        std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+    }
+    Ok(match (every_s > 0.0, resume && path.exists()) {
+        (true, _) => Some((path, every)),
+        (false, true) => Some((path, Duration::MAX)),
+        (false, false) => None,
+    })
 }
 
 /// The mapping from work units to wall points and histograms.
@@ -353,15 +373,27 @@ impl<'a> Plan<'a> {
         progress: &(dyn Fn(usize, usize) + Sync),
         stop: &AtomicBool,
     ) -> Result<Vec<Capture>> {
+        Ok(self.render_unflushed(opt, progress, stop)?.0)
+    }
+
+    /// As [`Plan::render_all_until`], with the units finished since the checkpoint's last append,
+    /// which a completed render does not write (its caller deletes the checkpoint next).
+    fn render_unflushed(
+        &self,
+        opt: &RenderOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+        stop: &AtomicBool,
+    ) -> Result<(Vec<Capture>, Option<Unflushed>)> {
         let mut caps = self.empty_captures(opt.spp, opt.seed, opt.shard);
-        self.run(opt, progress, stop, Some(&mut caps))?;
+        let unflushed = self.run(opt, progress, stop, Some(&mut caps))?;
         caps.iter_mut().for_each(|c| self.finish(c));
-        Ok(caps)
+        Ok((caps, unflushed))
     }
 
     /// As [`Plan::render_all_until`], then writes capture k to `outs[k]` with `write` (none when `outs`
     /// is empty) and removes `opt.checkpoint`: once the captures are stored, a stale checkpoint could
-    /// only mislead a later resume. An interrupted or failed render keeps its checkpoint.
+    /// only mislead a later resume. An interrupted render, or one whose write fails, keeps its
+    /// checkpoint with every unit it finished, so a resume renders nothing twice.
     pub fn render_stored(
         &self,
         opt: &RenderOptions,
@@ -370,9 +402,22 @@ impl<'a> Plan<'a> {
         progress: &(dyn Fn(usize, usize) + Sync),
         stop: &AtomicBool,
     ) -> Result<Vec<Capture>> {
-        let caps = self.render_all_until(opt, progress, stop)?;
-        for (out, cap) in outs.iter().zip(&caps) {
-            write(out, cap)?;
+        if !outs.is_empty() && outs.len() != self.ratios.len() {
+            return Err(Error::param(format!(
+                "{} outputs for a render of {} captures",
+                outs.len(),
+                self.ratios.len()
+            )));
+        }
+        let (caps, unflushed) = self.render_unflushed(opt, progress, stop)?;
+        if let Err(e) = outs
+            .iter()
+            .zip(&caps)
+            .try_for_each(|(out, cap)| write(out, cap))
+        {
+            // The write's own error says more than a failed append after it.
+            let _ = unflushed.map(Unflushed::append);
+            return Err(e);
         }
         if let Some(ckpt) = &opt.checkpoint {
             // Failing to remove it is harmless: its header still matches only this render.
@@ -450,7 +495,7 @@ impl<'a> Plan<'a> {
                 "a part render needs a shard and a checkpoint file to hold it",
             ));
         }
-        self.run(opt, progress, stop, None)
+        self.run(opt, progress, stop, None).map(|_| ())
     }
 
     /// The capture an unsharded render of `spp` and `seed` gives, bit for bit, from the checkpoints
@@ -522,7 +567,7 @@ impl<'a> Plan<'a> {
         progress: &(dyn Fn(usize, usize) + Sync),
         stop: &AtomicBool,
         mut h: Option<&mut [Capture]>,
-    ) -> Result<()> {
+    ) -> Result<Option<Unflushed>> {
         if !(1..=MAX_SPP).contains(&opt.spp) {
             return Err(Error::param(format!(
                 "spp must be between 1 and {MAX_SPP}, got {}",
@@ -597,12 +642,17 @@ impl<'a> Plan<'a> {
             Ok(())
         });
         let s = shared.into_inner().unwrap_or_else(|e| e.into_inner());
-        if let (true, Some(mut c)) = (result.is_err() || part, s.ckpt) {
-            let flushed = c.append(&s.pending);
-            // A stop's own error says more than a failed flush after it.
-            result.and(flushed)
-        } else {
-            result
+        let unflushed = s.ckpt.map(|ckpt| Unflushed {
+            ckpt,
+            pending: s.pending,
+        });
+        match unflushed {
+            Some(u) if result.is_err() || part => {
+                let flushed = u.append();
+                // A stop's own error says more than a failed flush after it.
+                result.and(flushed).map(|_| None)
+            }
+            u => result.map(|_| u),
         }
     }
 
@@ -884,6 +934,18 @@ impl Checkpoint {
     }
 }
 
+/// A checkpoint and the finished units not yet appended to it.
+struct Unflushed {
+    ckpt: Checkpoint,
+    pending: Vec<(usize, Vec<f32>)>,
+}
+
+impl Unflushed {
+    fn append(mut self) -> Result<()> {
+        self.ckpt.append(&self.pending)
+    }
+}
+
 /// Why a checkpoint's header does not match this render, naming the keys that differ where it can.
 fn refusal(bytes: &[u8], key: &str) -> String {
     let theirs = (bytes.len() >= 32 && bytes[..8] == MAGIC[..])
@@ -899,8 +961,10 @@ fn refusal(bytes: &[u8], key: &str) -> String {
                 diffs.join("; ")
             }
         }
-        None if bytes.starts_with(MAGIC) => "its header is cut short or damaged".to_string(),
+        None if bytes.starts_with(MAGIC) => {
+            return "damaged checkpoint (its header is cut short); delete it to start afresh".into()
+        }
         None => "it is not a checkpoint of this murk version".to_string(),
     };
-    format!("checkpoint of a different render ({what}); delete it or drop --resume")
+    format!("checkpoint of a different render ({what}); delete it to start afresh")
 }

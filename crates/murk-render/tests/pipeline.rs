@@ -124,7 +124,10 @@ fn seeded_render_is_bitwise_reproducible() {
         .render(&opts(None, Some(ck.clone())), &|_, _| {})
         .unwrap_err()
         .to_string();
-    assert!(e.contains("header is cut short or damaged"), "{e}");
+    assert!(
+        e.contains("damaged checkpoint (its header is cut short)"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -501,7 +504,7 @@ fn shards_partition_the_units_evenly() {
 }
 
 /// `render_stored` hands each capture to the writer and then removes the checkpoint; a failed write
-/// keeps it, so a resume finds every unit. Absurd spp and checkpoint intervals are refused in one line.
+/// keeps it with every unit, so a resume renders nothing twice. Absurd spp and checkpoint intervals are refused in one line.
 #[test]
 fn stored_renders_drop_their_checkpoint_only_once_written() {
     use std::sync::atomic::AtomicBool;
@@ -531,8 +534,12 @@ fn stored_renders_drop_their_checkpoint_only_once_written() {
     assert_eq!((&written[0].0, &written[0].1), (&out, &caps[0].h));
     assert!(!ck.exists(), "the checkpoint outlived the stored capture");
 
+    // Even with no append during the render (an interval longer than it), a failed write leaves
+    // every unit in the checkpoint: the resume starts with all of them done.
+    let mut rare = opts(None, Some(ck.clone()));
+    rare.checkpoint_every = Duration::MAX;
     let failed = plan.render_stored(
-        &opts(None, Some(ck.clone())),
+        &rare,
         std::slice::from_ref(&out),
         &|p, _| Err(murk_core::Error::io(p, std::io::Error::other("disk full"))),
         &|_, _| {},
@@ -540,6 +547,21 @@ fn stored_renders_drop_their_checkpoint_only_once_written() {
     );
     assert!(failed.unwrap_err().to_string().contains("disk full"));
     assert!(ck.exists(), "a failed write removed the checkpoint");
+    let first = Mutex::new(None);
+    let resumed = plan
+        .render(&rare, &|done, total| {
+            first.lock().unwrap().get_or_insert((done, total));
+        })
+        .unwrap();
+    assert_eq!(first.into_inner().unwrap(), Some((6, 6)));
+    assert_eq!(resumed.h, caps[0].h);
+    // Two outputs for one capture are refused before rendering.
+    let two = [out.clone(), dir.join("t.h5")];
+    let e = plan.render_stored(&rare, &two, &|_, _| Ok(()), &|_, _| {}, &never);
+    assert!(e
+        .unwrap_err()
+        .to_string()
+        .contains("2 outputs for a render of 1 captures"));
     std::fs::remove_dir_all(&dir).unwrap();
 
     let mut huge = opts(None, None);
@@ -548,7 +570,7 @@ fn stored_renders_drop_their_checkpoint_only_once_written() {
     assert!(e.contains("spp must be between 1 and"), "{e}");
     assert_eq!(
         murk_render::checkpoint_interval(0.0).unwrap(),
-        Duration::MAX
+        Duration::ZERO
     );
     assert_eq!(
         murk_render::checkpoint_interval(1.5).unwrap(),
