@@ -510,11 +510,16 @@ fn render_refuses_bad_outputs_up_front() {
             &["one year"],
         );
     }
-    let mut args = render(&["--out", &at("q.h5")]);
-    args[5] = "2000000000000".into(); // --spp beyond 2^40
+    // --spp beyond 2^40, and a time budget with --resume (each run would pick another spp).
+    let q = at("q.h5");
+    let base = ["render", scene, "--grid", "8", "--out", q.as_str()];
     fails(
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &[&base[..], &["--spp", "2000000000000"]].concat(),
         &["--spp", "2000000000000"],
+    );
+    fails(
+        &[&base[..], &["--time-budget", "5", "--resume"]].concat(),
+        &["--time-budget", "--resume"],
     );
     no_leftovers(&d, &[]);
     std::fs::remove_dir_all(&d).ok();

@@ -1,6 +1,6 @@
 //! `murk experiment paper`: the paper's study in one command (murk-study does the work).
 
-use anyhow::{bail, Context};
+use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use murk_study::plan::{Figure, Scale, StudyOptions};
@@ -107,12 +107,6 @@ pub fn run(a: ExperimentArgs, quiet: bool) -> anyhow::Result<()> {
         .iter()
         .map(|s| Figure::parse(s))
         .collect::<Result<Vec<_>, _>>()?;
-    if !a.scenes.join("z-letter.toml").exists() {
-        bail!(
-            "{}: no z-letter.toml here; give the scenes folder with --scenes",
-            a.scenes.display()
-        );
-    }
     let opt = StudyOptions {
         scale: match a.scale {
             ScaleArg::Quick => Scale::Quick,

@@ -28,8 +28,9 @@ pub struct RenderArgs {
     /// Paths per traced wall point (per laser point for a laser grid); default: the scene's [render] spp.
     #[arg(long, conflicts_with = "time_budget", value_parser = clap::value_parser!(u64).range(1..=murk_render::MAX_SPP))]
     pub spp: Option<u64>,
-    /// Pick the spp that fits this many seconds (measured on a short pilot run, then rendered deterministically).
-    #[arg(long, value_name = "SECONDS", value_parser = parse_budget)]
+    /// Pick the spp that fits this many seconds (measured on a short pilot run, then rendered
+    /// deterministically). Not with --resume: each run would pick another spp.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_budget, conflicts_with = "resume")]
     pub time_budget: Option<f64>,
     /// Random seed; a seeded render gives identical bytes for any --threads and any sharding.
     #[arg(long, default_value_t = 0)]
@@ -95,15 +96,13 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
-/// A time budget: 0 < seconds ≤ one year.
+/// A time budget in seconds, as the library takes it.
 fn parse_budget(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v > 0.0 && v <= murk_render::MAX_SECONDS => Ok(v),
-        _ => Err(format!(
-            "need 0 < seconds ≤ {} (one year), got {s}",
-            murk_render::MAX_SECONDS
-        )),
-    }
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    murk_render::time_budget(v).map_err(|e| e.to_string())
 }
 
 /// A checkpoint interval in seconds, as the library takes it.

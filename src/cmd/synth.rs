@@ -1,7 +1,6 @@
 //! `murk synth`: analytic captures (first hidden bounce only) of points and planar shapes.
 
 use crate::cmd::progress::say;
-use anyhow::bail;
 use clap::Args;
 use murk_core::{Capture, DVec3, TimeAxis};
 use murk_synth::{floats, synthesize, CaptureLayout, SynthOptions, Synthesis};
@@ -72,12 +71,6 @@ fn parse_xyz(s: &str) -> Result<DVec3, String> {
 
 /// Builds the capture described by `a` (no file I/O).
 pub fn build(a: &SynthArgs) -> anyhow::Result<Capture> {
-    if !(a.bin_width > 0.0 && a.bin_width.is_finite()) {
-        bail!(
-            "--bin-width must be a positive number of metres, got {}",
-            a.bin_width
-        );
-    }
     Ok(synthesize(&Synthesis {
         layout: CaptureLayout {
             kind: a.kind.parse()?,

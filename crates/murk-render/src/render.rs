@@ -46,6 +46,17 @@ pub fn checkpoint_interval(seconds: f64) -> Result<Duration> {
     }
 }
 
+/// A time budget for [`Plan::spp_for_budget`]: 0 < seconds ≤ one year.
+pub fn time_budget(seconds: f64) -> Result<f64> {
+    if seconds > 0.0 && seconds <= MAX_SECONDS {
+        Ok(seconds)
+    } else {
+        Err(Error::param(format!(
+            "a time budget needs 0 < seconds ≤ {MAX_SECONDS} (one year), got {seconds}"
+        )))
+    }
+}
+
 /// The checkpoint a render to `out` keeps: `out` with `.ckpt` appended.
 pub fn checkpoint_path(out: &Path) -> PathBuf {
     let mut p = out.as_os_str().to_owned();
@@ -429,11 +440,7 @@ impl<'a> Plan<'a> {
     /// The spp that fills 90 % of `budget_s` seconds for the units of `shard` on the current rayon
     /// pool, timed on a short pilot run of a few units at 8 spp.
     pub fn spp_for_budget(&self, budget_s: f64, shard: Option<(usize, usize)>) -> Result<u64> {
-        if !(budget_s.is_finite() && budget_s > 0.0 && budget_s <= MAX_SECONDS) {
-            return Err(Error::param(format!(
-                "a time budget needs 0 < seconds ≤ {MAX_SECONDS} (one year), got {budget_s}"
-            )));
-        }
+        time_budget(budget_s)?;
         let n_units = self.shard_units(shard).len();
         let threads = rayon::current_num_threads();
         let pilot: Vec<usize> = (0..threads * 2)

@@ -581,4 +581,8 @@ fn stored_renders_drop_their_checkpoint_only_once_written() {
     }
     assert!(plan.spp_for_budget(f64::INFINITY, None).is_err());
     assert!(plan.spp_for_budget(0.0, None).is_err());
+    // A thousand times the budget buys more paths (the pilot's timing noise is far below 1000×).
+    let small = plan.spp_for_budget(0.01, None).unwrap();
+    let large = plan.spp_for_budget(10.0, None).unwrap();
+    assert!(small >= 1 && large > 10 * small, "{small} vs {large}");
 }

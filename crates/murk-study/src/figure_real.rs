@@ -24,17 +24,17 @@ fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
         last = Some(f()?);
         secs.push(t0.elapsed().as_secs_f64());
     }
-    secs.sort_by(f64::total_cmp);
-    Ok((secs[secs.len() / 2], last.expect("at least one run")))
+    Ok((murk_core::median(&secs), last.expect("at least one run")))
 }
 
 /// Depth of the brightest voxel, and the median per-pixel argmax depth over pixels whose
-/// maximum-intensity projection exceeds half of its maximum.
+/// maximum-intensity projection exceeds half of its maximum (NaN when no pixel does: an all-zero
+/// reconstruction).
 fn depths(rec: &Reconstruction) -> (f64, f64) {
     let (p, _) = rec.peak();
     let v = pictures::views(&rec.volume, &rec.intensity);
     let max = v.front.values.iter().cloned().fold(f32::MIN, f32::max);
-    let mut zs: Vec<f64> = v
+    let zs: Vec<f64> = v
         .front
         .values
         .iter()
@@ -42,8 +42,7 @@ fn depths(rec: &Reconstruction) -> (f64, f64) {
         .filter(|(f, _)| **f > 0.5 * max)
         .map(|(_, d)| *d as f64)
         .collect();
-    zs.sort_by(f64::total_cmp);
-    (p[2], zs[zs.len() / 2])
+    (p[2], murk_core::median(&zs))
 }
 
 struct Cell {

@@ -312,6 +312,16 @@ impl Plan {
                 opt.shards
             )));
         }
+        // Before anything is written, so that a mistyped folder leaves no plan behind.
+        for scene in [SceneKind::ZLetter, SceneKind::Shelf] {
+            if !opt.scenes_dir.join(scene.file()).is_file() {
+                return Err(Error::param(format!(
+                    "{}: no {} in this scenes folder",
+                    opt.scenes_dir.display(),
+                    scene.file()
+                )));
+            }
+        }
         let mut plan = Plan {
             scale: opt.scale,
             seeds: opt.seeds,
@@ -621,6 +631,13 @@ mod tests {
             Figure::ALL.map(count),
             [1, 15, 15, 3, 3],
             "cells per figure"
+        );
+        // Labels join the non-empty parts with single spaces (Fig. 3a has no column).
+        let labels: Vec<String> = plan.cells.iter().map(Cell::label).collect();
+        assert_eq!(labels[0], "fig3a no medium");
+        assert!(
+            labels.contains(&"fig3b μt = 1 α = 0.5".to_string()),
+            "{labels:?}"
         );
         // Fig. 3a, Fig. 3b's three rows, Fig. 3c's g = ±0.7 rows, the shelf's three media.
         assert_eq!(plan.captures.len(), 1 + 3 + 2 + 3);

@@ -216,7 +216,8 @@ pub struct Scores {
 pub struct CellResult {
     pub cell: Cell,
     pub voxel_dz_m: f64,
-    /// Share of the peak that the last 5 % of bins carry (summed over histograms), per seed.
+    /// The summed histogram's largest value over its last 5 % of bins relative to its peak
+    /// ([`Capture::end_level`]; 0 for an all-zero capture), per seed.
     pub tail_share: Vec<f64>,
     /// CPU seconds of the cell's renders (None where an external executor rendered them).
     pub cpu_s: Option<f64>,
