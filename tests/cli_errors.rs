@@ -87,6 +87,26 @@ fn missing_truncated_and_foreign_files() {
     let out = d.join("v.npy");
     let out = out.to_str().unwrap();
     fails(&["info", d.join("nope.h5").to_str().unwrap()], &["nope.h5"]);
+    // A FIFO is refused before it is opened (opening it would wait for a writer), as input and as
+    // output (the rename would turn it into a plain file). `timeout` bounds a regression's hang.
+    let fifo = d.join("pipe.h5");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let f = fifo.to_str().unwrap();
+    let info = std::process::Command::new("timeout")
+        .args(["10", env!("CARGO_BIN_EXE_murk"), "info", f])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&info.stderr);
+    assert_eq!(info.status.code(), Some(1), "{err}");
+    assert!(err.contains("pipe.h5: is not a regular file"), "{err}");
+    fails(
+        &["synth", "--target", "z:1", "--grid", "16", "--out", f],
+        &["pipe.h5: is not a regular file"],
+    );
+    let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+    assert!(std::os::unix::fs::FileTypeExt::is_fifo(&kind));
+    std::fs::remove_file(&fifo).unwrap();
     fails(
         &[
             "reconstruct",
@@ -259,7 +279,7 @@ fn nonsense_parameters() {
     );
     fails(
         &["synth", "--out", out, "--target", "z:1", "--bin-width", "0"],
-        &["bin-width"],
+        &["bin width must be a positive number of metres, got 0"],
     );
     // A gate past the window would leave a volume of zeros that looks like a result.
     fails(

@@ -12,6 +12,7 @@
 pub mod buffer;
 mod capture;
 mod error;
+mod input;
 mod limits;
 mod points;
 mod progress;
@@ -23,6 +24,7 @@ pub mod window;
 
 pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
 pub use error::{Error, Result};
+pub use input::{open_input, read_input};
 pub use glam::DVec3;
 pub use limits::{short, Limits};
 pub use points::{PointLayout, PointSet, RegularGrid};

@@ -9,6 +9,7 @@ use std::sync::Mutex;
 /// Writes `path` through `fill` (buffered), so that readers see either the old file or the complete new one,
 /// and a failed write leaves nothing behind.
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    refuse_special(path)?;
     let tmp = temp_sibling(path)?;
     let _live = Live::register(&tmp);
     // Errors name `path`, the file the user asked for, not the temporary that is gone afterwards.
@@ -77,6 +78,22 @@ fn temp_sibling(path: &Path) -> Result<PathBuf> {
     Ok(path.with_file_name(tmp_name))
 }
 
+/// Refuses to replace anything but a regular file: the rename would turn a folder's path, a device
+/// (`/dev/null`) or a FIFO into a plain file.
+fn refuse_special(out: &Path) -> Result<()> {
+    match std::fs::metadata(out) {
+        Ok(m) if m.is_dir() => Err(Error::param(format!(
+            "{}: is a folder; the output must be a file path",
+            out.display()
+        ))),
+        Ok(m) if !m.is_file() => Err(Error::param(format!(
+            "{}: is not a regular file (a device, FIFO or socket); murk writes only regular files",
+            out.display()
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// Refuses an output that is one of the inputs (the same file, whatever path names it): the
 /// atomic rename would replace the input with the result.
 fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
@@ -99,12 +116,7 @@ fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
 /// file in a folder that does not exist: otherwise a long render fails only when it writes) or that
 /// names one of `inputs`.
 pub fn check_output(out: &Path, inputs: &[&Path]) -> Result<()> {
-    if out.is_dir() {
-        return Err(Error::param(format!(
-            "{}: is a folder; the output must be a file path",
-            out.display()
-        )));
-    }
+    refuse_special(out)?;
     let parent = folder_of(out);
     if !parent.is_dir() {
         return Err(Error::param(format!(

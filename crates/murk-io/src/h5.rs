@@ -39,16 +39,7 @@ pub(crate) fn guarded<T>(path: &Path, f: impl FnOnce() -> Result<T>) -> Result<T
 /// Opens an HDF5 file lazily (metadata and data are fetched on demand, so a large capture is not
 /// buffered twice). Distinguishes "cannot open" (Io) from "not HDF5" (Format).
 pub(crate) fn open(path: &Path) -> Result<File> {
-    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    if std::fs::metadata(path)
-        .map_err(|e| Error::io(path, e))?
-        .is_dir()
-    {
-        return Err(Error::io(
-            path,
-            std::io::Error::new(std::io::ErrorKind::InvalidInput, "is a directory"),
-        ));
-    }
+    let mut f = murk_core::open_input(path)?;
     let mut head = [0u8; 128];
     let n = read_prefix(&mut f, &mut head).map_err(|e| Error::io(path, e))?;
     if !hdf5_pure::is_hdf5(path).map_err(|e| Error::io(path, e))? {

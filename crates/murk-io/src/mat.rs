@@ -25,7 +25,7 @@ enum Kind {
 }
 
 fn sniff(path: &Path) -> Result<Kind> {
-    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut f = murk_core::open_input(path)?;
     let mut head = [0u8; 128];
     let n = h5::read_prefix(&mut f, &mut head).map_err(|e| Error::io(path, e))?;
     let head = &head[..n];

@@ -53,7 +53,7 @@ impl MatValue {
 
 /// The top-level variables of a v5 file, in file order.
 pub fn read_mat_v5(path: &Path) -> Result<Vec<(String, MatValue)>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = murk_core::read_input(path)?;
     parse(&bytes).map_err(|msg| Error::format(path, format!("MATLAB v5 file: {msg}")))
 }
 

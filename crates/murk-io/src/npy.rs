@@ -66,7 +66,7 @@ pub fn read_npy_f32(path: &Path) -> Result<(Vec<usize>, Vec<f32>)> {
 /// As [`read_npy_f32`], refusing arrays whose f32 copy would exceed `max_bytes`.
 pub fn read_npy_f32_with_limit(path: &Path, max_bytes: u64) -> Result<(Vec<usize>, Vec<f32>)> {
     let bad = |msg: String| Error::format(path, msg);
-    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut f = murk_core::open_input(path)?;
     let mut pre = [0u8; 12];
     let got = crate::h5::read_prefix(&mut f, &mut pre).map_err(|e| Error::io(path, e))?;
     if got < 10 || &pre[..6] != MAGIC {
@@ -84,7 +84,7 @@ pub fn read_npy_f32_with_limit(path: &Path, max_bytes: u64) -> Result<(Vec<usize
     if (hstart + hlen) as u64 > file_len {
         return Err(bad("truncated .npy header".into()));
     }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = murk_core::read_input(path)?;
     let header = std::str::from_utf8(&bytes[hstart..hstart + hlen])
         .map_err(|_| bad("the .npy header is not text".into()))?;
     let descr = dict_value(header, "descr")

@@ -67,7 +67,8 @@ impl Scene {
     }
 
     pub fn load(path: &Path, ov: &Overrides) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = String::from_utf8(murk_core::read_input(path)?)
+            .map_err(|_| Error::format(path, "the scene file is not UTF-8 text"))?;
         Scene::from_str(&text, path, ov)
     }
 
