@@ -90,7 +90,10 @@ fn missing_truncated_and_foreign_files() {
     // A FIFO is refused before it is opened (opening it would wait for a writer), as input and as
     // output (the rename would turn it into a plain file). `timeout` bounds a regression's hang.
     let fifo = d.join("pipe.h5");
-    let made = std::process::Command::new("mkfifo").arg(&fifo).status().unwrap();
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
     assert!(made.success());
     let f = fifo.to_str().unwrap();
     let info = std::process::Command::new("timeout")
@@ -476,8 +479,34 @@ fn outputs_never_replace_inputs() {
             "--png",
             note.to_str().unwrap(),
         ],
-        &["note.txt", "--png needs a folder"],
+        &["note.txt", "the pictures need a folder"],
     );
+    // A capture inside the pictures' folder under a picture's name, and a volume named like the
+    // pictures' folder, are refused before anything is written.
+    let pics = d.join("pics");
+    std::fs::create_dir_all(&pics).unwrap();
+    let inside = pics.join("front.png");
+    std::fs::copy(&good, &inside).unwrap();
+    let p = pics.to_str().unwrap();
+    fails(
+        &[
+            "reconstruct",
+            inside.to_str().unwrap(),
+            "--out",
+            v.to_str().unwrap(),
+            "--png",
+            p,
+        ],
+        &["front.png", "replace the input"],
+    );
+    assert_eq!(std::fs::read(&inside).unwrap(), before);
+    let clash = d.join("v.h5");
+    let c = clash.to_str().unwrap();
+    fails(
+        &["reconstruct", g, "--out", c, "--png", c],
+        &["v.h5", "is the output"],
+    );
+    std::fs::remove_dir_all(&pics).unwrap();
     no_leftovers(&d, &["good.h5", "note.txt"]);
     std::fs::remove_dir_all(&d).ok();
 }

@@ -239,12 +239,8 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     murk_io::check_volume_path(&a.out)?;
     murk_io::check_output(&a.out, &[&a.file])?;
     if let Some(png) = &a.png {
-        // Refused before the reconstruction, so that a bad --png leaves no volume behind either.
-        anyhow::ensure!(
-            !png.exists() || png.is_dir(),
-            "{}: --png needs a folder, and this is a file",
-            png.display()
-        );
+        // Before the reconstruction, so that a bad --png leaves no volume behind either.
+        pictures::check_pictures_dir(png, &[&a.file], &a.out)?;
     }
     let cap = murk_io::read_capture(&a.file)?;
     let kind = cap.kind();

@@ -16,7 +16,10 @@ pub fn open_input(path: &Path) -> Result<File> {
     } else {
         return File::open(path).map_err(|e| Error::io(path, e));
     };
-    Err(Error::io(path, std::io::Error::new(ErrorKind::InvalidInput, why)))
+    Err(Error::io(
+        path,
+        std::io::Error::new(ErrorKind::InvalidInput, why),
+    ))
 }
 
 /// The whole of the regular file `path`.
@@ -43,7 +46,10 @@ mod tests {
         assert!(e.contains("is a directory"), "{e}");
         // A device would be read for ever; it is refused before it is opened.
         let e = read_input(Path::new("/dev/zero")).unwrap_err().to_string();
-        assert!(e.starts_with("/dev/zero: ") && e.contains("not a regular file"), "{e}");
+        assert!(
+            e.starts_with("/dev/zero: ") && e.contains("not a regular file"),
+            "{e}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

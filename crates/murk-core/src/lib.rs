@@ -24,8 +24,8 @@ pub mod window;
 
 pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
 pub use error::{Error, Result};
-pub use input::{open_input, read_input};
 pub use glam::DVec3;
+pub use input::{open_input, read_input};
 pub use limits::{short, Limits};
 pub use points::{PointLayout, PointSet, RegularGrid};
 pub use progress::{NoProgress, Progress};

@@ -153,6 +153,40 @@ pub fn write_png(path: &Path, plane: &Plane, lo: f32, hi: f32) -> Result<()> {
     })
 }
 
+/// The files [`write_views`] and [`write_index`] write into their folder.
+pub const PICTURE_FILES: [&str; 5] = [
+    "front.png",
+    "top.png",
+    "side.png",
+    "depth.png",
+    "index.html",
+];
+
+/// Refuses, before anything is computed, a pictures folder `dir` that is a file or names the file
+/// `out`, or whose pictures would replace one of `inputs` or land on `out`.
+pub fn check_pictures_dir(dir: &Path, inputs: &[&Path], out: &Path) -> Result<()> {
+    let refuse = |why: String| Err(murk_core::Error::param(format!("{}: {why}", dir.display())));
+    if dir.exists() && !dir.is_dir() {
+        return refuse("the pictures need a folder, and this is a file".into());
+    }
+    if murk_io::same_target(dir, out) {
+        return refuse(format!(
+            "the pictures' folder is the output {}",
+            out.display()
+        ));
+    }
+    for name in PICTURE_FILES {
+        let p = dir.join(name);
+        if murk_io::same_target(&p, out) {
+            return refuse(format!("its {name} would be the output {}", out.display()));
+        }
+        if dir.is_dir() {
+            murk_io::check_output(&p, inputs)?;
+        }
+    }
+    Ok(())
+}
+
 /// Writes front.png, top.png, side.png and depth.png into `dir`; returns their paths with captions.
 pub fn write_views(dir: &Path, vol: &Volume, intensity: &[f32]) -> Result<Vec<(PathBuf, String)>> {
     std::fs::create_dir_all(dir).map_err(|e| murk_core::Error::io(dir, e))?;
