@@ -74,8 +74,8 @@ fn pf_finds_a_square_behind_the_foam_at_its_depth() {
         depth_m(&vol, &rec.intensity)
     };
     let (seen, peak) = (
-        slab.round_trip_delay_m(Some(pulse)),
-        slab.round_trip_delay_m(None),
+        slab.round_trip_delay_m(Some(pulse)).unwrap(),
+        slab.round_trip_delay_m(None).unwrap(),
     );
     assert!(seen < peak, "pulse's delay {seen} m, peak {peak} m");
     let (with_seen, with_peak) = (depth_with(seen), depth_with(peak));

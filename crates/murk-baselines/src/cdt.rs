@@ -53,8 +53,10 @@ impl SlabParams {
     /// peak of the round trip's response K ⊛ K integrated over the lateral plane or, with a `pulse`,
     /// the peak of that response's envelope after Phasor Fields' band-pass, which is where PF puts
     /// the point. The response rises sharply and decays slowly, so the band-pass (weighing its
-    /// rise) peaks earlier than the response does.
-    pub fn round_trip_delay_m(&self, pulse: Option<Pulse>) -> f64 {
+    /// rise) peaks earlier than the response does. A slab whose response does not peak inside the
+    /// model's 4 ns is refused.
+    pub fn round_trip_delay_m(&self, pulse: Option<Pulse>) -> Result<f64> {
+        self.validate()?;
         // 1 ps steps over 4 ns cover the foam's response (its peak is near 0.3 ns).
         let dt_s = 1e-12;
         let n = 4000;
@@ -98,7 +100,16 @@ impl SlabParams {
             .iter()
             .enumerate()
             .fold((0, f64::MIN), |a, (i, &v)| if v > a.1 { (i, v) } else { a });
-        best.0 as f64 * step_m
+        if best.1.is_nan() || best.1 <= 0.0 || best.0 + 1 >= n {
+            return Err(Error::param(format!(
+                "the slab ({} m, μs′ {} /m, μa {} /m, n {}) does not return its light within 4 ns, the span its delay is modelled over",
+                murk_core::short(self.thickness_m),
+                murk_core::short(self.mu_s_prime_per_m),
+                murk_core::short(self.mu_a_per_m),
+                murk_core::short(self.n)
+            )));
+        }
+        Ok(best.0 as f64 * step_m)
     }
 
     /// Time-resolved transmittance at lateral distance `rho` (m) and time `t` (s) after entry.
@@ -132,21 +143,28 @@ impl SlabParams {
         (a, four_dvt)
     }
 
+    /// Each parameter within what the diffusion model describes: a slab up to 1 m thick of a
+    /// medium whose transport length (1/μs′) lies between 1 µm and 1 m, with a refractive index of
+    /// 1 to 4; outside these the model's response underflows to nothing or stops being diffusion.
     fn validate(&self) -> Result<()> {
-        let ok = [self.thickness_m, self.mu_s_prime_per_m, self.n]
-            .iter()
-            .all(|v| v.is_finite() && *v > 0.0)
-            && self.mu_a_per_m.is_finite()
-            && self.mu_a_per_m >= 0.0
-            && self.ze_m.is_finite()
-            && self.ze_m >= 0.0;
-        if ok {
-            Ok(())
-        } else {
-            Err(Error::param(format!(
-                "slab parameters out of range: {self:?}"
-            )))
+        let checks = [
+            ("slab thickness (m)", self.thickness_m, 0.0, 1.0, false),
+            ("slab μa (1/m)", self.mu_a_per_m, 0.0, 1e4, true),
+            ("slab μs′ (1/m)", self.mu_s_prime_per_m, 1.0, 1e6, true),
+            ("slab refractive index", self.n, 1.0, 4.0, true),
+            ("slab extrapolation length (m)", self.ze_m, 0.0, 1.0, true),
+        ];
+        for (what, v, lo, hi, closed) in checks {
+            let low_ok = if closed { v >= lo } else { v > lo };
+            if !(low_ok && v <= hi) {
+                let open = if closed { "≤" } else { "<" };
+                return Err(Error::param(format!(
+                    "{what} must be {lo} {open} value ≤ {hi}, got {}",
+                    murk_core::short(v)
+                )));
+            }
         }
+        Ok(())
     }
 }
 
@@ -187,12 +205,7 @@ impl CdtPlan {
     /// (stopped when it asks).
     pub fn new(capture: &Capture, params: CdtParams, progress: &dyn Progress) -> Result<Self> {
         params.slab.validate()?;
-        if params.snr.is_nan() || params.snr <= 0.0 {
-            return Err(Error::param(format!(
-                "CDT snr must be positive, got {}",
-                params.snr
-            )));
-        }
+        crate::lct::check_snr("CDT", params.snr)?;
         let geom = ConfocalGeometry::new(capture, params.grid)?;
         let stolt = Stolt::new(&geom);
         let steps = Steps::start(progress, Fft3::FORWARD_PASSES + Fft3::MAP_REAL_PASSES);

@@ -59,12 +59,7 @@ impl LctPlan {
     /// Plans for captures of `capture`'s geometry. The kernel's spectrum is a pass through a grid
     /// as large as a run's, so it reports to `progress` and stops when asked.
     pub fn new(capture: &Capture, params: LctParams, progress: &dyn Progress) -> Result<Self> {
-        if params.snr.is_nan() || params.snr <= 0.0 {
-            return Err(Error::param(format!(
-                "LCT snr must be positive, got {}",
-                params.snr
-            )));
-        }
+        crate::lct::check_snr("LCT", params.snr)?;
         let geom = ConfocalGeometry::new(capture, params.grid)?;
         let m = geom.nt.next_power_of_two();
         let (nx, ny) = (geom.nx, geom.ny);
@@ -165,6 +160,19 @@ fn light_cone(g: &ConfocalGeometry, m: usize) -> (Vec<Option<usize>>, f32) {
         }
     }
     (delay, 1.0 / (count as f32).sqrt())
+}
+
+/// A Wiener signal-to-noise ratio that `method` can use: within 1e-12..=1e12, so that 1/snr stays
+/// a normal f32 (beyond it the filter is all zeros or a bare inverse).
+pub(crate) fn check_snr(method: &str, snr: f64) -> Result<()> {
+    if (1e-12..=1e12).contains(&snr) {
+        Ok(())
+    } else {
+        Err(Error::param(format!(
+            "{method} snr must be within 1e-12 ..= 1e12, got {}",
+            murk_core::short(snr)
+        )))
+    }
 }
 
 /// The Wiener filter conj(F)/(|F|² + 1/snr) of the PSF spectrum F. (Of a real PSF's spectrum it

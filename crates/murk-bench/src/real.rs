@@ -31,7 +31,7 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
         ..PfParams::default()
     };
     let cdt = CdtParams::default();
-    let delay = cdt.slab.round_trip_delay_m(None);
+    let delay = cdt.slab.round_trip_delay_m(None)?;
     let mut table: Vec<(&str, Vec<f64>)> = Vec::new();
     let mut record = |name: &'static str, s: f64| match table.iter_mut().find(|r| r.0 == name) {
         Some(r) => r.1.push(s),

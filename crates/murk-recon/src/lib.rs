@@ -133,8 +133,12 @@ impl PfParams {
             }
         };
         if !(l.is_finite() && l > 0.0) {
-            return Err(Error::param(format!("wavelength must be > 0 m, got {l}")));
+            return Err(Error::param(format!(
+                "wavelength must be > 0 m, got {}",
+                murk_core::short(l)
+            )));
         }
+        murk_core::Limits::get().length("the wavelength", l)?;
         Ok(l)
     }
 }
@@ -285,6 +289,7 @@ impl PfPlan {
             }
         }
         let sigma_m = params.sigma_m(wavelength_m);
+        murk_core::Limits::get().length("the virtual pulse's σ (cycles × λ / 6)", sigma_m)?;
         if 2.0 * sigma_m < cap.time.bin_width_m {
             return Err(Error::param(format!(
                 "the virtual pulse (σ = {} m) is shorter than one time bin ({} m); use more cycles or a longer wavelength",

@@ -334,7 +334,7 @@ impl Plan {
             TOffset::Metres(v) => {
                 return Err(Error::param(format!("time offset must be finite, got {v}")))
             }
-            TOffset::Slab(slab) => slab.round_trip_delay_m(pulse),
+            TOffset::Slab(slab) => slab.round_trip_delay_m(pulse)?,
         };
         geometry.time.start_m -= offset_m;
         // The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.

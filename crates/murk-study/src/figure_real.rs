@@ -74,7 +74,7 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> Result<Vec<Cel
         shifted.time.start_m -= params.slab.round_trip_delay_m(Some(Pulse {
             wavelength_m,
             sigma_m: pf.sigma_m(wavelength_m),
-        }));
+        }))?;
         let (secs, r) = timed(runs, || {
             murk_recon::reconstruct(&shifted, &vol, pf, PfForm::Fast, &NoProgress)
         })?;
@@ -100,6 +100,7 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
     };
     let pfs = [pf_of(8.0), pf_of(4.0)];
     let slab = CdtParams::default().slab;
+    let peak_m = slab.round_trip_delay_m(None)?;
     let mut rows = vec![
         (
             "CDT".to_string(),
@@ -112,7 +113,7 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
             "PF".to_string(),
             format!(
                 "confocal round-trip kernel, 8 cycles, no falloff, fast form; time shifted by the slab's round-trip delay as each row's pulse sees it (docs/slab-delay.md; the response's peak is {:.4} m of path); same voxels as CDT. Row 2: λ = 4Δc of depth (one-way distance) = 8Δc of path (--wavefactor 8). Row 3: λ = 4Δc of path (--wavefactor 4), at the Nyquist limit of the round-trip kernel",
-                slab.round_trip_delay_m(None)
+                peak_m
             ),
         ),
         (

@@ -50,12 +50,13 @@ pub fn add_first_bounce(
             opts.mu_t_per_m
         )));
     }
-    if !(opts.jitter_sigma_m >= 0.0 && opts.jitter_sigma_m.is_finite()) {
+    if opts.jitter_sigma_m.is_nan() || opts.jitter_sigma_m < 0.0 {
         return Err(Error::param(format!(
             "jitter must be ≥ 0 m, got {}",
             opts.jitter_sigma_m
         )));
     }
+    murk_core::Limits::get().length("the jitter", opts.jitter_sigma_m)?;
     let nt = cap.time.bins;
     if cap.h.len() != cap.n_hist() * nt {
         return Err(Error::param(
@@ -112,7 +113,8 @@ fn deposit(hist: &mut [f32], time: &murk_core::TimeAxis, path: f64, w: f64, jitt
         let cdf = |x: f64| 0.5 * (1.0 + erf((x - path) / (jitter * std::f64::consts::SQRT_2)));
         for n in lo.max(0)..=hi.min(nt - 1) {
             let a = time.start_m + n as f64 * time.bin_width_m;
-            hist[n as usize] += (w * (cdf(a + time.bin_width_m) - cdf(a))) as f32;
+            // A bin's share is never negative, even where erf's rounding is not monotonic.
+            hist[n as usize] += (w * (cdf(a + time.bin_width_m) - cdf(a)).max(0.0)) as f32;
         }
         return;
     }
