@@ -196,6 +196,40 @@ fn nonsense_parameters() {
     let g = good.to_str().unwrap();
     let out = d.join("v.npy");
     let out = out.to_str().unwrap();
+    // Magnitudes that used to give all-zero volumes or a Debug dump, each named.
+    let conf = synth_capture(&d, "conf.h5", &["--kind", "confocal"]);
+    let c = conf.to_str().unwrap();
+    for (extra, want) in [
+        (&["--wavelength", "1e300"][..], "the wavelength is 1e300 m"),
+        (&["--cycles", "1e300"], "the virtual pulse's σ"),
+        (
+            &["--method", "lct", "--snr", "1e-300"],
+            "LCT snr must be within",
+        ),
+        (
+            &["--method", "cdt", "--slab-n", "0"],
+            "slab refractive index",
+        ),
+        (
+            &["--method", "cdt", "--slab-thickness", "100"],
+            "slab thickness",
+        ),
+        (
+            &["--method", "fk", "--t-offset", "4"],
+            "before any depth behind the wall",
+        ),
+    ] {
+        fails(
+            &[&["reconstruct", c, "--out", out][..], extra].concat(),
+            &[want],
+        );
+    }
+    fails(
+        &[
+            "synth", "--out", out, "--target", "z:1", "--jitter", "1e300",
+        ],
+        &["the jitter is 1e300 m"],
+    );
     fails(
         &[
             "reconstruct",
@@ -293,7 +327,7 @@ fn nonsense_parameters() {
         &["reconstruct", g, "--out", out, "--gate", "1e30"],
         &["gate '1e30'", "100000 m"],
     );
-    no_leftovers(&d, &["good.h5"]);
+    no_leftovers(&d, &["good.h5", "conf.h5"]);
     std::fs::remove_dir_all(&d).ok();
 }
 

@@ -342,6 +342,13 @@ impl Plan {
             p.sigma_m
         });
         let volume = match (req.volume, m.own_grid()) {
+            // The methods on their own grid have no volume to check against the window.
+            (_, true) if deepest_reach_m(&geometry) <= 0.0 => {
+                return Err(Error::param(format!(
+                    "the capture's time window ends at {:.3} m of path (after the time offset), before any depth behind the wall",
+                    geometry.time.end_m()
+                )))
+            }
             (_, true) => None,
             (VolumeSpec::Given(v), false) => {
                 v.validate()?;
@@ -407,6 +414,18 @@ fn closing_rows(offset_m: f64, gated: &GateReport, end: &EndReport) -> Vec<(Stri
     ]
 }
 
+/// The deepest depth the time window reaches: the shortest round trip to depth z is 2z (a voxel
+/// straight in front of the wall points) plus the devices' legs.
+fn deepest_reach_m(cap: &Capture) -> f64 {
+    let offsets = (0..cap.n_hist())
+        .map(|i| {
+            let (l, s) = cap.hist_pair(i);
+            cap.first_bounce_m(l) + cap.last_bounce_m(s)
+        })
+        .fold(f64::MAX, f64::min);
+    (cap.time.end_m() - offsets) / 2.0
+}
+
 /// The wall grid's extent and spacing in x and y; depth from 0.1 m to what the time window reaches.
 pub fn default_volume(cap: &Capture) -> Result<Volume> {
     let side = if cap.sensor.len() > cap.illum.len() {
@@ -423,14 +442,7 @@ pub fn default_volume(cap: &Capture) -> Result<Volume> {
             (a.min(*p), b.max(*p))
         });
     let count = |a: f64, b: f64| ((b - a) / spacing).round() as usize + 1;
-    let offsets = (0..cap.n_hist())
-        .map(|i| {
-            let (l, s) = cap.hist_pair(i);
-            cap.first_bounce_m(l) + cap.last_bounce_m(s)
-        })
-        .fold(f64::MAX, f64::min);
-    // The shortest round trip to depth z is 2z (a voxel straight in front of the wall points).
-    let z_max = (cap.time.end_m() - offsets) / 2.0;
+    let z_max = deepest_reach_m(cap);
     let z_min = 0.1;
     if z_max <= z_min {
         return Err(Error::param(format!(
