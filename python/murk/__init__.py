@@ -12,13 +12,16 @@ renders through scattering media. Every function calls murk's Rust library, the 
 See docs/python.md for a worked example, Dask (``murk.dask``) and the study (``murk.experiment``).
 """
 
+import functools
 import os
+import re
+import types
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from . import _murk
+from . import _murk as _raw
 from .errors import (
     Error,
     FileError,
@@ -28,6 +31,35 @@ from .errors import (
     UnsupportedError,
 )
 
+
+
+class _Native:
+    """The extension module, with its argument conversion errors ("failed to extract field
+    RenderArgs.spp") raised as InputError naming the keyword and what was wrong with it."""
+
+    def __init__(self, module):
+        self._module = module
+
+    def __getattr__(self, name):
+        f = getattr(self._module, name)
+        if not isinstance(f, types.BuiltinFunctionType):
+            return f
+
+        @functools.wraps(f)
+        def call(*args, **kwargs):
+            try:
+                return f(*args, **kwargs)
+            except (TypeError, OverflowError) as e:
+                m = re.fullmatch(r"failed to extract field \w+\.(\w+)", str(e))
+                if m is None:
+                    raise
+                why = e.__cause__ if e.__cause__ is not None else "wrong type"
+                raise InputError(f"{m.group(1)}: {why}") from e
+
+        return call
+
+
+_murk = _Native(_raw)
 Capture = _murk.Capture
 read_capture = _murk.read_capture
 write_capture = _murk.write_capture
@@ -113,14 +145,19 @@ def synth(
 
 
 def _toml(v) -> str:
-    """A Python value as the TOML value ``murk render --set key=VALUE`` takes."""
+    """A Python value as the TOML value ``murk render --set key=VALUE`` takes (numpy arrays and
+    scalars as the Python values they hold)."""
+    if isinstance(v, (np.ndarray, np.generic)):
+        v = v.tolist()
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, str):
         return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_toml(x) for x in v) + "]"
-    return repr(v)
+    if isinstance(v, float):
+        return repr(v)
+    return str(v)
 
 
 def _overrides(set) -> List[str]:

@@ -96,14 +96,18 @@ impl murk_recon::Progress for Ticker {
 pub(crate) fn compute<T: Send>(
     py: Python<'_>,
     progress: Option<&Bound<'_, PyAny>>,
-    threads: Option<usize>,
+    threads: Option<i64>,
     work: impl FnOnce(&Ticker) -> murk_core::Result<T> + Send,
 ) -> PyResult<T> {
     let ticker = Ticker::default();
     let pool = match threads {
         Some(n) => Some(
             rayon::ThreadPoolBuilder::new()
-                .num_threads(murk_core::Limits::threads(n).map_err(to_py)?)
+                .num_threads(
+                    usize::try_from(n)
+                        .map_err(|_| error("InputError", format!("threads must be ≥ 0, got {n}")))
+                        .and_then(|n| murk_core::Limits::threads(n).map_err(to_py))?,
+                )
                 .build()
                 .map_err(|e| error("Error", format!("cannot start {n} worker threads: {e}")))?,
         ),

@@ -119,7 +119,7 @@ pub fn render(
     py: Python<'_>,
     scene: PathBuf,
     args: RenderArgs,
-    threads: Option<usize>,
+    threads: Option<i64>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<Capture>> {
     let caps = compute(py, progress, threads, |t: &Ticker| {
@@ -135,6 +135,17 @@ pub fn render(
             .collect();
         for out in &outs {
             murk_io::check_output(out, &file)?;
+            // The checkpoint is removed once the captures are written: it must not be one of them.
+            if let Some(c) = args
+                .checkpoint
+                .as_deref()
+                .filter(|c| murk_io::same_target(c, out))
+            {
+                return Err(murk_core::Error::param(format!(
+                    "{}: the checkpoint and the output are the same file",
+                    c.display()
+                )));
+            }
         }
         let scene = args.scene(&scene)?;
         let caps = args.plan(&scene)?.render_stored(
@@ -157,7 +168,7 @@ pub fn render_part(
     py: Python<'_>,
     scene: PathBuf,
     args: RenderArgs,
-    threads: Option<usize>,
+    threads: Option<i64>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
     compute(py, progress, threads, |t: &Ticker| {
@@ -325,7 +336,7 @@ pub fn run_study(
     py: Python<'_>,
     out: PathBuf,
     args: StudyArgs,
-    threads: Option<usize>,
+    threads: Option<i64>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PathBuf> {
     let opt = study_options(args)?;

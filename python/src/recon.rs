@@ -148,7 +148,7 @@ pub fn reconstruct<'py>(
     py: Python<'py>,
     capture: &Bound<'py, PyAny>,
     args: Args,
-    threads: Option<usize>,
+    threads: Option<i64>,
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Out<'py>> {
     let source = Source::of(capture)?;

@@ -1,5 +1,6 @@
 import math
 
+import numpy as np
 import pytest
 
 import murk
@@ -114,3 +115,31 @@ def test_render_outputs_checked_before_rendering(tmp_path):
     with pytest.raises(murk.InputError) as e:
         murk.render(scene, grid=4, spp=1, out=tmp_path / "no" / "such" / "c.h5")
     assert "does not exist" in one_line(e)
+
+
+def test_argument_conversion_errors_name_the_keyword(tmp_path):
+    with pytest.raises(murk.InputError) as e:
+        murk.synth("z:1", grid=-1)
+    assert one_line(e).startswith("grid: ")
+    with pytest.raises(murk.InputError) as e:
+        murk.render(SCENES / "z-letter.toml", grid=4, spp=2.0)
+    assert one_line(e).startswith("spp: ")
+    with pytest.raises(murk.InputError) as e:
+        murk.render(SCENES / "z-letter.toml", grid=4, spp=1, threads=-1)
+    assert "threads must be ≥ 0" in one_line(e)
+
+
+def test_checkpoint_and_output_must_differ(tmp_path):
+    out = tmp_path / "z.h5"
+    with pytest.raises(murk.InputError) as e:
+        murk.render(SCENES / "z-letter.toml", grid=4, spp=1, checkpoint=out, out=out)
+    assert "the checkpoint and the output are the same file" in one_line(e)
+    assert not out.exists()
+
+
+def test_numpy_values_as_overrides():
+    a = murk.render(SCENES / "z-letter.toml", grid=4, spp=1, set={
+        "object[0].center": np.array([0.0, 0.0, 1.5]), "medium.albedo": np.float64(0.5)})
+    b = murk.render(SCENES / "z-letter.toml", grid=4, spp=1, set={
+        "object[0].center": [0.0, 0.0, 1.5], "medium.albedo": 0.5})
+    assert np.array_equal(a.H, b.H)
