@@ -418,6 +418,40 @@ fn absurd_magnitudes_in_a_capture() {
         }
         keep.push(name.to_string());
     }
+    // Finite values so large that the reconstruction's sums overflow f32: refused, not a volume of
+    // inf and NaN.
+    let npy = d.join("huge.npy");
+    let (nt, n) = (128, 8);
+    let mut h = vec![0f32; nt * n * n];
+    for (i, v) in h.iter_mut().enumerate() {
+        *v = if i / (n * n) == 60 { 1e36 } else { 0.0 };
+    }
+    murk_io::write_npy_f32(&npy, &[nt, n, n], &h).unwrap();
+    let huge = d.join("huge.h5");
+    let (code, _, err) = murk(&[
+        "import",
+        npy.to_str().unwrap(),
+        "--axes",
+        "t,x,y",
+        "--bin-width-ps",
+        "32",
+        "--wall-size",
+        "0.8",
+        "--confocal",
+        "--out",
+        huge.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    fails(
+        &[
+            "reconstruct",
+            huge.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &["huge.h5", "overflows 32-bit floats"],
+    );
+    keep.extend(["huge.npy".to_string(), "huge.h5".to_string()]);
     let keep: Vec<&str> = keep.iter().map(|s| s.as_str()).collect();
     no_leftovers(&d, &keep);
     std::fs::remove_dir_all(&d).ok();

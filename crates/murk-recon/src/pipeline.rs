@@ -393,6 +393,14 @@ impl Plan {
         let gated = apply_gate(&mut cap, self.open_m, self.edge_m);
         let mut end = handle_end(&mut cap, self.window_end, self.edge_m);
         let mut out = self.engine.run(&cap, progress)?;
+        if out.intensity.iter().any(|v| !v.is_finite()) {
+            // Finite data whose sums overflow f32: a volume of inf and NaN would look like a result.
+            let peak = cap.h.iter().fold(0f32, |m, v| m.max(v.abs()));
+            return Err(Error::Limits(format!(
+                "the reconstruction overflows 32-bit floats (the capture's values reach {}); scale the capture down",
+                murk_core::short(peak as f64)
+            )));
+        }
         end.trim(&cap, &out.volume, &mut out.intensity);
         out.warnings.extend(end.warning());
         out.warnings.extend(near_face_warning(&out, &gated));
