@@ -15,9 +15,16 @@ fn side(name: &str, p: &murk_core::PointSet) -> String {
         .fold((p.points[0], p.points[0]), |(a, b), q| {
             (a.min(*q), b.max(*q))
         });
+    // Both steps where they differ (a non-square scan over a square side), else the one.
     let spacing = p
-        .spacing_m()
-        .map(|d| format!(", spacing {d:.4} m"))
+        .regular_grid()
+        .map(|g| (g.step_x.length(), g.step_y.length()))
+        .map(|(sx, sy)| match (sx - sy).abs() <= 1e-9 * sx.max(sy) {
+            true => format!(", spacing {sx:.4} m"),
+            false => format!(
+                ", spacing {sx:.4} m along the grid's first index, {sy:.4} m along its second"
+            ),
+        })
         .unwrap_or_default();
     format!(
         "{name}: {layout}{spacing}, x {:+.3}..{:+.3}, y {:+.3}..{:+.3}, z {:+.3}..{:+.3} m",

@@ -287,11 +287,20 @@ impl Scan {
     }
 
     /// Zeroes the first `bins` bins of every histogram.
-    fn gate(&mut self, bins: usize) {
+    /// Zeroes the first `bins` bins of every histogram; a gate that leaves nothing is refused
+    /// (every method would return zeros).
+    fn gate(&mut self, path: &Path, bins: usize) -> Result<()> {
         let nt = self.nt;
-        for hist in self.h.chunks_mut(nt) {
-            hist[..bins.min(nt)].fill(0.0);
+        if bins >= nt {
+            return Err(Error::param(format!(
+                "{}: a gate of {bins} bins leaves nothing of its {nt}-bin histograms",
+                path.display()
+            )));
         }
+        for hist in self.h.chunks_mut(nt) {
+            hist[..bins].fill(0.0);
+        }
+        Ok(())
     }
 
     /// A confocal capture on murk's regular grid over [−side/2, side/2]², first point to last.
@@ -304,7 +313,15 @@ impl Scan {
                 f.side_m, bin_width_m
             )));
         }
-        self.gate(f.gate_bins);
+        self.gate(path, f.gate_bins)?;
+        if f.t0_bin >= self.nt {
+            return Err(Error::param(format!(
+                "{}: bin {} as path 0 puts the whole {}-bin window before the wall",
+                path.display(),
+                f.t0_bin,
+                self.nt
+            )));
+        }
         let (nx, ny, side) = (self.nx, self.ny, f.side_m);
         let points = square_grid(nx, ny, side);
         let grid = PointSet {

@@ -63,7 +63,7 @@ impl Walls {
         }
         mirror(&mut self, o.flip);
         let gate = o.gate_bins.unwrap_or(0);
-        self.scan.gate(gate);
+        self.scan.gate(path, gate)?;
         let (nx, ny, nt) = (self.scan.nx, self.scan.ny, self.scan.nt);
         let (layout, order) = arrange(&self.sensor, nx, ny);
         let pick = |v: &[DVec3]| order.iter().map(|&i| v[i]).collect::<Vec<_>>();
@@ -83,6 +83,13 @@ impl Walls {
             bin_width_m,
             bins: nt,
         };
+        if time.end_m() <= 0.0 {
+            return Err(Error::param(format!(
+                "{}: bin {t0} as path 0 puts the whole window before the wall (it ends at {} m)",
+                path.display(),
+                short(time.end_m())
+            )));
+        }
         let arranged = match layout {
             PointLayout::Grid { nx, ny } => format!("grid {nx} × {ny} along +x, +y"),
             PointLayout::List => "list in the file's order (not an axis-aligned grid)".into(),
