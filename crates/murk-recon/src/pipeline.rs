@@ -330,9 +330,9 @@ impl Plan {
         let pulse = m.pulse(&geometry)?;
         let offset_m = match req.t_offset {
             TOffset::None => 0.0,
-            TOffset::Metres(v) if v.is_finite() => v,
             TOffset::Metres(v) => {
-                return Err(Error::param(format!("time offset must be finite, got {v}")))
+                murk_core::Limits::get().length("the time offset", v)?;
+                v
             }
             TOffset::Slab(slab) => slab.round_trip_delay_m(pulse)?,
         };

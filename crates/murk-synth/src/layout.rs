@@ -1,4 +1,4 @@
-use murk_core::{Capture, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
+use murk_core::{short, Capture, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
 
 /// Which capture to build; the wall is a square at z = 0 centred on the origin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,7 +74,10 @@ impl CaptureLayout {
         if self.point.x.abs() > half || self.point.y.abs() > half || self.point.z != 0.0 {
             return Err(Error::param(format!(
                 "the single wall point ({}, {}, {}) is not on the {} m wall at z = 0",
-                self.point.x, self.point.y, self.point.z, self.wall_size_m
+                short(self.point.x),
+                short(self.point.y),
+                short(self.point.z),
+                short(self.wall_size_m)
             )));
         }
         let grid = PointSet::wall_grid(

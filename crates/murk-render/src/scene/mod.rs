@@ -4,7 +4,7 @@
 use crate::geometry::Geometry;
 use crate::medium::Medium;
 use crate::overrides::{apply, canonical, Overrides};
-use murk_core::{DVec3, Error, Pairing, PointSet, Result, TimeAxis};
+use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
 use std::path::Path;
 
 mod file;
@@ -217,6 +217,6 @@ fn check_albedo(a: f64, field: &str, bad: Bad) -> Result<()> {
     if (0.0..=1.0).contains(&a) {
         Ok(())
     } else {
-        Err(bad(field, format!("must be in [0, 1], got {a}")))
+        Err(bad(field, format!("must be in [0, 1], got {}", short(a))))
     }
 }

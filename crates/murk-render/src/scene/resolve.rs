@@ -7,7 +7,7 @@ use super::file::{
 use super::{check_albedo, v3, Bad, CaptureSpec, Relay};
 use crate::geometry::{triangulate, Aabb, Object, Shape};
 use crate::medium::{Medium, Phase};
-use murk_core::{DVec3, Error, Pairing, PointSet, Result, TimeAxis};
+use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
 use std::path::Path;
 
 impl RelayDef {
@@ -129,7 +129,7 @@ impl CaptureDef {
                 "capture.bin_width",
                 format!(
                     "must be a positive path length in metres, got {}",
-                    c.bin_width
+                    short(c.bin_width)
                 ),
             ));
         }
@@ -202,7 +202,7 @@ impl RenderDef {
         if !(s.time_jitter.is_finite() && s.time_jitter >= 0.0) {
             return Err(bad(
                 "render.time_jitter",
-                format!("must be ≥ 0, got {}", s.time_jitter),
+                format!("must be ≥ 0, got {}", short(s.time_jitter)),
             ));
         }
         if let Some(p) = s
@@ -237,7 +237,7 @@ impl RenderDef {
         if !(s.target_split_radius.is_finite() && s.target_split_radius >= 0.0) {
             return Err(bad(
                 "render.target_split_radius",
-                format!("must be ≥ 0 m, got {}", s.target_split_radius),
+                format!("must be ≥ 0 m, got {}", short(s.target_split_radius)),
             ));
         }
         if let Some(p) = s.target_lobe.filter(|p| !(0.0..1.0).contains(p)) {
@@ -263,7 +263,7 @@ impl MediumDef {
         if !(m.mu_t_per_m.is_finite() && m.mu_t_per_m >= 0.0) {
             return Err(bad(
                 "medium.mu_t",
-                format!("must be ≥ 0 (1/m), got {}", m.mu_t_per_m),
+                format!("must be ≥ 0 (1/m), got {}", short(m.mu_t_per_m)),
             ));
         }
         check_albedo(m.albedo, "medium.albedo", bad)?;
@@ -273,11 +273,14 @@ impl MediumDef {
         if bad_g {
             return Err(bad(
                 "medium.g",
-                format!("must satisfy |g| < 1, got {}", m.g),
+                format!("must satisfy |g| < 1, got {}", short(m.g)),
             ));
         }
         if !(m.ior.is_finite() && m.ior >= 1.0) {
-            return Err(bad("medium.ior", format!("must be ≥ 1, got {}", m.ior)));
+            return Err(bad(
+                "medium.ior",
+                format!("must be ≥ 1, got {}", short(m.ior)),
+            ));
         }
         if !(0..3).all(|i| m.min[i].is_finite() && m.max[i].is_finite() && m.min[i] < m.max[i]) {
             return Err(bad(
