@@ -26,7 +26,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Paths per traced wall point (per laser point for a laser grid); default: the scene's [render] spp.
-    #[arg(long, conflicts_with = "time_budget", value_parser = clap::value_parser!(u64).range(1..=murk_render::MAX_SPP))]
+    #[arg(long, conflicts_with = "time_budget", value_parser = clap::value_parser!(u64).range(1..=murk_core::Limits::MAX_SPP))]
     pub spp: Option<u64>,
     /// Pick the spp that fits this many seconds (measured on a short pilot run, then rendered
     /// deterministically). Not with --resume: each run would pick another spp.

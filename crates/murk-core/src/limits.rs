@@ -18,6 +18,14 @@ impl Limits {
     /// Most worker threads murk starts: far above any machine's cores, far below what the OS can run.
     pub const MAX_THREADS: usize = 1024;
 
+    /// Most paths per traced point one render takes: 2^40 ≈ 1.1·10¹², far beyond any converged
+    /// render; more is a typo that would run for ever.
+    pub const MAX_SPP: u64 = 1 << 40;
+
+    /// Longest interval or time budget in seconds: one year (a `Duration` cannot hold every float,
+    /// and anything longer is a typo).
+    pub const MAX_SECONDS: f64 = 365.0 * 86_400.0;
+
     /// A worker thread count `n` (0: one per core) that murk will start.
     pub fn threads(n: usize) -> Result<usize> {
         if n > Self::MAX_THREADS {

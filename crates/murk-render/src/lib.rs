@@ -27,7 +27,6 @@ pub use overrides::Overrides;
 pub use render::{
     check_shard, checkpoint_interval, checkpoint_path, fingerprint, merge, output_checkpoint,
     render_key, render_outputs, scene_info, sweep_output, time_budget, Plan, RenderOptions,
-    MAX_SECONDS, MAX_SPP,
 };
 pub use scene::{
     CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, ObjectDef, Relay, RelayDef, RelayKind,

@@ -27,13 +27,8 @@ pub struct RenderOptions {
     pub checkpoint_every: Duration,
 }
 
-/// Longest interval or budget in seconds that murk takes: one year (a `Duration` cannot hold every
-/// float, and anything longer is a typo).
-pub const MAX_SECONDS: f64 = 365.0 * 86_400.0;
-
-/// Most paths per traced point one render takes: 2^40 ≈ 1.1·10¹², far beyond any converged render;
-/// more is a typo that would run for ever.
-pub const MAX_SPP: u64 = 1 << 40;
+const MAX_SECONDS: f64 = murk_core::Limits::MAX_SECONDS;
+const MAX_SPP: u64 = murk_core::Limits::MAX_SPP;
 
 /// The interval between checkpoint appends, from seconds (0: after every unit). Refuses negative,
 /// non-finite and longer-than-a-year values.

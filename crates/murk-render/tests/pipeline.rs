@@ -565,7 +565,7 @@ fn stored_renders_drop_their_checkpoint_only_once_written() {
     std::fs::remove_dir_all(&dir).unwrap();
 
     let mut huge = opts(None, None);
-    huge.spp = murk_render::MAX_SPP + 1;
+    huge.spp = murk_core::Limits::MAX_SPP + 1;
     let e = plan.render(&huge, &|_, _| {}).unwrap_err().to_string();
     assert!(e.contains("spp must be between 1 and"), "{e}");
     assert_eq!(
