@@ -15,12 +15,14 @@
 //! let index = murk_study::run_study(std::path::Path::new("study"), &opt, &Silent).unwrap();
 //! ```
 
+pub mod demo;
 mod figure_real;
 pub mod metrics;
 pub mod plan;
 pub mod report;
 pub mod run;
 
+pub use demo::demo;
 pub use figure_real::figure_real;
 
 use murk_core::{Error, Result};
