@@ -87,7 +87,14 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> Result<Vec<Cel
 /// `out/grid.png` and `out/index.html`, and returns the index's path; `say` receives one line per
 /// reconstruction.
 pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> Result<PathBuf> {
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    // The folder is made only once there is something to put in it (a failed or interrupted run
+    // leaves none behind), but a path that cannot become one is refused first.
+    if out.exists() && !out.is_dir() {
+        return Err(Error::param(format!(
+            "{}: is a file; the figure needs a folder",
+            out.display()
+        )));
+    }
     // The paper's "λ = 4Δc, 8 cycles" for these confocal captures, read two ways. On the depth axis
     // (one-way distance, as confocal codes such as Lindell's define their wavelength) it is 8Δc of round-trip
     // path; read on the path axis, the round-trip kernel e^{2ikr} puts λ/2 = 2Δc at the lateral Nyquist
@@ -151,6 +158,7 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
         cells.push(pair);
     }
     let grid = grid_plane(&cells);
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let png = out.join("grid.png");
     pictures::write_png(&png, &grid, 0.0, 1.0)?;
     let index = pictures::write_index(
