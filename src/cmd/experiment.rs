@@ -1,6 +1,5 @@
 //! `murk experiment paper`: the paper's study in one command (murk-study does the work).
 
-use anyhow::Context;
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use murk_study::plan::{Figure, Scale, StudyOptions};
@@ -134,10 +133,7 @@ pub fn run(a: ExperimentArgs, quiet: bool) -> anyhow::Result<()> {
         ProgressStyle::with_template("{msg}\n{bar:40} {pos}/{len} units, {elapsed} elapsed")
             .expect("static template"),
     );
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()
-        .context("cannot start the worker threads")?;
+    let pool = crate::cmd::pool(a.threads)?;
     let obs = Bars { bar, quiet };
     let index = pool.install(|| murk_study::run_study(&a.out, &opt, &obs))?;
     obs.bar.finish_and_clear();

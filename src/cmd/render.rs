@@ -1,6 +1,5 @@
 //! `murk render` and `murk merge`: Monte Carlo captures of scene files (see `scenes/`).
 
-use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use murk_render::{
@@ -142,11 +141,7 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     if let Some(t) = &a.truth {
         murk_io::write_truth_h5(t, &scene.ground_truth())?;
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()
-        .context("cannot start the worker threads")?;
-    pool.install(|| render(&a, &plan, &outs, quiet))
+    crate::cmd::pool(a.threads)?.install(|| render(&a, &plan, &outs, quiet))
 }
 
 fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow::Result<()> {

@@ -1,5 +1,5 @@
 //! `murk bench --confocal-vs-tal`: murk's f-k and LCT next to y-tal's `fk` and `lct` on y-tal's own
-//! 64 × 64 × 512 confocal benchmark capture (docs/benchmarks.md, "y-tal's benchmark case"), for issue 4's targets (≥ 20× faster,
+//! 64 × 64 × 512 confocal benchmark capture (docs/benchmarks.md, "y-tal's benchmark case"), against the targets (≥ 20× faster,
 //! ≥ 5× less memory). Speed: the median of in-process calls, plan and run together, as `murk
 //! reconstruct` makes them. Memory: the peak RSS of a whole `murk reconstruct` process, since the
 //! bench process itself has already held other cases' buffers; y-tal's figure is likewise its whole

@@ -68,10 +68,9 @@ pub enum Lateral {
     /// product, the kernel's and the inverse's FFTs along x and their transposes on average over the
     /// band. Along each axis where the voxels sit off the wall's lattice (not for confocal data) the
     /// band is cut the same way and read by a 6–12-tap Kaiser–Bessel kernel whose spectrum the data
-    /// were divided by, instead of `Full`'s 16-tap windowed sinc: less aliasing, fewer taps. Measured
-    /// against `Full`: intensity relL2 1.8e-4 on the synthetic Z letter (128², 142² × 30 voxels;
-    /// 5.5e-5 with the sinc and the cut along y only), 3.4e-4 and 6.4e-4 on the real (confocal)
-    /// mannequin and letter S (their noise there).
+    /// were divided by, instead of `Full`'s 16-tap windowed sinc: less aliasing, fewer taps. Against
+    /// `Full` the intensity differs by relL2 1.8e-4 on the synthetic Z letter (128², 142² × 30
+    /// voxels), 3.4e-4 and 6.4e-4 on the real (confocal) mannequin and letter S (docs/reconstruction.md).
     #[default]
     Propagating,
     /// Every frequency of the FFT grid: the fast form equals the exact discrete sum to rounding.

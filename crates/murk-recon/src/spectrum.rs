@@ -163,8 +163,8 @@ pub fn path_range(cap: &Capture, vol: &Volume) -> (f64, f64) {
     }
 }
 
-/// Smallest length ≥ n whose only prime factors are 2, 3 and 5: rustfft's fastest kernels (lengths
-/// with a factor 7 measured 1.4–2× slower per point here, e.g. 63 and 280).
+/// Smallest length ≥ n whose only prime factors are 2, 3 and 5: rustfft's fastest kernels (a factor
+/// 7 costs more per point; docs/benchmarks.md).
 pub fn next_fast_len(n: usize) -> usize {
     let mut m = n.max(1);
     loop {

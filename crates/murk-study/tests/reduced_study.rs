@@ -1,5 +1,5 @@
 //! A reduced study at quick scale (128 spp): Fig. 3a, the α = 0.5 column of Fig. 3b and Fig. 4, rendered,
-//! reconstructed and scored end to end. It asserts what the issue asks the study to show, as measured.
+//! reconstructed and scored end to end. It asserts what the study must show (docs/study.md), as measured.
 //! Fig. 3b's μt = 1 α = 0.5 cell and Fig. 4 (α = 0.83) come from one albedo sweep.
 //! At 64 spp one seed's noise could order the 2λ0 and 3λ0 cells' high-frequency shares either way
 //! (0.00202 against 0.00257 once the renderer's random stream changed); at 96, 128 and 192 spp the
