@@ -65,6 +65,10 @@ fn main() {
             std::process::exit(2);
         }
     };
+    if let Err(e) = murk_core::Limits::check_env() {
+        eprintln!("murk: error: {e}");
+        std::process::exit(2);
+    }
     let result: anyhow::Result<()> = match cli.command {
         Command::Demo(a) => cmd::demo::run(a, cli.quiet),
         Command::Info(a) => cmd::info::run(a),

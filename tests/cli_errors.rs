@@ -657,6 +657,15 @@ fn usage_errors_say_what_is_wrong() {
         &["reconstruct", "x.h5", "--out", "v.npy", "--method", "foo"],
         &["'foo'", "possible values", "pf-exact", "cdt"],
     );
+    // A memory budget that is set but meaningless is refused, not silently replaced by the machine's.
+    let out = Command::new(env!("CARGO_BIN_EXE_murk"))
+        .env("MURK_MAX_BYTES", "abc")
+        .args(["info", "x.h5"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("MURK_MAX_BYTES is 'abc'"), "{err}");
 }
 
 /// `murk info x.h5 | head -1`: the closed pipe ends murk quietly, without a panic message.

@@ -84,13 +84,13 @@ impl Capture {
     }
     /// The laser device's position (x, y, z) in metres, or None.
     #[getter]
-    fn laser_xyz(&self) -> Option<[f64; 3]> {
-        self.cap.laser_xyz.map(|p| p.to_array())
+    fn laser_xyz(&self) -> Option<(f64, f64, f64)> {
+        self.cap.laser_xyz.map(|p| (p.x, p.y, p.z))
     }
     /// The SPAD device's position (x, y, z) in metres, or None.
     #[getter]
-    fn sensor_xyz(&self) -> Option<[f64; 3]> {
-        self.cap.sensor_xyz.map(|p| p.to_array())
+    fn sensor_xyz(&self) -> Option<(f64, f64, f64)> {
+        self.cap.sensor_xyz.map(|p| (p.x, p.y, p.z))
     }
     /// Optical path (m) at the start of bin 0.
     #[getter]

@@ -99,6 +99,7 @@ pub(crate) fn compute<T: Send>(
     threads: Option<i64>,
     work: impl FnOnce(&Ticker) -> murk_core::Result<T> + Send,
 ) -> PyResult<T> {
+    murk_core::Limits::check_env().map_err(to_py)?;
     let ticker = Ticker::default();
     let pool = match threads {
         Some(n) => Some(

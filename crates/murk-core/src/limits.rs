@@ -37,10 +37,22 @@ impl Limits {
         Ok(n)
     }
 
+    /// Refuses a `MURK_MAX_BYTES` that is set but not a positive number of bytes ([`Limits::get`]
+    /// would ignore it and use the machine's memory, which is not what its setter meant).
+    pub fn check_env() -> Result<()> {
+        match std::env::var("MURK_MAX_BYTES") {
+            Ok(v) if !v.trim().parse::<u64>().is_ok_and(|b| b > 0) => Err(Error::param(format!(
+                "MURK_MAX_BYTES is '{v}'; it must be a positive number of bytes"
+            ))),
+            _ => Ok(()),
+        }
+    }
+
     pub fn get() -> Limits {
         let max_bytes = std::env::var("MURK_MAX_BYTES")
             .ok()
             .and_then(|v| v.trim().parse().ok())
+            .filter(|&b| b > 0)
             .unwrap_or_else(physical_memory_bytes);
         Limits {
             max_length_m: 1e5,
