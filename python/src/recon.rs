@@ -86,8 +86,10 @@ impl Args {
         let mu = self.mu_t.unwrap_or(0.0);
         let compensation = match (self.compensate.as_deref(), self.mu_t) {
             (None, _) => Compensation::None,
-            (Some(_), None) => return Err(Error::param("compensate needs mu_t")),
-            (Some(c), Some(_)) => pick(
+            (Some("paper" | "ballistic"), None) => {
+                return Err(Error::param("compensate needs mu_t"))
+            }
+            (Some(c), _) => pick(
                 "compensate",
                 c,
                 &[

@@ -143,3 +143,9 @@ def test_numpy_values_as_overrides():
     b = murk.render(SCENES / "z-letter.toml", grid=4, spp=1, set={
         "object[0].center": [0.0, 0.0, 1.5], "medium.albedo": 0.5})
     assert np.array_equal(a.H, b.H)
+
+
+def test_unknown_compensation_is_named(cap):
+    with pytest.raises(murk.InputError) as e:
+        murk.reconstruct(cap, volume=VOL, compensate="foo")
+    assert "foo" in one_line(e) and "ballistic" in one_line(e)

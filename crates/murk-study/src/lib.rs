@@ -33,6 +33,12 @@ use std::path::{Path, PathBuf};
 /// Plans the study, writes `DIR/plan.json` and makes `DIR/renders/` for the tasks' outputs.
 pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
     let plan = Plan::new(opt)?;
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::param(format!(
+            "{}: is a file; the study needs a folder",
+            dir.display()
+        )));
+    }
     let renders = dir.join("renders");
     std::fs::create_dir_all(&renders).map_err(|e| Error::io(&renders, e))?;
     let path = dir.join("plan.json");
