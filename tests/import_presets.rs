@@ -102,14 +102,16 @@ fn generic_npy_with_flip_and_t0() {
         "--confocal",
     ]);
     assert!(e.contains("t, x and y once each"), "{e}");
-    let e = base(&[
+    // Everything but --confocal.
+    let framed = [
         "--axes",
         "t,x,y",
         "--bin-width-m",
         "0.01",
         "--wall-size",
         "1",
-    ]);
+    ];
+    let e = base(&framed);
     assert!(e.contains("confocal"), "{e}");
     let e = base(&["--axes", "t,x,y", "--confocal"]);
     assert!(
@@ -123,18 +125,9 @@ fn generic_npy_with_flip_and_t0() {
     let e = base(&[]);
     assert!(e.contains("--format") || e.contains("--axes"), "{e}");
     // A gate or a path-0 bin that leaves nothing to reconstruct.
-    let valid = [
-        "--axes",
-        "t,x,y",
-        "--bin-width-m",
-        "0.01",
-        "--wall-size",
-        "1",
-        "--confocal",
-    ];
-    let e = base(&[&valid[..], &["--gate-bins", "64"]].concat());
+    let e = base(&[&framed[..], &["--confocal", "--gate-bins", "64"]].concat());
     assert!(e.contains("a gate of 64 bins leaves nothing"), "{e}");
-    let e = base(&[&valid[..], &["--t0-bin", "64"]].concat());
+    let e = base(&[&framed[..], &["--confocal", "--t0-bin", "64"]].concat());
     assert!(e.contains("before the wall"), "{e}");
     std::fs::remove_dir_all(dir).ok();
 }
