@@ -4,7 +4,7 @@ use crate::capture::Source;
 use crate::compute;
 use murk_baselines::{Reflectance, SlabParams};
 use murk_core::window::WindowEnd;
-use murk_core::{Error, Result, Volume};
+use murk_core::{Error, Named, Result, Volume};
 use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
 use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
@@ -16,17 +16,6 @@ type Axes<'py> = [Bound<'py, PyArray1<f64>>; 3];
 type Out<'py> = (Bound<'py, PyArrayDyn<f32>>, Axes<'py>, Rows, Vec<String>);
 
 /// One of `choices` (the CLI's value names for a flag) by name, or the one-line error naming them.
-fn pick<T: Copy>(what: &str, name: &str, choices: &[(&str, T)]) -> Result<T> {
-    choices
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map(|(_, v)| *v)
-        .ok_or_else(|| {
-            let names: Vec<&str> = choices.iter().map(|(n, _)| *n).collect();
-            Error::param(format!("{what} '{name}': expected {}", names.join(", ")))
-        })
-}
-
 /// The keywords of `murk.reconstruct` (its capture, threads and progress aside), which are
 /// `murk reconstruct`'s flags.
 #[derive(FromPyObject)]
@@ -62,15 +51,7 @@ impl Args {
             },
             t_offset: TOffset::parse(self.t_offset.as_deref(), o.slab)?,
             gate: self.gate.parse::<Gate>()?,
-            window_end: pick(
-                "window_end",
-                &self.window_end,
-                &[
-                    ("auto", WindowEnd::Auto),
-                    ("taper", WindowEnd::Taper),
-                    ("keep", WindowEnd::Keep),
-                ],
-            )?,
+            window_end: WindowEnd::named(&self.window_end)?,
         })
     }
 
@@ -83,54 +64,22 @@ impl Args {
             (None, Some(f)) => Some(Wavelength::WallFactor(f)),
             (None, None) => None,
         };
-        let mu = self.mu_t.unwrap_or(0.0);
         let compensation = match (self.compensate.as_deref(), self.mu_t) {
             (None, _) => Compensation::None,
             (Some("paper" | "ballistic"), None) => {
                 return Err(Error::param("compensate needs mu_t"))
             }
-            (Some(c), _) => pick(
-                "compensate",
-                c,
-                &[
-                    (
-                        "paper",
-                        Compensation::Paper {
-                            mu_t_per_m: mu,
-                            albedo: self.albedo,
-                        },
-                    ),
-                    ("ballistic", Compensation::Ballistic { mu_t_per_m: mu }),
-                ],
-            )?,
+            (Some(c), mu) => Compensation::named(c, mu.unwrap_or(0.0), self.albedo)?,
         };
         let (thickness_m, mu_a_per_m, mu_s_prime_per_m, n) = self.slab;
         Ok(Options {
             wavelength,
             cycles: self.cycles,
-            falloff: pick(
-                "falloff",
-                &self.falloff,
-                &[("none", Falloff::None), ("inv-r", Falloff::InvR)],
-            )?,
+            falloff: Falloff::named(&self.falloff)?,
             compensation,
-            lateral: pick(
-                "lateral",
-                &self.lateral,
-                &[
-                    ("propagating", Lateral::Propagating),
-                    ("full", Lateral::Full),
-                ],
-            )?,
+            lateral: Lateral::named(&self.lateral)?,
             snr: self.snr,
-            reflectance: pick(
-                "weighting",
-                &self.weighting,
-                &[
-                    ("diffuse", Reflectance::Diffuse),
-                    ("retroreflective", Reflectance::Retroreflective),
-                ],
-            )?,
+            reflectance: Reflectance::named(&self.weighting)?,
             slab: SlabParams {
                 thickness_m,
                 mu_a_per_m,

@@ -3,11 +3,10 @@
 use crate::cmd::progress::{say, Bar};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use murk_baselines::{Reflectance, SlabParams};
-use murk_core::window::WindowEnd;
-use murk_core::{CaptureKind, Volume};
+use murk_baselines::SlabParams;
+use murk_core::{CaptureKind, Named, Volume};
 use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
-use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
+use murk_recon::{Compensation, Wavelength};
 use murk_view::pictures;
 use std::path::PathBuf;
 
@@ -128,14 +127,13 @@ pub enum WindowEndArg {
     Keep,
 }
 
-impl From<WindowEndArg> for WindowEnd {
-    fn from(a: WindowEndArg) -> WindowEnd {
-        match a {
-            WindowEndArg::Auto => WindowEnd::Auto,
-            WindowEndArg::Taper => WindowEnd::Taper,
-            WindowEndArg::Keep => WindowEnd::Keep,
-        }
-    }
+/// The library's value for a choice the parser accepted: the flags' value names are the library's
+/// own (`value_names_are_the_librarys` checks), so the CLI keeps only their help texts.
+fn library<T: Named>(choice: impl ValueEnum) -> anyhow::Result<T> {
+    let value = choice
+        .to_possible_value()
+        .context("a choice without a name")?;
+    Ok(T::named(value.get_name())?)
 }
 
 /// The scattering slab in front of the scene (CDT; `--t-offset slab`). Defaults: the 2.54 cm foam
@@ -184,7 +182,7 @@ impl SlabArgs {
 impl ReconstructArgs {
     /// The library request these arguments make for `cap`.
     pub fn request(&self, kind: CaptureKind) -> anyhow::Result<Request> {
-        let o = self.options();
+        let o = self.options()?;
         Ok(Request {
             method: Method::from_name(&self.method, kind, &o)?,
             volume: match &self.volume {
@@ -193,45 +191,37 @@ impl ReconstructArgs {
             },
             t_offset: TOffset::parse(self.t_offset.as_deref(), o.slab).context("--t-offset")?,
             gate: self.gate.parse::<Gate>().context("--gate")?,
-            window_end: self.window_end.into(),
+            window_end: library(self.window_end)?,
         })
     }
 
     /// The method options these arguments set.
-    pub fn options(&self) -> Options {
+    pub fn options(&self) -> anyhow::Result<Options> {
         let wavelength = match (self.wavelength, self.wavefactor) {
             (Some(m), _) => Some(Wavelength::Metres(m)),
             (None, Some(f)) => Some(Wavelength::WallFactor(f)),
             (None, None) => None,
         };
-        let mu = self.mu_t.unwrap_or(0.0);
         let compensation = match self.compensate {
             None => Compensation::None,
-            Some(CompensateArg::Paper) => Compensation::Paper {
-                mu_t_per_m: mu,
-                albedo: self.albedo,
-            },
-            Some(CompensateArg::Ballistic) => Compensation::Ballistic { mu_t_per_m: mu },
+            Some(c) => Compensation::named(
+                c.to_possible_value()
+                    .context("a choice without a name")?
+                    .get_name(),
+                self.mu_t.unwrap_or(0.0),
+                self.albedo,
+            )?,
         };
-        Options {
+        Ok(Options {
             wavelength,
             cycles: self.cycles,
-            falloff: match self.falloff {
-                FalloffArg::None => Falloff::None,
-                FalloffArg::InvR => Falloff::InvR,
-            },
+            falloff: library(self.falloff)?,
             compensation,
-            lateral: match self.lateral {
-                LateralArg::Propagating => Lateral::Propagating,
-                LateralArg::Full => Lateral::Full,
-            },
+            lateral: library(self.lateral)?,
             snr: self.slab.snr,
-            reflectance: match self.slab.weighting {
-                WeightingArg::Diffuse => Reflectance::Diffuse,
-                WeightingArg::Retroreflective => Reflectance::Retroreflective,
-            },
+            reflectance: library(self.slab.weighting)?,
             slab: self.slab.slab(),
-        }
+        })
     }
 }
 
@@ -286,4 +276,35 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         say(quiet, format!("  {k}: {v}"));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use murk_baselines::Reflectance;
+    use murk_core::window::WindowEnd;
+    use murk_recon::{Falloff, Lateral};
+
+    fn names<T: ValueEnum>() -> Vec<String> {
+        T::value_variants()
+            .iter()
+            .map(|v| v.to_possible_value().unwrap().get_name().to_string())
+            .collect()
+    }
+
+    fn library_names<T: Named>() -> Vec<String> {
+        T::CHOICES.iter().map(|(n, _)| n.to_string()).collect()
+    }
+
+    /// Each flag offers exactly the library's names, so `library` never meets an unknown one.
+    #[test]
+    fn value_names_are_the_librarys() {
+        assert_eq!(names::<FalloffArg>(), library_names::<Falloff>());
+        assert_eq!(names::<LateralArg>(), library_names::<Lateral>());
+        assert_eq!(names::<WeightingArg>(), library_names::<Reflectance>());
+        assert_eq!(names::<WindowEndArg>(), library_names::<WindowEnd>());
+        let mut with_none = vec!["none".to_string()];
+        with_none.extend(names::<CompensateArg>());
+        assert_eq!(with_none, Compensation::NAMES);
+    }
 }

@@ -23,6 +23,14 @@ pub enum Reflectance {
     Retroreflective,
 }
 
+impl murk_core::Named for Reflectance {
+    const WHAT: &'static str = "weighting";
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("diffuse", Self::Diffuse),
+        ("retroreflective", Self::Retroreflective),
+    ];
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LctParams {
     pub reflectance: Reflectance,

@@ -22,6 +22,22 @@ pub enum Compensation {
 }
 
 impl Compensation {
+    /// Every compensation's name ("none" is no compensation).
+    pub const NAMES: [&'static str; 3] = ["none", "paper", "ballistic"];
+
+    /// The compensation called `name`, for a medium of `mu_t_per_m` and `albedo`.
+    pub fn named(name: &str, mu_t_per_m: f64, albedo: f64) -> Result<Compensation> {
+        match name {
+            "none" => Ok(Compensation::None),
+            "paper" => Ok(Compensation::Paper { mu_t_per_m, albedo }),
+            "ballistic" => Ok(Compensation::Ballistic { mu_t_per_m }),
+            _ => Err(Error::param(format!(
+                "compensate '{name}': expected {}",
+                Self::NAMES.join(", ")
+            ))),
+        }
+    }
+
     pub fn validate(&self) -> Result<()> {
         let (mu, alb) = match *self {
             Compensation::None => return Ok(()),

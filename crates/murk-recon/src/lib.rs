@@ -58,6 +58,17 @@ pub enum Falloff {
     InvR,
 }
 
+impl murk_core::Named for Falloff {
+    const WHAT: &'static str = "falloff";
+    const CHOICES: &'static [(&'static str, Self)] = &[("none", Self::None), ("inv-r", Self::InvR)];
+}
+
+impl murk_core::Named for Lateral {
+    const WHAT: &'static str = "lateral";
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("propagating", Self::Propagating), ("full", Self::Full)];
+}
+
 /// Which lateral (wall-plane) frequencies the fast form keeps, per depth plane and band frequency.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Lateral {

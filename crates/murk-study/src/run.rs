@@ -175,21 +175,7 @@ fn merge_parts(dir: &Path, job: &CaptureJob) -> Result<()> {
 }
 
 /// The compensations every cell is scored with.
-pub const COMPENSATIONS: [&str; 3] = ["none", "paper", "ballistic"];
-
-fn compensation(name: &str, cell: &Cell) -> Compensation {
-    let m = cell.medium;
-    match name {
-        "paper" => Compensation::Paper {
-            mu_t_per_m: m.mu_t_per_m,
-            albedo: m.albedo,
-        },
-        "ballistic" => Compensation::Ballistic {
-            mu_t_per_m: m.mu_t_per_m,
-        },
-        _ => Compensation::None,
-    }
-}
+pub const COMPENSATIONS: [&str; 3] = Compensation::NAMES;
 
 /// A detected-or-not verdict and depth error for one named object of the scene.
 #[derive(Clone, Debug)]
@@ -295,7 +281,9 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
             }
             let reference = &references[&key];
             for (name, scores, first) in by_comp.iter_mut() {
-                let i = murk_recon::intensity(&cap, &volume, &field, compensation(name, cell));
+                let m = cell.medium;
+                let comp = Compensation::named(name, m.mu_t_per_m, m.albedo)?;
+                let i = murk_recon::intensity(&cap, &volume, &field, comp);
                 let v = views(&volume, &i);
                 scores.push(score(&v.front, &v.depth, reference, &truth, cell.scene));
                 if seed == 0 {
