@@ -158,6 +158,32 @@ impl Capture {
     fn from_tal<'py>(py: Python<'py>, data: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         py.import("murk._tal")?.call_method1("from_tal", (data,))
     }
+    /// Pickling (multiprocessing, Dask, joblib) keeps every field exactly; a capture file keeps its
+    /// coordinates and time axis as f32.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (State,))> {
+        let c = &slf.get().cap;
+        let set = |p: &PointSet| PointState {
+            points: p.points.iter().flat_map(|q| q.to_array()).collect(),
+            normals: p.normals.iter().flat_map(|q| q.to_array()).collect(),
+            grid: match p.layout {
+                PointLayout::Grid { nx, ny } => Some((nx, ny)),
+                PointLayout::List => None,
+            },
+        };
+        let state = State {
+            illum: set(&c.illum),
+            sensor: set(&c.sensor),
+            laser_xyz: c.laser_xyz.map(|p| p.to_array()),
+            sensor_xyz: c.sensor_xyz.map(|p| p.to_array()),
+            time: (c.time.start_m, c.time.bin_width_m, c.time.bins),
+            first_and_last: c.t_accounts_first_and_last_bounces,
+            paired: c.pairing == Pairing::Paired,
+            h: c.h.iter().flat_map(|v| v.to_le_bytes()).collect(),
+            scene_info: c.scene_info.clone(),
+        };
+        let rebuild = slf.py().import("murk._murk")?.getattr("_capture_from_state")?;
+        Ok((rebuild, (state,)))
+    }
     fn __repr__(&self) -> String {
         let t = self.cap.time;
         format!(
@@ -226,4 +252,86 @@ pub fn write_capture(
     compute(py, None, None, |_| {
         murk_io::write_capture_compressed(&path, cap, compression)
     })
+}
+
+/// One point set of a pickled [`Capture`]: flat xyz triples and the grid shape, if a grid.
+#[derive(IntoPyObject, FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct PointState {
+    points: Vec<f64>,
+    normals: Vec<f64>,
+    grid: Option<(usize, usize)>,
+}
+
+/// A pickled [`Capture`]: its fields as a dict of plain Python values.
+#[derive(IntoPyObject, FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct State {
+    illum: PointState,
+    sensor: PointState,
+    laser_xyz: Option<[f64; 3]>,
+    sensor_xyz: Option<[f64; 3]>,
+    time: (f64, f64, usize),
+    first_and_last: bool,
+    paired: bool,
+    /// H as little-endian f32 bytes (a list of floats would take 30 bytes a sample).
+    h: Vec<u8>,
+    scene_info: String,
+}
+
+/// Rebuilds a pickled capture, checking it as a file read is checked.
+#[pyfunction]
+pub fn _capture_from_state(state: State) -> PyResult<Capture> {
+    let set = |p: PointState| {
+        let xyz = |v: Vec<f64>| {
+            v.chunks(3)
+                .map(murk_core::DVec3::from_slice)
+                .collect::<Vec<_>>()
+        };
+        let whole = p.points.len() % 3 == 0 && p.normals.len() % 3 == 0;
+        whole.then(|| PointSet {
+            points: xyz(p.points),
+            normals: xyz(p.normals),
+            layout: p.grid.map_or(PointLayout::List, |(nx, ny)| PointLayout::Grid { nx, ny }),
+        })
+    };
+    let (Some(illum), Some(sensor)) = (set(state.illum), set(state.sensor)) else {
+        return Err(crate::error(
+            "InputError",
+            "pickled capture: points are not xyz triples".into(),
+        ));
+    };
+    if state.h.len() % 4 != 0 {
+        return Err(crate::error(
+            "InputError",
+            "pickled capture: H is not whole f32 values".into(),
+        ));
+    }
+    let h = state
+        .h
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    let (start_m, bin_width_m, bins) = state.time;
+    let cap = murk_core::Capture {
+        illum,
+        sensor,
+        laser_xyz: state.laser_xyz.map(murk_core::DVec3::from_array),
+        sensor_xyz: state.sensor_xyz.map(murk_core::DVec3::from_array),
+        time: murk_core::TimeAxis {
+            start_m,
+            bin_width_m,
+            bins,
+        },
+        t_accounts_first_and_last_bounces: state.first_and_last,
+        pairing: match state.paired {
+            true => Pairing::Paired,
+            false => Pairing::Product,
+        },
+        h,
+        scene_info: state.scene_info,
+    };
+    cap.validate()
+        .map_err(|e| crate::error("InputError", format!("pickled capture: {e}")))?;
+    Ok(Capture { cap })
 }

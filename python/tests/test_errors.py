@@ -149,3 +149,13 @@ def test_unknown_compensation_is_named(cap):
     with pytest.raises(murk.InputError) as e:
         murk.reconstruct(cap, volume=VOL, compensate="foo")
     assert "foo" in one_line(e) and "ballistic" in one_line(e)
+
+
+def test_damaged_pickle_state(cap):
+    rebuild, (state,) = cap.__reduce__()
+    for key, value, says in [("h", b"abc", "H is not whole f32 values"),
+                             ("time", (3.5, 0.01, 3), "expected 64 histograms × 3 bins"),
+                             ("time", (3.5, -0.01, 256), "bin width must be a positive")]:
+        with pytest.raises(murk.InputError) as e:
+            rebuild({**state, key: value})
+        assert one_line(e).startswith("pickled capture: ") and says in one_line(e)

@@ -14,6 +14,13 @@ impl TimeAxis {
     pub fn end_m(&self) -> f64 {
         self.start_m + self.bins as f64 * self.bin_width_m
     }
+    /// Whether two axes are the same once written: the capture format keeps `start_m` and
+    /// `bin_width_m` as f32 (as y-tal does), so a capture in memory and its file must match.
+    pub fn same_as_stored(&self, other: &TimeAxis) -> bool {
+        self.bins == other.bins
+            && self.start_m as f32 == other.start_m as f32
+            && self.bin_width_m as f32 == other.bin_width_m as f32
+    }
 }
 
 /// Which (illumination, sensor) combinations H holds.

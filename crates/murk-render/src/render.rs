@@ -781,7 +781,7 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
         if b != base
             || k != n
             || c.h.len() != out.h.len()
-            || c.time != out.time
+            || !c.time.same_as_stored(&out.time)
             || c.pairing != out.pairing
         {
             return Err(Error::format(path, "belongs to a different render (scene, spp, seed, shard count or layout differ from the first part)"));

@@ -68,6 +68,16 @@ fn seeded_render_is_bitwise_reproducible() {
     let merged = merge(&parts).unwrap();
     assert_eq!(merged.h, one.h);
     assert_eq!(merged.scene_info, one.scene_info);
+    // A part read back from its file has its time axis in f32 and still merges; another bin width
+    // does not.
+    let mut stored = parts.clone();
+    let t = &mut stored[1].1.time;
+    t.bin_width_m = t.bin_width_m as f32 as f64;
+    t.start_m = t.start_m as f32 as f64;
+    assert_ne!(stored[1].1.time, parts[1].1.time);
+    assert_eq!(merge(&stored).unwrap().h, one.h);
+    stored[1].1.time.bin_width_m *= 1.0 + 1e-6;
+    assert!(merge(&stored).unwrap_err().to_string().contains("part1"));
     // A missing part is refused.
     assert!(merge(&parts[..3])
         .unwrap_err()
