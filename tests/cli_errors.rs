@@ -196,6 +196,8 @@ fn nonsense_parameters() {
     let g = good.to_str().unwrap();
     let out = d.join("v.npy");
     let out = out.to_str().unwrap();
+    let synth_out = d.join("s.h5");
+    let synth_out = synth_out.to_str().unwrap();
     // Magnitudes that used to give all-zero volumes or a Debug dump, each named.
     let conf = synth_capture(&d, "conf.h5", &["--kind", "confocal"]);
     let c = conf.to_str().unwrap();
@@ -226,7 +228,7 @@ fn nonsense_parameters() {
     }
     fails(
         &[
-            "synth", "--out", out, "--target", "z:1", "--jitter", "1e300",
+            "synth", "--out", synth_out, "--target", "z:1", "--jitter", "1e300",
         ],
         &["the jitter is 1e300 m"],
     );
@@ -307,15 +309,15 @@ fn nonsense_parameters() {
     );
     assert!(!own.exists());
     fails(
-        &["synth", "--out", out, "--target", "point:0,0,-1"],
+        &["synth", "--out", synth_out, "--target", "point:0,0,-1"],
         &["not behind the wall"],
     );
     fails(
-        &["synth", "--out", out, "--target", "point:0,0,50"],
+        &["synth", "--out", synth_out, "--target", "point:0,0,50"],
         &["time window"],
     );
     fails(
-        &["synth", "--out", out, "--target", "z:1", "--bin-width", "0"],
+        &["synth", "--out", synth_out, "--target", "z:1", "--bin-width", "0"],
         &["bin width must be a positive number of metres, got 0"],
     );
     // A gate past the window would leave a volume of zeros that looks like a result.
@@ -599,6 +601,16 @@ fn render_refuses_bad_outputs_up_front() {
         );
     };
     run(&["--out", d.to_str().unwrap()], &["is a folder"]);
+    // Captures and truths are HDF5 whatever the name, so another extension is refused.
+    run(&["--out", &at("q.mat")], &["q.mat", ".h5 or .hdf5"]);
+    run(
+        &["--out", &at("q.h5"), "--truth", &at("t.npy")],
+        &["t.npy", ".h5 or .hdf5"],
+    );
+    fails(
+        &["synth", "--out", &at("s.npy"), "--target", "z:1"],
+        &["s.npy", ".h5 or .hdf5"],
+    );
     run(&["--out", &at("no/such/q.h5")], &["does not exist"]);
     let spelled = format!(
         "{}/../{}/q.h5",

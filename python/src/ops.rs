@@ -134,7 +134,7 @@ pub fn render(
             .into_iter()
             .collect();
         for out in &outs {
-            murk_io::check_output(out, &file)?;
+            murk_io::check_h5_output(out, &file)?;
             // The checkpoint is removed once the captures are written: it must not be one of them.
             if let Some(c) = args
                 .checkpoint

@@ -154,7 +154,7 @@ impl ImportArgs {
 pub fn run(a: ImportArgs, quiet: bool) -> anyhow::Result<()> {
     let mut inputs = vec![a.file.as_path()];
     inputs.extend(a.tof.as_deref());
-    murk_io::check_output(&a.out, &inputs)?;
+    murk_io::check_h5_output(&a.out, &inputs)?;
     let cap = murk_io::import::import(&a.file, &a.options()?)?;
     murk_io::write_capture(&a.out, &cap)?;
     say(quiet, format!("wrote {}", a.out.display()));

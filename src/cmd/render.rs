@@ -122,13 +122,13 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     };
     let outs = render_outputs(&a.out, a.albedos.as_deref());
     for out in &outs {
-        murk_io::check_output(out, &[&a.scene])?;
+        murk_io::check_h5_output(out, &[&a.scene])?;
     }
     if let Some(t) = &a.truth {
         let inputs: Vec<&Path> = std::iter::once(a.scene.as_path())
             .chain(outs.iter().map(PathBuf::as_path))
             .collect();
-        murk_io::check_output(t, &inputs)?;
+        murk_io::check_h5_output(t, &inputs)?;
         anyhow::ensure!(
             !outs.iter().any(|o| murk_io::same_target(o, t)),
             "{}: --truth and the capture name the same file",
@@ -201,7 +201,7 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
 
 pub fn run_merge(a: MergeArgs, quiet: bool) -> anyhow::Result<()> {
     let inputs: Vec<&Path> = a.parts.iter().map(|p| p.as_path()).collect();
-    murk_io::check_output(&a.out, &inputs)?;
+    murk_io::check_h5_output(&a.out, &inputs)?;
     let parts = a
         .parts
         .iter()

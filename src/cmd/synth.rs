@@ -96,7 +96,7 @@ pub fn build(a: &SynthArgs) -> anyhow::Result<Capture> {
 
 pub fn run(a: SynthArgs, quiet: bool) -> anyhow::Result<()> {
     let t0 = std::time::Instant::now();
-    murk_io::check_output(&a.out, &[])?;
+    murk_io::check_h5_output(&a.out, &[])?;
     let cap = build(&a)?;
     murk_io::write_capture(&a.out, &cap)?;
     say(

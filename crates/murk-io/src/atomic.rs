@@ -128,6 +128,25 @@ pub fn check_output(out: &Path, inputs: &[&Path]) -> Result<()> {
     refuse_overwrite(out, inputs)
 }
 
+/// [`check_output`] for an HDF5 file (a capture or a ground truth), which must also be named so.
+pub fn check_h5_output(out: &Path, inputs: &[&Path]) -> Result<()> {
+    check_output(out, inputs)?;
+    check_h5_name(out)
+}
+
+/// Captures and ground truths are always y-tal-style HDF5: a `.mat` or `.npy` name would put HDF5
+/// bytes under the wrong name, which other tools then misread.
+pub fn check_h5_name(path: &Path) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    match ext.to_ascii_lowercase().as_str() {
+        "h5" | "hdf5" => Ok(()),
+        _ => Err(Error::param(format!(
+            "{}: murk writes HDF5 here; name the file .h5 or .hdf5",
+            path.display()
+        ))),
+    }
+}
+
 /// Whether `a` and `b` name the same file, whether or not it exists yet (`./x`, `d/../x` and `x`
 /// are one file): each path's folder is resolved, then the file names compared.
 pub fn same_target(a: &Path, b: &Path) -> bool {

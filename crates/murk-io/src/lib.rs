@@ -21,7 +21,9 @@ mod tal;
 mod truth;
 mod volume;
 
-pub use atomic::{check_output, remove_temporaries, same_target, write_atomic};
+pub use atomic::{
+    check_h5_name, check_h5_output, check_output, remove_temporaries, same_target, write_atomic,
+};
 pub use describe::describe;
 pub use mat::{read_mat_v5_array, read_mat_v73_array, ArrayFile};
 pub use npy::{read_npy_f32, read_npy_f32_with_limit, write_npy_f32};

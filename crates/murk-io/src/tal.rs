@@ -334,6 +334,7 @@ pub fn write_capture(path: &Path, cap: &Capture) -> Result<()> {
 /// As [`write_capture`], gzip-compressing H at `level` 1..=9 (0 = none), as y-tal's
 /// `compression_level` does.
 pub fn write_capture_compressed(path: &Path, cap: &Capture, level: u32) -> Result<()> {
+    crate::check_h5_name(path)?;
     if level > 9 {
         return Err(Error::param(format!(
             "compression level must be 0..=9, got {level}"

@@ -10,6 +10,7 @@ use std::path::Path;
 
 /// Writes `truth` atomically.
 pub fn write_truth_h5(path: &Path, truth: &GroundTruth) -> Result<()> {
+    crate::check_h5_name(path)?;
     let [nx, ny] = truth.shape();
     let mut fb = FileBuilder::new();
     fb.create_dataset("depth")
