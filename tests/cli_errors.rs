@@ -601,6 +601,35 @@ fn render_refuses_bad_outputs_up_front() {
         );
     };
     run(&["--out", d.to_str().unwrap()], &["is a folder"]);
+    // The checkpoint (OUT.ckpt) is not the scene, which the render would remove.
+    let scene_copy = at("r.h5.ckpt");
+    std::fs::copy(scene, &scene_copy).unwrap();
+    fails(
+        &["render", &scene_copy, "--grid", "8", "--out", &at("r.h5")],
+        &["r.h5.ckpt", "checkpoint"],
+    );
+    assert!(std::fs::metadata(&scene_copy).is_ok());
+    std::fs::remove_file(&scene_copy).unwrap();
+    // A checkpoint that is a FIFO (would block) or larger than any of this render's is refused
+    // before it is read.
+    let fifo = at("f.h5.ckpt");
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    run(
+        &["--out", &at("f.h5"), "--resume"],
+        &["f.h5.ckpt", "not a regular file"],
+    );
+    std::fs::remove_file(&fifo).unwrap();
+    let big = at("b.h5.ckpt");
+    std::fs::write(&big, vec![0u8; 1 << 24]).unwrap();
+    run(
+        &["--out", &at("b.h5"), "--resume"],
+        &["b.h5.ckpt", "more than a checkpoint"],
+    );
+    std::fs::remove_file(&big).unwrap();
     // Captures and truths are HDF5 whatever the name, so another extension is refused.
     run(&["--out", &at("q.mat")], &["q.mat", ".h5 or .hdf5"]);
     run(

@@ -135,6 +135,14 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
             t.display()
         );
     }
+    // The checkpoint is replaced or removed as the render goes, so it must not be the scene (the
+    // truth cannot be: it is named .h5).
+    anyhow::ensure!(
+        !murk_io::same_target(&a.scene, &checkpoint_path(&a.out)),
+        "{}: is the render's checkpoint for --out {}; choose another output",
+        a.scene.display(),
+        a.out.display()
+    );
     let scene = Scene::load(&a.scene, &ov)?;
     // The plan checks a sweep's albedos, so a refused sweep writes nothing, not even the truth.
     let plan = Plan::with_albedos(&scene, a.albedos.as_deref())?;

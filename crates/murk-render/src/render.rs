@@ -852,14 +852,24 @@ fn read_checkpoint(
     units: usize,
     mut unit: impl FnMut(usize, &[f32]),
 ) -> Result<Option<u64>> {
-    let mut f = match std::fs::File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(Error::io(path, e)),
-    };
+    if matches!(std::fs::metadata(path), Err(e) if e.kind() == std::io::ErrorKind::NotFound) {
+        return Ok(None);
+    }
+    // A regular file only (a FIFO would block, a device never end), and no larger than this
+    // render's header and every unit once: checked before reading it into memory.
+    let mut f = murk_core::open_input(path)?;
+    let header = header(key, unit_len);
+    let rec = 8 + 4 * unit_len;
+    let most = (units as u64 + 1) * rec as u64 + header.len() as u64;
+    let len = f.metadata().map_err(|e| Error::io(path, e))?.len();
+    if len > most {
+        return Err(Error::format(
+            path,
+            format!("{len} bytes: more than a checkpoint of this render's {units} units holds"),
+        ));
+    }
     let mut bytes = Vec::new();
     f.read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
-    let header = header(key, unit_len);
     // Empty, or cut inside this render's own header by a kill: nothing was recorded yet.
     if header.starts_with(&bytes) {
         return Ok(Some(0));
@@ -867,7 +877,6 @@ fn read_checkpoint(
     if !bytes.starts_with(&header) {
         return Err(Error::format(path, refusal(&bytes, key)));
     }
-    let rec = 8 + 4 * unit_len;
     let mut vals = vec![0f32; unit_len];
     let mut off = header.len();
     while off + rec <= bytes.len() {
@@ -931,8 +940,14 @@ impl Checkpoint {
                 .for_each(|v| buf.extend_from_slice(&v.to_le_bytes()));
         }
         let io = |e| Error::io(&self.path, e);
-        self.file.write_all(&buf).map_err(io)?;
-        self.file.sync_data().map_err(io)
+        let before = self.file.metadata().map_err(io)?.len();
+        let written = self.file.write_all(&buf).and_then(|_| self.file.sync_data());
+        if written.is_err() {
+            // A torn record would misalign every later append (a retry after a failed write
+            // appends the same units again), so the file goes back to its last whole record.
+            let _ = self.file.set_len(before);
+        }
+        written.map_err(io)
     }
 }
 
