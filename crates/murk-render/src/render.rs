@@ -861,21 +861,23 @@ fn read_checkpoint(
     let header = header(key, unit_len);
     let rec = 8 + 4 * unit_len;
     let most = (units as u64 + 1) * rec as u64 + header.len() as u64;
-    let len = f.metadata().map_err(|e| Error::io(path, e))?.len();
-    if len > most {
-        return Err(Error::format(
-            path,
-            format!("{len} bytes: more than a checkpoint of this render's {units} units holds"),
-        ));
-    }
     let mut bytes = Vec::new();
-    f.read_to_end(&mut bytes).map_err(|e| Error::io(path, e))?;
+    (&mut f)
+        .take(most + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
     // Empty, or cut inside this render's own header by a kill: nothing was recorded yet.
     if header.starts_with(&bytes) {
         return Ok(Some(0));
     }
     if !bytes.starts_with(&header) {
         return Err(Error::format(path, refusal(&bytes, key)));
+    }
+    if bytes.len() as u64 > most {
+        return Err(Error::format(
+            path,
+            format!("more bytes than a checkpoint of this render's {units} units holds"),
+        ));
     }
     let mut vals = vec![0f32; unit_len];
     let mut off = header.len();

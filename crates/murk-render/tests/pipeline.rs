@@ -110,6 +110,18 @@ fn seeded_render_is_bitwise_reproducible() {
             .unwrap()
     });
     assert_eq!(resumed.h, one.h);
+    // Every unit twice is more than any render of this plan records: refused before reading it all.
+    let whole = std::fs::read(&ck).unwrap();
+    let header_len = whole.len() - 6 * (8 + 4 * 2 * 64);
+    let mut twice = whole.clone();
+    twice.extend_from_slice(&whole[header_len..]);
+    std::fs::write(&ck, &twice).unwrap();
+    let e = plan
+        .render(&opts(None, Some(ck.clone())), &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("more bytes than a checkpoint"), "{e}");
+    std::fs::write(&ck, &whole).unwrap();
     // A checkpoint from another seed is refused rather than mixed in.
     let mut other = opts(None, Some(ck.clone()));
     other.seed = 1;
