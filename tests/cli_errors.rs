@@ -109,7 +109,21 @@ fn missing_truncated_and_foreign_files() {
     );
     let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
     assert!(std::os::unix::fs::FileTypeExt::is_fifo(&kind));
-    std::fs::remove_file(&fifo).unwrap();
+    // So is a scene's mesh that is a FIFO (it used to block; /dev/zero filled memory).
+    std::fs::create_dir_all(d.join("meshes")).unwrap();
+    std::fs::rename(&fifo, d.join("meshes/vase.obj")).unwrap();
+    let shelf = d.join("shelf.toml").to_str().unwrap().to_string();
+    std::fs::copy(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shelf.toml"),
+        &shelf,
+    )
+    .unwrap();
+    fails(
+        &["render", &shelf, "--grid", "4", "--out", d.join("s.h5").to_str().unwrap()],
+        &["shelf.toml", "vase.obj", "not a regular file"],
+    );
+    std::fs::remove_dir_all(d.join("meshes")).unwrap();
+    std::fs::remove_file(&shelf).unwrap();
     fails(
         &[
             "reconstruct",
@@ -690,15 +704,28 @@ fn usage_errors_say_what_is_wrong() {
         &["reconstruct", "x.h5", "--out", "v.npy", "--method", "foo"],
         &["'foo'", "possible values", "pf-exact", "cdt"],
     );
-    // A memory budget that is set but meaningless is refused, not silently replaced by the machine's.
-    let out = Command::new(env!("CARGO_BIN_EXE_murk"))
-        .env("MURK_MAX_BYTES", "abc")
-        .args(["info", "x.h5"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("MURK_MAX_BYTES is 'abc'"), "{err}");
+    for runs in ["0", "1001", "18446744073709551615"] {
+        fails(
+            &["figure", "real", "--data", "d", "--out", "f", "--runs", runs],
+            &["--runs", runs],
+        );
+    }
+    // A memory budget that is set but meaningless (or not UTF-8) is refused, not silently replaced
+    // by the machine's.
+    use std::os::unix::ffi::OsStrExt;
+    for (value, shown) in [
+        (std::ffi::OsStr::new("abc"), "'abc'"),
+        (std::ffi::OsStr::from_bytes(b"1\xff"), "'1\u{fffd}'"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_murk"))
+            .env("MURK_MAX_BYTES", value)
+            .args(["info", "x.h5"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("MURK_MAX_BYTES is {shown}")), "{err}");
+    }
 }
 
 /// `murk info x.h5 | head -1`: the closed pipe ends murk quietly, without a panic message.

@@ -15,7 +15,6 @@ type Axes<'py> = [Bound<'py, PyArray1<f64>>; 3];
 /// What `reconstruct` returns: intensity, axes, rows, warnings.
 type Out<'py> = (Bound<'py, PyArrayDyn<f32>>, Axes<'py>, Rows, Vec<String>);
 
-/// One of `choices` (the CLI's value names for a flag) by name, or the one-line error naming them.
 /// The keywords of `murk.reconstruct` (its capture, threads and progress aside), which are
 /// `murk reconstruct`'s flags.
 #[derive(FromPyObject)]

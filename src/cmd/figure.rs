@@ -22,14 +22,14 @@ pub struct FigureArgs {
     /// Output folder (grid.png, index.html).
     #[arg(long)]
     pub out: PathBuf,
-    /// Timed runs per reconstruction (the median is reported).
-    #[arg(long, default_value_t = 5)]
-    pub runs: usize,
+    /// Timed runs per reconstruction (the median is reported), 1 to 1000.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u16).range(1..=1000))]
+    pub runs: u16,
 }
 
 pub fn run(a: FigureArgs, quiet: bool) -> anyhow::Result<()> {
     let Which::Real = a.which;
-    let index = murk_study::figure_real(&a.data, &a.out, a.runs, &|line| say(quiet, line))?;
+    let index = murk_study::figure_real(&a.data, &a.out, a.runs.into(), &|line| say(quiet, line))?;
     say(quiet, format!("wrote {}", index.display()));
     Ok(())
 }

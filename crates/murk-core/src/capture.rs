@@ -327,6 +327,12 @@ impl Capture {
             ("SPAD position", self.sensor_xyz),
         ] {
             if let Some(p) = p {
+                // max_element skips NaN, so finiteness is checked on its own.
+                if !p.is_finite() {
+                    return Err(Error::param(format!(
+                        "the {name} has a non-finite coordinate: {p}"
+                    )));
+                }
                 limits.length(
                     &format!("the {name}'s largest |coordinate|"),
                     p.abs().max_element(),
@@ -415,6 +421,18 @@ mod tests {
         c.h.iter_mut().for_each(|v| *v = 1.0);
         c.h[10] = 4.0;
         c
+    }
+
+    #[test]
+    fn non_finite_device_positions_are_refused() {
+        let mut c = flat(40);
+        c.laser_xyz = Some(DVec3::new(0.0, f64::NAN, 1.0));
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("laser position has a non-finite coordinate"), "{e}");
+        c.laser_xyz = None;
+        c.sensor_xyz = Some(DVec3::new(f64::INFINITY, 0.0, 1.0));
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("SPAD position has a non-finite coordinate"), "{e}");
     }
 
     #[test]

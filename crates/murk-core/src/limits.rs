@@ -14,6 +14,20 @@ pub struct Limits {
     pub max_bytes: u64,
 }
 
+/// `MURK_MAX_BYTES`: `None` when unset, its text when it is not a positive number of bytes (text
+/// that is not UTF-8 included).
+fn env_max_bytes() -> Option<std::result::Result<u64, String>> {
+    let raw = std::env::var_os("MURK_MAX_BYTES")?;
+    let text = raw.to_string_lossy();
+    Some(
+        text.trim()
+            .parse::<u64>()
+            .ok()
+            .filter(|&b| b > 0)
+            .ok_or_else(|| text.into_owned()),
+    )
+}
+
 impl Limits {
     /// Most worker threads murk starts: far above any machine's cores, far below what the OS can run.
     pub const MAX_THREADS: usize = 1024;
@@ -40,8 +54,8 @@ impl Limits {
     /// Refuses a `MURK_MAX_BYTES` that is set but not a positive number of bytes ([`Limits::get`]
     /// would ignore it and use the machine's memory, which is not what its setter meant).
     pub fn check_env() -> Result<()> {
-        match std::env::var("MURK_MAX_BYTES") {
-            Ok(v) if !v.trim().parse::<u64>().is_ok_and(|b| b > 0) => Err(Error::param(format!(
+        match env_max_bytes() {
+            Some(Err(v)) => Err(Error::param(format!(
                 "MURK_MAX_BYTES is '{v}'; it must be a positive number of bytes"
             ))),
             _ => Ok(()),
@@ -49,10 +63,8 @@ impl Limits {
     }
 
     pub fn get() -> Limits {
-        let max_bytes = std::env::var("MURK_MAX_BYTES")
-            .ok()
-            .and_then(|v| v.trim().parse().ok())
-            .filter(|&b| b > 0)
+        let max_bytes = env_max_bytes()
+            .and_then(|b| b.ok())
             .unwrap_or_else(physical_memory_bytes);
         Limits {
             max_length_m: 1e5,

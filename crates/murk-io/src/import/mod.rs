@@ -286,7 +286,6 @@ impl Scan {
         })
     }
 
-    /// Zeroes the first `bins` bins of every histogram.
     /// Zeroes the first `bins` bins of every histogram; a gate that leaves nothing is refused
     /// (every method would return zeros).
     fn gate(&mut self, path: &Path, bins: usize) -> Result<()> {

@@ -420,12 +420,18 @@ impl ObjectDef {
                     single_index: true,
                     ..Default::default()
                 };
-                let (models, _) = tobj::load_obj(&full, &opts).map_err(|e| {
-                    Error::format(
-                        path,
-                        format!("{}: cannot load OBJ {}: {e}", field("file"), full.display()),
-                    )
+                // A regular file only: a FIFO would block and a device never end.
+                let text = murk_core::read_input(&full).map_err(|e| {
+                    Error::format(path, format!("{}: cannot read OBJ: {e}", field("file")))
                 })?;
+                let no_materials = |_: &Path| Err(tobj::LoadError::OpenFileFailed);
+                let (models, _) =
+                    tobj::load_obj_buf(&mut text.as_slice(), &opts, no_materials).map_err(|e| {
+                        Error::format(
+                            path,
+                            format!("{}: cannot load OBJ {}: {e}", field("file"), full.display()),
+                        )
+                    })?;
                 let mut prims = Vec::new();
                 for m in &models {
                     let pos = &m.mesh.positions;
