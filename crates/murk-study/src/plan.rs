@@ -312,16 +312,6 @@ impl Plan {
                 opt.shards
             )));
         }
-        // Before anything is written, so that a mistyped folder leaves no plan behind.
-        for scene in [SceneKind::ZLetter, SceneKind::Shelf] {
-            if !opt.scenes_dir.join(scene.file()).is_file() {
-                return Err(Error::param(format!(
-                    "{}: no {} in this scenes folder",
-                    opt.scenes_dir.display(),
-                    scene.file()
-                )));
-            }
-        }
         let mut plan = Plan {
             scale: opt.scale,
             seeds: opt.seeds,
@@ -406,6 +396,18 @@ impl Plan {
                 "no cell of the study matches {:?} (labels look like 'fig3b μt = 1 α = 0.5')",
                 opt.cells
             )));
+        }
+        // Before anything is written, so that a mistyped folder leaves no plan behind; only the
+        // scenes the chosen cells render.
+        for scene in [SceneKind::ZLetter, SceneKind::Shelf] {
+            let used = cells.iter().any(|(.., k, _, _)| *k == scene);
+            if used && !opt.scenes_dir.join(scene.file()).is_file() {
+                return Err(Error::param(format!(
+                    "{}: no {} in this scenes folder",
+                    opt.scenes_dir.display(),
+                    scene.file()
+                )));
+            }
         }
         // Cells whose fog differs only in albedo share one render, an albedo sweep: its paths do not
         // depend on the albedo, so the tracing is paid once per row (docs/study.md).
@@ -618,6 +620,22 @@ mod tests {
             spp: Some(8),
             scenes_dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
         }
+    }
+
+    /// A scenes folder needs only the scenes of the chosen figures.
+    #[test]
+    fn scenes_folder_needs_the_chosen_figures_scenes() {
+        let dir = std::env::temp_dir().join(format!("murk-scenes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let here = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/z-letter.toml");
+        std::fs::copy(here, dir.join("z-letter.toml")).unwrap();
+        let mut opt = options(&[Figure::Fig3a, Figure::Fig4], 1, 1);
+        opt.scenes_dir = dir.clone();
+        assert!(Plan::new(&opt).is_ok());
+        opt.only = vec![Figure::Fig5];
+        let e = Plan::new(&opt).unwrap_err().to_string();
+        assert!(e.contains("no shelf.toml in this scenes folder"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// Cells as the paper lays them out; a capture serves every cell that needs it (Fig. 4 and the
