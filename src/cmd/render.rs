@@ -55,7 +55,8 @@ pub struct RenderArgs {
     /// Render only part i of N (0-based), for `murk merge`.
     #[arg(long, value_name = "i/N", value_parser = parse_shard)]
     pub shard: Option<(usize, usize)>,
-    /// Seconds between checkpoints (OUT.ckpt); 0 disables them.
+    /// Seconds between checkpoints (OUT.ckpt); 0 keeps none, except that --resume still reads an
+    /// existing one and appends to it if the render stops early or cannot write its captures.
     #[arg(long, default_value_t = 60.0, value_name = "SECONDS", value_parser = parse_seconds)]
     pub checkpoint_every: f64,
     /// Continue from OUT.ckpt left by an interrupted run with the same scene, spp, seed and shard.

@@ -170,8 +170,9 @@ fn light_cone(g: &ConfocalGeometry, m: usize) -> (Vec<Option<usize>>, f32) {
     (delay, 1.0 / (count as f32).sqrt())
 }
 
-/// A Wiener signal-to-noise ratio that `method` can use: within 1e-12..=1e12, so that 1/snr stays
-/// a normal f32 (beyond it the filter is all zeros or a bare inverse).
+/// A Wiener signal-to-noise ratio that `method` can use: within 1e-12..=1e12, far beyond any useful
+/// filter; past it 1/snr swamps, or vanishes against, every |F|² an f32 spectrum holds, so the
+/// filter is all zeros or a bare inverse.
 pub(crate) fn check_snr(method: &str, snr: f64) -> Result<()> {
     if (1e-12..=1e12).contains(&snr) {
         Ok(())
