@@ -38,6 +38,9 @@ pub struct GridLayout {
     pub title_band: u32,
     /// Label text size (pixels); the title is drawn somewhat larger.
     pub font_px: u32,
+    /// Width from `left` that the colour bar's end labels span: the bar's, or theirs where wider
+    /// (a grid of one small cell), so that neither is clipped.
+    pub bar_labels_span: u32,
     /// Top edge of the colour bar under the cells (from `left`, as wide as the cells, `font_px`
     /// high), with "0" and [`BAR_TOP_LABEL`] under its ends.
     pub bar_top: u32,
@@ -166,6 +169,7 @@ pub fn grid_layout(grid: &FigureGrid, cell_px: u32) -> Result<GridLayout> {
         top,
         title_band,
         font_px,
+        bar_labels_span: cells_w.max(bar_labels_w),
         bar_top,
     })
 }
@@ -320,11 +324,10 @@ fn draw_labels(
         root.draw(&Text::new(text.as_str(), (x, y as i32 + half), style))
             .map_err(err)?;
     }
-    let bar_w = lay.cols * (lay.cell_px + lay.gap) - lay.gap;
     let y = (lay.bar_top + lay.font_px * 2) as i32;
     for (text, x, h) in [
         ("0", lay.left, HPos::Left),
-        (BAR_TOP_LABEL, lay.left + bar_w, HPos::Right),
+        (BAR_TOP_LABEL, lay.left + lay.bar_labels_span, HPos::Right),
     ] {
         let style = label.pos(Pos::new(h, VPos::Center));
         root.draw(&Text::new(text, (x as i32, y), style))
@@ -543,6 +546,10 @@ mod tests {
         assert_eq!(lay.bar_top, margin + 32 + lay.font_px);
         assert_eq!(img.height, lay.bar_top + lay.font_px * 5 / 2 + margin);
         assert!(img.width > 2 * margin + 2 * 32 + lay.gap);
+        // The right end label is anchored at the labels' span, not the narrower bar's end, so it
+        // starts right of the left edge instead of being clipped.
+        assert!(lay.bar_labels_span > 2 * 32 + lay.gap);
+        assert_eq!(img.width, lay.left + lay.bar_labels_span + margin);
         let layout = &img
             .texts
             .iter()
