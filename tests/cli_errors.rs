@@ -119,7 +119,14 @@ fn missing_truncated_and_foreign_files() {
     )
     .unwrap();
     fails(
-        &["render", &shelf, "--grid", "4", "--out", d.join("s.h5").to_str().unwrap()],
+        &[
+            "render",
+            &shelf,
+            "--grid",
+            "4",
+            "--out",
+            d.join("s.h5").to_str().unwrap(),
+        ],
         &["shelf.toml", "vase.obj", "not a regular file"],
     );
     std::fs::remove_dir_all(d.join("meshes")).unwrap();
@@ -331,7 +338,15 @@ fn nonsense_parameters() {
         &["time window"],
     );
     fails(
-        &["synth", "--out", synth_out, "--target", "z:1", "--bin-width", "0"],
+        &[
+            "synth",
+            "--out",
+            synth_out,
+            "--target",
+            "z:1",
+            "--bin-width",
+            "0",
+        ],
         &["bin width must be a positive number of metres, got 0"],
     );
     // A gate past the window would leave a volume of zeros that looks like a result.
@@ -706,7 +721,9 @@ fn usage_errors_say_what_is_wrong() {
     );
     for runs in ["0", "1001", "18446744073709551615"] {
         fails(
-            &["figure", "real", "--data", "d", "--out", "f", "--runs", runs],
+            &[
+                "figure", "real", "--data", "d", "--out", "f", "--runs", runs,
+            ],
             &["--runs", runs],
         );
     }

@@ -181,7 +181,10 @@ impl Capture {
             h: c.h.iter().flat_map(|v| v.to_le_bytes()).collect(),
             scene_info: c.scene_info.clone(),
         };
-        let rebuild = slf.py().import("murk._murk")?.getattr("_capture_from_state")?;
+        let rebuild = slf
+            .py()
+            .import("murk._murk")?
+            .getattr("_capture_from_state")?;
         Ok((rebuild, (state,)))
     }
     fn __repr__(&self) -> String {
@@ -292,7 +295,9 @@ pub fn _capture_from_state(state: State) -> PyResult<Capture> {
         whole.then(|| PointSet {
             points: xyz(p.points),
             normals: xyz(p.normals),
-            layout: p.grid.map_or(PointLayout::List, |(nx, ny)| PointLayout::Grid { nx, ny }),
+            layout: p
+                .grid
+                .map_or(PointLayout::List, |(nx, ny)| PointLayout::Grid { nx, ny }),
         })
     };
     let (Some(illum), Some(sensor)) = (set(state.illum), set(state.sensor)) else {

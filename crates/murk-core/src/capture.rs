@@ -428,11 +428,17 @@ mod tests {
         let mut c = flat(40);
         c.laser_xyz = Some(DVec3::new(0.0, f64::NAN, 1.0));
         let e = c.validate().unwrap_err().to_string();
-        assert!(e.contains("laser position has a non-finite coordinate"), "{e}");
+        assert!(
+            e.contains("laser position has a non-finite coordinate"),
+            "{e}"
+        );
         c.laser_xyz = None;
         c.sensor_xyz = Some(DVec3::new(f64::INFINITY, 0.0, 1.0));
         let e = c.validate().unwrap_err().to_string();
-        assert!(e.contains("SPAD position has a non-finite coordinate"), "{e}");
+        assert!(
+            e.contains("SPAD position has a non-finite coordinate"),
+            "{e}"
+        );
     }
 
     #[test]

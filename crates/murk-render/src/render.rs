@@ -943,7 +943,10 @@ impl Checkpoint {
         }
         let io = |e| Error::io(&self.path, e);
         let before = self.file.metadata().map_err(io)?.len();
-        let written = self.file.write_all(&buf).and_then(|_| self.file.sync_data());
+        let written = self
+            .file
+            .write_all(&buf)
+            .and_then(|_| self.file.sync_data());
         if written.is_err() {
             // A torn record would misalign every later append (a retry after a failed write
             // appends the same units again), so the file goes back to its last whole record.

@@ -425,8 +425,8 @@ impl ObjectDef {
                     Error::format(path, format!("{}: cannot read OBJ: {e}", field("file")))
                 })?;
                 let no_materials = |_: &Path| Err(tobj::LoadError::OpenFileFailed);
-                let (models, _) =
-                    tobj::load_obj_buf(&mut text.as_slice(), &opts, no_materials).map_err(|e| {
+                let (models, _) = tobj::load_obj_buf(&mut text.as_slice(), &opts, no_materials)
+                    .map_err(|e| {
                         Error::format(
                             path,
                             format!("{}: cannot load OBJ {}: {e}", field("file"), full.display()),
