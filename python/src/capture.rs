@@ -291,7 +291,7 @@ pub fn _capture_from_state(state: State) -> PyResult<Capture> {
                 .map(murk_core::DVec3::from_slice)
                 .collect::<Vec<_>>()
         };
-        let whole = p.points.len() % 3 == 0 && p.normals.len() % 3 == 0;
+        let whole = p.points.len().is_multiple_of(3) && p.normals.len().is_multiple_of(3);
         whole.then(|| PointSet {
             points: xyz(p.points),
             normals: xyz(p.normals),
@@ -306,7 +306,7 @@ pub fn _capture_from_state(state: State) -> PyResult<Capture> {
             "pickled capture: points are not xyz triples".into(),
         ));
     };
-    if state.h.len() % 4 != 0 {
+    if !state.h.len().is_multiple_of(4) {
         return Err(crate::error(
             "InputError",
             "pickled capture: H is not whole f32 values".into(),
