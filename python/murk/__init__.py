@@ -51,6 +51,10 @@ class _Native:
                 return f(*args, **kwargs)
             except (TypeError, OverflowError) as e:
                 m = re.fullmatch(r"failed to extract field \w+\.(\w+)", str(e))
+                if m is None and isinstance(e, OverflowError):
+                    # Keywords travel in dicts (named above); `threads` is the only integer
+                    # passed on its own.
+                    raise InputError(f"threads: {e}") from e
                 if m is None:
                     raise
                 why = e.__cause__ if e.__cause__ is not None else "wrong type"

@@ -159,3 +159,11 @@ def test_damaged_pickle_state(cap):
         with pytest.raises(murk.InputError) as e:
             rebuild({**state, key: value})
         assert one_line(e).startswith("pickled capture: ") and says in one_line(e)
+
+
+def test_huge_thread_counts_are_input_errors(cap):
+    for call in (lambda: murk.reconstruct(cap, volume=VOL, threads=2**70),
+                 lambda: murk.render(SCENES / "z-letter.toml", grid=4, spp=1, threads=2**70)):
+        with pytest.raises(murk.InputError) as e:
+            call()
+        assert one_line(e).startswith("threads: ")
