@@ -79,6 +79,20 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
         let t: f64 = fields[at].parse().unwrap();
         assert!(t > 0.0 && t < 1.0, "{row}");
     }
+    // A finished capture replaced by another render's is refused, not scored as this cell's.
+    let renders: Vec<PathBuf> = std::fs::read_dir(d.join("renders"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "h5"))
+        .collect();
+    assert_eq!(renders.len(), 2, "{renders:?}");
+    std::fs::copy(&renders[0], &renders[1]).unwrap();
+    let (code, _, err) = small_study(&d, &["--shards", "2"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(renders[1].to_str().unwrap()) && err.contains("another render"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 

@@ -465,8 +465,17 @@ impl<'a> Plan<'a> {
 
     /// One empty capture per albedo, each with its `scene_info`.
     fn empty_captures(&self, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> Vec<Capture> {
+        self.scene_infos(spp, seed, shard)
+            .into_iter()
+            .map(|info| self.empty_capture(info))
+            .collect()
+    }
+
+    /// The `scene_info` of each capture this plan renders (one per albedo of a sweep): what a
+    /// finished capture must hold to be this render's.
+    pub fn scene_infos(&self, spp: u64, seed: u64, shard: Option<(usize, usize)>) -> Vec<String> {
         if self.albedos.is_empty() {
-            return vec![self.empty_capture(scene_info(self.scene, spp, seed, shard))];
+            return vec![scene_info(self.scene, spp, seed, shard)];
         }
         // The sweep's lines go before the shard line, which merging strips; the scene's own text (in
         // the info's head) may hold anything, so the head is rendered without a shard.
@@ -475,10 +484,10 @@ impl<'a> Plan<'a> {
         self.albedos
             .iter()
             .map(|a| {
-                self.empty_capture(format!(
+                format!(
                     "{head}{SWEEP_KEY}{:?}\n{ALBEDO_KEY}{a:?}\n{shard}",
                     self.albedos
-                ))
+                )
             })
             .collect()
     }

@@ -213,10 +213,35 @@ pub struct CellResult {
     pub by_compensation: Vec<(&'static str, Vec<Scores>, Plane)>,
 }
 
+/// Reads capture `id`, refusing a file that holds another render than the plan's: one copied or
+/// left there by hand would otherwise be scored as this cell's.
+fn load_capture(plan: &Plan, dir: &Path, id: &str) -> Result<Capture> {
+    let path = dir.join(capture_path(id));
+    let cap = murk_io::read_capture(&path)?;
+    let (job, k) = plan
+        .captures
+        .iter()
+        .find_map(|j| {
+            let k = j.capture_ids().iter().position(|c| c == id)?;
+            Some((j, k))
+        })
+        .ok_or_else(|| Error::param(format!("capture {id} is not one of the plan's")))?;
+    let scene = crate::plan::load_scene(&plan.scenes_dir, job.scene, &job.set)?;
+    let want =
+        murk_render::Plan::with_albedos(&scene, job.sweep())?.scene_infos(job.spp, job.seed, None);
+    if cap.scene_info != want[k] {
+        return Err(Error::format(
+            &path,
+            "holds another render than the plan's (its scene_info differs); delete it to render it again",
+        ));
+    }
+    Ok(cap)
+}
+
 /// Reconstructs and scores every cell; the captures must exist.
 pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellResult>> {
     // Captures are read when used, one at a time (a paper-scale capture is 268 MB).
-    let load = |id: &str| murk_io::read_capture(&dir.join(capture_path(id)));
+    let load = |id: &str| load_capture(plan, dir, id);
     // Front views of the no-medium captures per (capture, λ): every cell of that scene compares with them.
     let mut references: HashMap<(String, u64), Plane> = HashMap::new();
     // Fields of captures that several cells reconstruct at the same λ (Fig. 3c's g = 0 row is Fig. 3b's
