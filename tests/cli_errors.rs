@@ -178,6 +178,43 @@ fn non_finite_h_and_zero_bin_width() {
     // The capture's largest H value, stored as little-endian f32 in the uncompressed file.
     let cap = murk_io::read_capture(&good).unwrap();
     let max = cap.h.iter().cloned().fold(0.0f32, f32::max);
+    // Histograms of zeros, or of values that underflow, give no volume but say why (lct, fk and
+    // cdt used to write a volume of zeros).
+    let conf = synth_capture(&d, "conf.h5", &["--kind", "confocal"]);
+    for (name, scale, needle, methods) in [
+        (
+            "zeros.h5",
+            0.0f32,
+            "the capture's histograms are",
+            &["pf", "lct", "cdt"][..],
+        ),
+        // cdt scales its input and still finds these.
+        (
+            "tiny.h5",
+            1e-44,
+            "no signal of the capture's window",
+            &["pf", "lct"],
+        ),
+    ] {
+        let mut c = murk_io::read_capture(&conf).unwrap();
+        let peak = c.h.iter().cloned().fold(0.0f32, f32::max);
+        c.h.iter_mut().for_each(|v| *v = *v / peak * scale);
+        let p = d.join(name);
+        murk_io::write_capture(&p, &c).unwrap();
+        for &method in methods {
+            fails(
+                &[
+                    "reconstruct",
+                    p.to_str().unwrap(),
+                    "--method",
+                    method,
+                    "--out",
+                    out,
+                ],
+                &[name, "all zeros", needle],
+            );
+        }
+    }
     let nan = d.join("nan.h5");
     patch(&good, &nan, &max.to_le_bytes(), &f32::NAN.to_le_bytes());
     fails(
@@ -206,7 +243,12 @@ fn non_finite_h_and_zero_bin_width() {
         &["reconstruct", zero.to_str().unwrap(), "--out", out],
         &["zero.h5", "bin width"],
     );
-    no_leftovers(&d, &["good.h5", "nan.h5", "inf.h5", "zero.h5"]);
+    no_leftovers(
+        &d,
+        &[
+            "good.h5", "nan.h5", "inf.h5", "zero.h5", "conf.h5", "zeros.h5", "tiny.h5",
+        ],
+    );
     std::fs::remove_dir_all(&d).ok();
 }
 

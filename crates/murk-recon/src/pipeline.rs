@@ -401,6 +401,21 @@ impl Plan {
                 murk_core::short(peak as f64)
             )));
         }
+        if out.intensity.iter().all(|&v| v == 0.0) {
+            // A volume of zeros would look like a result (lct, fk and cdt gave one for windows that
+            // cannot reach their volume, and for values that underflow).
+            let peak = cap.h.iter().fold(0f32, |m, v| m.max(v.abs()));
+            return Err(Error::param(match peak {
+                0.0 => "the reconstruction is all zeros: the capture's histograms are (after any gate)"
+                    .to_string(),
+                _ => format!(
+                    "the reconstruction is all zeros: no signal of the capture's window ({:.3} to {:.3} m, values up to {}) reaches the volume",
+                    cap.time.start_m,
+                    cap.time.end_m(),
+                    murk_core::short(peak as f64)
+                ),
+            }));
+        }
         end.trim(&cap, &out.volume, &mut out.intensity);
         out.warnings.extend(end.warning());
         out.warnings.extend(near_face_warning(&out, &gated));
