@@ -185,7 +185,7 @@ fn non_finite_h_and_zero_bin_width() {
         (
             "zeros.h5",
             0.0f32,
-            "the capture's histograms are",
+            "the capture's histograms are all zeros",
             &["pf", "lct", "cdt"][..],
         ),
         // cdt scales its input and still finds these.

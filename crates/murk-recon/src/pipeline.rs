@@ -406,7 +406,7 @@ impl Plan {
             // cannot reach their volume, and for values that underflow).
             let peak = cap.h.iter().fold(0f32, |m, v| m.max(v.abs()));
             return Err(Error::param(match peak {
-                0.0 => "the reconstruction is all zeros: the capture's histograms are (after any gate)"
+                0.0 => "the reconstruction is all zeros because the capture's histograms are all zeros (after any gate)"
                     .to_string(),
                 _ => format!(
                     "the reconstruction is all zeros: no signal of the capture's window ({:.3} to {:.3} m, values up to {}) reaches the volume",
