@@ -63,12 +63,15 @@ impl Args {
             (None, Some(f)) => Some(Wavelength::WallFactor(f)),
             (None, None) => None,
         };
-        let compensation = match (self.compensate.as_deref(), self.mu_t) {
-            (None, _) => Compensation::None,
-            (Some("paper" | "ballistic"), None) => {
-                return Err(Error::param("compensate needs mu_t"))
+        let compensation = match self.compensate.as_deref() {
+            None => Compensation::None,
+            Some(c) => {
+                let comp = Compensation::named(c, self.mu_t.unwrap_or(0.0), self.albedo)?;
+                if !matches!(comp, Compensation::None) && self.mu_t.is_none() {
+                    return Err(Error::param("compensate needs mu_t"));
+                }
+                comp
             }
-            (Some(c), mu) => Compensation::named(c, mu.unwrap_or(0.0), self.albedo)?,
         };
         let (thickness_m, mu_a_per_m, mu_s_prime_per_m, n) = self.slab;
         Ok(Options {

@@ -393,22 +393,21 @@ impl Plan {
         let gated = apply_gate(&mut cap, self.open_m, self.edge_m);
         let mut end = handle_end(&mut cap, self.window_end, self.edge_m);
         let mut out = self.engine.run(&cap, progress)?;
+        let peak = || cap.h.iter().fold(0f32, |m, v| m.max(v.abs()));
         if out.intensity.iter().any(|v| !v.is_finite()) {
             // Finite data whose sums overflow f32: a volume of inf and NaN would look like a result.
-            let peak = cap.h.iter().fold(0f32, |m, v| m.max(v.abs()));
             return Err(Error::Limits(format!(
                 "the reconstruction overflows 32-bit floats (the capture's values reach {}); scale the capture down",
-                murk_core::short(peak as f64)
+                murk_core::short(peak() as f64)
             )));
         }
         if out.intensity.iter().all(|&v| v == 0.0) {
             // A volume of zeros would look like a result (lct, fk and cdt gave one for windows that
             // cannot reach their volume, and for values that underflow).
-            let peak = cap.h.iter().fold(0f32, |m, v| m.max(v.abs()));
-            return Err(Error::param(match peak {
+            return Err(Error::param(match peak() {
                 0.0 => "the reconstruction is all zeros because the capture's histograms are all zeros (after any gate)"
                     .to_string(),
-                _ => format!(
+                peak => format!(
                     "the reconstruction is all zeros: no signal of the capture's window ({:.3} to {:.3} m, values up to {}) reaches the volume",
                     cap.time.start_m,
                     cap.time.end_m(),

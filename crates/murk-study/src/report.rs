@@ -166,7 +166,7 @@ fn write_figures(results: &[CellResult], dir: &Path) -> Result<Vec<(String, Path
                 cols.push(&r.cell.col);
             }
         }
-        for (k, comp) in crate::run::COMPENSATIONS.iter().enumerate() {
+        for (k, comp) in murk_recon::Compensation::NAMES.iter().enumerate() {
             let planes: Vec<Vec<Option<&Plane>>> = rows
                 .iter()
                 .map(|row| {

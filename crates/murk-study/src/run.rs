@@ -174,9 +174,6 @@ fn merge_parts(dir: &Path, job: &CaptureJob) -> Result<()> {
     Ok(())
 }
 
-/// The compensations every cell is scored with.
-pub const COMPENSATIONS: [&str; 3] = Compensation::NAMES;
-
 /// A detected-or-not verdict and depth error for one named object of the scene.
 #[derive(Clone, Debug)]
 pub struct ObjectScore {
@@ -272,7 +269,7 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
             &plan.job(&cell.captures[0]).set,
         )?;
         let truth = scene.ground_truth_on(&volume.x.values(), &volume.y.values());
-        let mut by_comp: Vec<(&'static str, Vec<Scores>, Option<Plane>)> = COMPENSATIONS
+        let mut by_comp: Vec<(&'static str, Vec<Scores>, Option<Plane>)> = Compensation::NAMES
             .iter()
             .map(|c| (*c, Vec::new(), None))
             .collect();
