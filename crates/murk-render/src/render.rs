@@ -830,15 +830,38 @@ pub fn fingerprint(key: &str) -> u64 {
 }
 
 /// An append-only file of finished units: a header (magic, fingerprint, unit length, key length, the
-/// render key), then records of (unit index: u64, values: f32 × unit length), little-endian. A record cut
-/// short by a kill is ignored; a key that differs is refused, naming what differs.
+/// render key), then records of (unit index: u64, values: f32 × unit length, checksum: u64),
+/// little-endian. The valid prefix ends at the first record cut short by a kill or whose checksum fails
+/// (a crash can leave zeros where data was not yet written; a disk can flip bits): the units from there
+/// on are rendered again, so a resumed capture is still exact. A key that differs is refused, naming
+/// what differs.
 struct Checkpoint {
     file: std::fs::File,
     path: PathBuf,
     unit_len: usize,
 }
 
-const MAGIC: &[u8; 8] = b"MURKCKP2";
+const MAGIC: &[u8; 8] = b"MURKCKP3";
+
+/// Bytes of one record: unit index, values and checksum.
+fn record_len(unit_len: usize) -> usize {
+    8 + 4 * unit_len + 8
+}
+
+/// A record's checksum over its index and values: FNV-1a over 8-byte words (a tail zero-padded), fast
+/// enough to check a whole capture's checkpoint as it is read.
+fn record_sum(bytes: &[u8]) -> u64 {
+    let mut chunks = bytes.chunks_exact(8);
+    let word = |c: &[u8]| {
+        let mut w = [0u8; 8];
+        w[..c.len()].copy_from_slice(c);
+        u64::from_le_bytes(w)
+    };
+    let h = chunks.by_ref().fold(0xcbf2_9ce4_8422_2325u64, |h, c| {
+        (h ^ word(c)).wrapping_mul(0x0100_0000_01b3)
+    });
+    (h ^ word(chunks.remainder())).wrapping_mul(0x0100_0000_01b3)
+}
 
 /// A checkpoint's header: magic, fingerprint, unit length, key length and the render key.
 fn header(key: &str, unit_len: usize) -> Vec<u8> {
@@ -853,7 +876,7 @@ fn header(key: &str, unit_len: usize) -> Vec<u8> {
 
 /// Calls `unit(u, values)` for each whole record of the checkpoint at `path`, after checking that its
 /// header is this render's; returns the length of the valid prefix, or `None` when there is no file.
-/// A unit index beyond `units` is a format error.
+/// A unit index beyond `units` in a record whose checksum holds is a format error.
 fn read_checkpoint(
     path: &Path,
     key: &str,
@@ -868,7 +891,7 @@ fn read_checkpoint(
     // render's header and every unit once: checked before reading it into memory.
     let mut f = murk_core::open_input(path)?;
     let header = header(key, unit_len);
-    let rec = 8 + 4 * unit_len;
+    let rec = record_len(unit_len);
     let most = (units as u64 + 1) * rec as u64 + header.len() as u64;
     let mut bytes = Vec::new();
     (&mut f)
@@ -891,7 +914,11 @@ fn read_checkpoint(
     let mut vals = vec![0f32; unit_len];
     let mut off = header.len();
     while off + rec <= bytes.len() {
-        let u = u64::from_le_bytes(bytes[off..off + 8].try_into().expect("8 bytes"));
+        let (body, sum) = bytes[off..off + rec].split_at(rec - 8);
+        if record_sum(body) != u64::from_le_bytes(sum.try_into().expect("8 bytes")) {
+            break;
+        }
+        let u = u64::from_le_bytes(body[..8].try_into().expect("8 bytes"));
         let u = usize::try_from(u)
             .ok()
             .filter(|&u| u < units)
@@ -903,7 +930,7 @@ fn read_checkpoint(
             })?;
         for (v, b) in vals
             .iter_mut()
-            .zip(bytes[off + 8..off + rec].chunks_exact(4))
+            .zip(body[8..].chunks_exact(4))
         {
             *v = f32::from_le_bytes(b.try_into().expect("4 bytes"));
         }
@@ -944,11 +971,14 @@ impl Checkpoint {
     }
 
     fn append(&mut self, recs: &[(usize, Vec<f32>)]) -> Result<()> {
-        let mut buf = Vec::with_capacity(recs.len() * (8 + 4 * self.unit_len));
+        let mut buf = Vec::with_capacity(recs.len() * record_len(self.unit_len));
         for (u, vals) in recs {
+            let start = buf.len();
             buf.extend_from_slice(&(*u as u64).to_le_bytes());
             vals.iter()
                 .for_each(|v| buf.extend_from_slice(&v.to_le_bytes()));
+            let sum = record_sum(&buf[start..]);
+            buf.extend_from_slice(&sum.to_le_bytes());
         }
         let io = |e| Error::io(&self.path, e);
         let before = self.file.metadata().map_err(io)?.len();

@@ -112,7 +112,7 @@ fn seeded_render_is_bitwise_reproducible() {
     assert_eq!(resumed.h, one.h);
     // Every unit twice is more than any render of this plan records: refused before reading it all.
     let whole = std::fs::read(&ck).unwrap();
-    let header_len = whole.len() - 6 * (8 + 4 * 2 * 64);
+    let header_len = whole.len() - 6 * (8 + 4 * 2 * 64 + 8);
     let mut twice = whole.clone();
     twice.extend_from_slice(&whole[header_len..]);
     std::fs::write(&ck, &twice).unwrap();
@@ -121,6 +121,18 @@ fn seeded_render_is_bitwise_reproducible() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("more bytes than a checkpoint"), "{e}");
+    // A record with a flipped bit (or the zeros a crash leaves) ends the valid prefix: the units from
+    // there on are rendered again, and the capture is the same.
+    let rec = 8 + 4 * 2 * 64 + 8;
+    for damage in [|b: &mut u8| *b ^= 0x10, |b: &mut u8| *b = 0] {
+        let mut bad = whole.clone();
+        bad[header_len + 2 * rec + 40..header_len + 4 * rec]
+            .iter_mut()
+            .for_each(damage);
+        std::fs::write(&ck, &bad).unwrap();
+        let resumed = plan.render(&opts(None, Some(ck.clone())), &|_, _| {});
+        assert_eq!(resumed.unwrap().h, one.h);
+    }
     std::fs::write(&ck, &whole).unwrap();
     // A checkpoint from another seed is refused rather than mixed in.
     let mut other = opts(None, Some(ck.clone()));
@@ -132,14 +144,14 @@ fn seeded_render_is_bitwise_reproducible() {
         .contains("different render"));
     // Cut inside its header (a kill as the render started), it holds nothing and starts afresh;
     // a damaged header is refused as such, not as another murk version's.
-    let header_len = std::fs::read(&ck).unwrap().len() as u64 - 6 * (8 + 4 * 2 * 64);
+    let header_len = std::fs::read(&ck).unwrap().len() as u64 - 6 * (8 + 4 * 2 * 64 + 8);
     let f = std::fs::OpenOptions::new().write(true).open(&ck).unwrap();
     f.set_len(20).unwrap();
     drop(f);
     let fresh = plan.render(&opts(None, Some(ck.clone())), &|_, _| {});
     assert_eq!(fresh.unwrap().h, one.h);
     let mut bytes = std::fs::read(&ck).unwrap();
-    assert_eq!(bytes.len() as u64, header_len + 6 * (8 + 4 * 2 * 64));
+    assert_eq!(bytes.len() as u64, header_len + 6 * (8 + 4 * 2 * 64 + 8));
     bytes[24..32].copy_from_slice(&u64::MAX.to_le_bytes());
     std::fs::write(&ck, &bytes).unwrap();
     let e = plan
@@ -206,6 +218,16 @@ fn checkpoint_parts_assemble_bitwise() {
     // Another seed's parts are refused, naming the key.
     let e = plan.assemble(64, 7, &paths).unwrap_err().to_string();
     assert!(e.contains("p0of3.ckpt") && e.contains("render.seed"), "{e}");
+    // A part with a damaged record is incomplete too.
+    let mut bytes = std::fs::read(&paths[2]).unwrap();
+    let n = bytes.len();
+    bytes[n - 100] ^= 1;
+    std::fs::write(&paths[2], &bytes).unwrap();
+    let e = plan.assemble(64, 42, &paths).unwrap_err().to_string();
+    assert!(
+        e.contains("p2of3.ckpt") && e.contains("incomplete: 1 of its 2 units"),
+        "{e}"
+    );
     // A part cut short (a kill mid-record) is incomplete.
     let len = std::fs::metadata(&paths[1]).unwrap().len();
     let f = std::fs::OpenOptions::new()
@@ -249,7 +271,7 @@ fn checkpoint_parts_assemble_bitwise() {
         )
     });
     assert!(r.unwrap_err().to_string().contains("stopped"));
-    let unit_bytes = 8 + 4 * 2 * 64; // index, then 2 laser points × 1 sensor × 64 bins
+    let unit_bytes = 8 + 4 * 2 * 64 + 8; // index, 2 laser points × 1 sensor × 64 bins, checksum
     assert_eq!(
         std::fs::metadata(&ck).unwrap().len(),
         header + 2 * unit_bytes
@@ -379,12 +401,37 @@ fn overrides_are_named_recorded_and_guard_resume() {
             "medium.albedo: must be in [0, 1], got 1.5",
         ),
         ("object[4].albedo=1", "object[4] does not exist"),
+        (
+            "object[0].scale=0",
+            "object[0].scale: must be a finite, non-zero factor, got 0",
+        ),
+        (
+            "object[0].scale=1e300",
+            "object[0].shape: a coordinate of its bounds is -4e299 m; murk accepts magnitudes up to",
+        ),
+        (
+            "object[0].center=[0, 0, 0]",
+            "object[0].shape: lies in the relay's plane z = 0",
+        ),
         ("medium", "expected KEY=VALUE"),
     ] {
         let e = load(&set(&[ov])).unwrap_err().to_string();
         assert!(e.starts_with("ov.toml: ") && e.contains(want), "{ov}: {e}");
         assert!(!e.contains('\n'));
     }
+
+    // No object and a medium that does not scatter: every histogram would be zero.
+    let empty = SCENE.split("[[object]]").next().unwrap();
+    for medium in ["medium.mu_t=0", "medium.albedo=0"] {
+        let e = Scene::from_str(empty, Path::new("ov.toml"), &set(&[medium]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("ov.toml: object: the scene has no hidden object and no scattering medium"),
+            "{medium}: {e}"
+        );
+    }
+    assert!(Scene::from_str(empty, Path::new("ov.toml"), &Overrides::default()).is_ok());
 
     let base = load(&Overrides::default()).unwrap();
     let fog = load(&Overrides {

@@ -137,6 +137,13 @@ impl Scene {
             .map(|(i, o)| o.resolve(i, dir, path, &bad))
             .collect::<Result<Vec<_>>>()?;
         let geometry = Geometry::new(objects);
+        if geometry.is_empty() && !medium.as_ref().is_some_and(Medium::scatters) {
+            return Err(bad(
+                "object",
+                "the scene has no hidden object and no scattering medium, so every histogram would be zero"
+                    .into(),
+            ));
+        }
 
         let scene = Scene {
             relay,

@@ -394,6 +394,7 @@ impl ObjectDef {
                 albedo,
                 ..
             } => {
+                check_scale(*scale, &field("scale"), bad)?;
                 let outline = murk_synth::z_letter_outline();
                 let c = v3(*center);
                 let p = |k: usize| c + DVec3::new(outline[k][0], outline[k][1], 0.0) * *scale;
@@ -414,6 +415,7 @@ impl ObjectDef {
                 albedo,
                 ..
             } => {
+                check_scale(*scale, &field("scale"), bad)?;
                 let full = dir.join(file);
                 let opts = tobj::LoadOptions {
                     triangulate: true,
@@ -472,6 +474,31 @@ impl ObjectDef {
                 ),
             ));
         }
+        let limits = murk_core::Limits::get();
+        for v in obj.bounds.min.to_array().into_iter().chain(obj.bounds.max.to_array()) {
+            limits
+                .length("a coordinate of its bounds", v)
+                .map_err(|e| bad(&field("shape"), e.to_string()))?;
+        }
+        // Light reaches the hidden side only through z > 0; a shape flat in the relay's plane is never hit.
+        if obj.bounds.max.z <= 0.0 {
+            return Err(bad(
+                &field("shape"),
+                "lies in the relay's plane z = 0, where no light from the hidden side reaches it".into(),
+            ));
+        }
         Ok(obj)
+    }
+}
+
+/// A shape's scale factor: finite and not zero (a negative one mirrors, which two-sided surfaces allow).
+fn check_scale(scale: f64, field: &str, bad: Bad) -> Result<()> {
+    if scale.is_finite() && scale != 0.0 {
+        Ok(())
+    } else {
+        Err(bad(
+            field,
+            format!("must be a finite, non-zero factor, got {}", short(scale)),
+        ))
     }
 }
