@@ -8,7 +8,8 @@ use crate::{Error, Result};
 pub struct Limits {
     /// Largest |coordinate|, time offset or path end (m). Long-range NLOS reaches about 1.5 km.
     pub max_length_m: f64,
-    /// Smallest time bin (m of path); 1e-7 m is 0.3 fs, finer than any streak camera.
+    /// Smallest time bin (m of path), and smallest span of a grid of wall points; 1e-7 m is 0.3 fs,
+    /// finer than any streak camera.
     pub min_bin_width_m: f64,
     /// Largest single buffer (bytes): the machine's physical memory, or `MURK_MAX_BYTES` when set.
     pub max_bytes: u64,

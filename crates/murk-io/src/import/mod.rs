@@ -341,6 +341,7 @@ impl Scan {
             f.extra,
         );
         confocal_capture(
+            path,
             grid,
             time_axis(bin_width_m, self.nt, f.t0_bin),
             self.h,
@@ -406,12 +407,17 @@ fn info_head(path: &Path, format: &str, var: &str) -> String {
 
 /// A capture measuring each point of `grid` with itself.
 fn confocal_capture(
+    path: &Path,
     grid: PointSet,
     time: TimeAxis,
     h: Vec<f32>,
     scene_info: String,
 ) -> Result<Capture> {
     let cap = Capture::confocal(grid, time, h, scene_info);
-    cap.validate()?;
+    // The check names the file read, as the reader's own errors do.
+    cap.validate().map_err(|e| match e {
+        Error::Parameter(m) | Error::Limits(m) => Error::format(path, m),
+        other => other,
+    })?;
     Ok(cap)
 }

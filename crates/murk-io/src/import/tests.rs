@@ -114,6 +114,25 @@ fn cdt_meas_t_a_b() {
     let cap = import(&p, &ImportOptions::preset(Preset::Cdt)).unwrap();
     assert_point(&cap, z, "cdt");
     assert!(cap.scene_info.contains("scan_side_m: 0.7"));
+    // The same file read as f-k's (a, b, t) is a 256 × 8 scan of 8 bins: refused as another dataset's.
+    let e = import(&p, &ImportOptions::preset(Preset::Fk))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cones.mat")
+            && e.contains("a 256 × 8 scan of 8 bins, but fk scans are square"),
+        "{e}"
+    );
+    // A scan side that makes every point coincide is refused naming the file.
+    let tiny = ImportOptions {
+        wall_size_m: Some(1e-300),
+        ..ImportOptions::preset(Preset::Cdt)
+    };
+    let e = import(&p, &tiny).unwrap_err().to_string();
+    assert!(
+        e.starts_with(&format!("{}: ", p.display())) && e.contains("span 1e-300 m"),
+        "{e}"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 
