@@ -381,6 +381,48 @@ fn nonsense_parameters() {
     );
     fails(
         &[
+            "import", g, "--format", "cdt", "--flip", "x,x", "--out", out,
+        ],
+        &["'x' is named twice"],
+    );
+    fails(
+        &[
+            "synth", "--out", synth_out, "--target", "z:1", "--bins", "0",
+        ],
+        &["bins must be at least 1"],
+    );
+    fails(
+        &[
+            "synth",
+            "--out",
+            synth_out,
+            "--target",
+            "polygon:1:0,0;1,0;2,0",
+        ],
+        &["the polygon covers no sample"],
+    );
+    // Options that would do nothing without --compensate, and outputs that are not files.
+    fails(
+        &["reconstruct", g, "--out", out, "--mu-t", "1"],
+        &["--compensate"],
+    );
+    fails(
+        &["reconstruct", g, "--out", d.to_str().unwrap()],
+        &["is a folder"],
+    );
+    fails(
+        &["reconstruct", g, "--out", "/dev/null"],
+        &["not a regular file"],
+    );
+    let file = d.join("a-file");
+    std::fs::write(&file, b"x").unwrap();
+    fails(
+        &["demo", "--out", file.to_str().unwrap()],
+        &["a-file: exists and is not a folder"],
+    );
+    std::fs::remove_file(&file).unwrap();
+    fails(
+        &[
             "synth",
             "--out",
             synth_out,

@@ -116,10 +116,14 @@ fn parse_axes(s: &str) -> Result<[Dim; 3], String> {
 fn parse_flip(s: &str) -> Result<Flip, String> {
     let mut flip = Flip::default();
     for a in s.split(',') {
-        match a.trim() {
-            "x" => flip.x = true,
-            "y" => flip.y = true,
+        let axis = match a.trim() {
+            "x" => &mut flip.x,
+            "y" => &mut flip.y,
             other => return Err(format!("'{other}' is not an axis to flip (x or y)")),
+        };
+        // Twice would read as undoing the flip, or as a typo for "x,y": neither is guessed.
+        if std::mem::replace(axis, true) {
+            return Err(format!("'{}' is named twice", a.trim()));
         }
     }
     Ok(flip)

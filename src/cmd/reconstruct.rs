@@ -87,11 +87,11 @@ pub struct ReconstructArgs {
     /// Medium compensation of the intensity (needs --mu-t; paper also --albedo).
     #[arg(long, value_enum, requires = "mu_t")]
     pub compensate: Option<CompensateArg>,
-    /// Extinction coefficient μt of the medium (1/m).
-    #[arg(long)]
+    /// Extinction coefficient μt of the medium (1/m), for --compensate.
+    #[arg(long, requires = "compensate")]
     pub mu_t: Option<f64>,
-    /// Single-scattering albedo α of the medium.
-    #[arg(long, default_value_t = 0.0)]
+    /// Single-scattering albedo α of the medium, for --compensate.
+    #[arg(long, default_value_t = 0.0, requires = "compensate")]
     pub albedo: f64,
     /// Amplitude factor per leg.
     #[arg(long, value_enum, default_value = "none")]
@@ -226,8 +226,8 @@ impl ReconstructArgs {
 }
 
 pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
-    murk_io::check_volume_path(&a.out)?;
     murk_io::check_output(&a.out, &[&a.file])?;
+    murk_io::check_volume_path(&a.out)?;
     if let Some(png) = &a.png {
         // Before the reconstruction, so that a bad --png leaves no volume behind either.
         pictures::check_pictures_dir(png, &[&a.file], &a.out)?;

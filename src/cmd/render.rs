@@ -96,23 +96,27 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
-/// A time budget in seconds, as the library takes it.
-fn parse_budget(s: &str) -> Result<f64, String> {
+/// A number of seconds that the library's `check` accepts.
+fn parse_seconds_with<T>(
+    s: &str,
+    check: impl Fn(f64) -> murk_core::Result<T>,
+) -> Result<f64, String> {
     let v: f64 = s
         .trim()
         .parse()
         .map_err(|_| format!("'{s}' is not a number of seconds"))?;
-    murk_render::time_budget(v).map_err(|e| e.to_string())
+    check(v).map_err(|e| e.to_string())?;
+    Ok(v)
+}
+
+/// A time budget in seconds, as the library takes it.
+fn parse_budget(s: &str) -> Result<f64, String> {
+    parse_seconds_with(s, murk_render::time_budget)
 }
 
 /// A checkpoint interval in seconds, as the library takes it.
 fn parse_seconds(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number of seconds"))?;
-    murk_render::checkpoint_interval(v).map_err(|e| e.to_string())?;
-    Ok(v)
+    parse_seconds_with(s, murk_render::checkpoint_interval)
 }
 
 pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {

@@ -135,10 +135,12 @@ impl PointSet {
         }
         // A grid whose points all but coincide (a scan side of 1e-300 m) has no aperture to image with.
         if matches!(self.layout, PointLayout::Grid { .. }) && self.points.len() > 1 {
-            let (lo, hi) = self.points.iter().fold(
-                (self.points[0], self.points[0]),
-                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-            );
+            let (lo, hi) = self
+                .points
+                .iter()
+                .fold((self.points[0], self.points[0]), |(lo, hi), p| {
+                    (lo.min(*p), hi.max(*p))
+                });
             let span = (hi - lo).max_element();
             if span < limits.min_bin_width_m {
                 return Err(Error::Limits(format!(

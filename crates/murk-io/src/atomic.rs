@@ -128,6 +128,18 @@ pub fn check_output(out: &Path, inputs: &[&Path]) -> Result<()> {
     refuse_overwrite(out, inputs)
 }
 
+/// Creates the output folder `dir` (and its parents) unless it exists; a file, device or FIFO at its
+/// path is refused as such ("File exists" named no reason).
+pub fn create_output_dir(dir: &Path) -> Result<()> {
+    if std::fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
+        return Err(Error::param(format!(
+            "{}: exists and is not a folder; the output here is a folder",
+            dir.display()
+        )));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+}
+
 /// [`check_output`] for an HDF5 file (a capture or a ground truth), which must also be named so.
 pub fn check_h5_output(out: &Path, inputs: &[&Path]) -> Result<()> {
     check_output(out, inputs)?;

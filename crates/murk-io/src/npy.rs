@@ -129,6 +129,14 @@ pub fn read_npy_f32_with_limit(path: &Path, max_bytes: u64) -> Result<(Vec<usize
             body.len()
         )));
     }
+    // numpy never writes past the array: more bytes mean a header whose shape or dtype is wrong.
+    if body.len() > n * size {
+        return Err(bad(format!(
+            "{} bytes after the array's data (shape {shape:?} of '{descr}' takes {}); the header does not describe this file",
+            body.len() - n * size,
+            n * size
+        )));
+    }
     let big = order == '>';
     let mut data: Vec<f32> = body[..n * size]
         .chunks_exact(size)

@@ -106,6 +106,10 @@ fn volume_format(path: &Path) -> Result<VolumeFormat> {
     match ext.as_str() {
         "npy" => Ok(VolumeFormat::Npy),
         "h5" | "hdf5" => Ok(VolumeFormat::Hdf5),
+        "" => Err(Error::param(format!(
+            "{}: has no extension; name the volume .npy or .h5",
+            path.display()
+        ))),
         _ => Err(Error::param(format!(
             "{}: unknown output type '.{ext}' (use .npy or .h5)",
             path.display()

@@ -928,10 +928,7 @@ fn read_checkpoint(
                     format!("unit {u} recorded, but the render has {units}"),
                 )
             })?;
-        for (v, b) in vals
-            .iter_mut()
-            .zip(body[8..].chunks_exact(4))
-        {
+        for (v, b) in vals.iter_mut().zip(body[8..].chunks_exact(4)) {
             *v = f32::from_le_bytes(b.try_into().expect("4 bytes"));
         }
         unit(u, &vals);

@@ -427,7 +427,9 @@ fn overrides_are_named_recorded_and_guard_resume() {
             .unwrap_err()
             .to_string();
         assert!(
-            e.starts_with("ov.toml: object: the scene has no hidden object and no scattering medium"),
+            e.starts_with(
+                "ov.toml: object: the scene has no hidden object and no scattering medium"
+            ),
             "{medium}: {e}"
         );
     }

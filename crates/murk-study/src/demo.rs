@@ -27,7 +27,7 @@ pub struct Demo {
 /// `dir` (created if missing).
 pub fn demo(dir: &Path, progress: &dyn Progress) -> Result<Demo> {
     let t0 = Instant::now();
-    std::fs::create_dir_all(dir).map_err(|e| murk_core::Error::io(dir, e))?;
+    murk_io::create_output_dir(dir)?;
     let layout = CaptureLayout {
         kind: LayoutKind::LaserGridSinglePoint,
         wall_size_m: 1.0,

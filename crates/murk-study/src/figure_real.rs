@@ -158,7 +158,7 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
         cells.push(pair);
     }
     let grid = grid_plane(&cells);
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    murk_io::create_output_dir(out)?;
     let png = out.join("grid.png");
     pictures::write_png(&png, &grid, 0.0, 1.0)?;
     let index = pictures::write_index(

@@ -40,7 +40,7 @@ pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
         )));
     }
     let renders = dir.join("renders");
-    std::fs::create_dir_all(&renders).map_err(|e| Error::io(&renders, e))?;
+    murk_io::create_output_dir(&renders)?;
     let path = dir.join("plan.json");
     let json = serde_json::to_string_pretty(&plan)
         .map_err(|e| Error::param(format!("cannot serialise the plan: {e}")))?;

@@ -199,7 +199,7 @@ fn write_figures(results: &[CellResult], dir: &Path) -> Result<Vec<(String, Path
 
 /// Plots of every metric against the study's axes (paper compensation, mean ± spread over seeds).
 fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBuf)>> {
-    std::fs::create_dir_all(dir.join("plots")).map_err(io(dir))?;
+    murk_io::create_output_dir(&dir.join("plots"))?;
     // (figure, file stem, x label, x value, series key)
     type Axis = (
         Figure,

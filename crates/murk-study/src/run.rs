@@ -69,7 +69,7 @@ fn cpu_path(dir: &Path, job: &CaptureJob) -> PathBuf {
 /// Renders every capture job whose file is missing, with all cores; returns how many tasks ran.
 pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
     let renders = dir.join("renders");
-    std::fs::create_dir_all(&renders).map_err(|e| Error::io(&renders, e))?;
+    murk_io::create_output_dir(&renders)?;
     let missing: Vec<&CaptureJob> = plan.captures.iter().filter(|j| !captured(dir, j)).collect();
     let all_parts =
         |j: &CaptureJob| j.tasks.len() > 1 && (0..j.tasks.len()).all(|t| task_done(dir, j, t));

@@ -70,6 +70,9 @@ impl CaptureLayout {
                 self.grid
             )));
         }
+        if self.time.bins == 0 {
+            return Err(Error::param("bins must be at least 1, got 0"));
+        }
         let half = self.wall_size_m / 2.0;
         if self.point.x.abs() > half || self.point.y.abs() > half || self.point.z != 0.0 {
             return Err(Error::param(format!(

@@ -90,6 +90,12 @@ impl Target {
                         }
                     }
                 }
+                if out.is_empty() {
+                    return Err(Error::param(format!(
+                        "the polygon covers no sample of its {} m raster: its area is zero or smaller than a sample's",
+                        murk_core::short(*spacing_m)
+                    )));
+                }
                 Ok(out)
             }
         }
@@ -158,6 +164,16 @@ mod tests {
         let s = t.scatterers().unwrap();
         let area: f64 = s.iter().map(|s| s.weight).sum();
         assert!((area - 0.1).abs() < 1e-9, "{area}");
+        // Collinear vertices enclose nothing: refused as such, not as a time window without returns.
+        let flat = Target::Polygon {
+            outline: vec![[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]],
+            offset: [0.0, 0.0],
+            depth_m: 1.0,
+            albedo: 1.0,
+            spacing_m: 0.01,
+        };
+        let e = flat.scatterers().unwrap_err().to_string();
+        assert!(e.contains("covers no sample of its 0.01 m raster"), "{e}");
     }
 
     #[test]

@@ -189,7 +189,7 @@ pub fn check_pictures_dir(dir: &Path, inputs: &[&Path], out: &Path) -> Result<()
 
 /// Writes front.png, top.png, side.png and depth.png into `dir`; returns their paths with captions.
 pub fn write_views(dir: &Path, vol: &Volume, intensity: &[f32]) -> Result<Vec<(PathBuf, String)>> {
-    std::fs::create_dir_all(dir).map_err(|e| murk_core::Error::io(dir, e))?;
+    murk_io::create_output_dir(dir)?;
     let v = views(vol, intensity);
     let max = intensity.iter().cloned().fold(0.0, f32::max);
     let mut out = Vec::new();

@@ -83,7 +83,7 @@ impl BinWidth {
 /// A layout described on the command line: one 3-D array of a confocal scan on a square grid.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Generic {
-    /// The array's name (`a.b` for a field of struct `a`); ignored for `.npy` files.
+    /// The array's name (`a.b` for a field of struct `a`); empty for `.npy` files, which hold one.
     pub var: String,
     /// What each stored axis holds, in the array's shape order (MATLAB's for `.mat` files, the
     /// stored order for HDF5 and `.npy`).
@@ -164,6 +164,12 @@ fn generic(path: &Path, g: &Generic, o: &ImportOptions) -> Result<Capture> {
         ));
     };
     let file = ArrayFile::open(path)?;
+    if !g.var.is_empty() && matches!(file, ArrayFile::Npy(..)) {
+        return Err(Error::param(format!(
+            "{}: a .npy file holds one unnamed array; --var names a variable of a MATLAB or HDF5 file",
+            path.display()
+        )));
+    }
     if g.var.is_empty() && !matches!(file, ArrayFile::Npy(..)) {
         return Err(Error::param(format!(
             "{}: give the array's name with --var (variables present: {})",
@@ -237,6 +243,12 @@ impl Scan {
         axes: [Dim; 3],
         flip: Flip,
     ) -> Result<Scan> {
+        // A .npy file's one array has no name.
+        let name = if var.is_empty() {
+            "the array".to_string()
+        } else {
+            format!("'{var}'")
+        };
         let names = axes.map(|d| match d {
             Dim::T => "T",
             Dim::X | Dim::Y => "N",
@@ -245,7 +257,7 @@ impl Scan {
             return Err(Error::format(
                 path,
                 format!(
-                    "'{var}' should be {} × {} × {} ({}), got shape {shape:?}",
+                    "{name} should be {} × {} × {} ({}), got shape {shape:?}",
                     names[0],
                     names[1],
                     names[2],
@@ -260,7 +272,7 @@ impl Scan {
             return Err(Error::format(
                 path,
                 format!(
-                    "'{var}' declares shape {shape:?} but holds {} values",
+                    "{name} declares shape {shape:?} but holds {} values",
                     data.len()
                 ),
             ));
@@ -268,16 +280,16 @@ impl Scan {
         if nx < 2 || ny < 2 || nt < 2 {
             return Err(Error::format(
                 path,
-                format!("'{var}' has shape {shape:?}; a confocal scan needs at least 2 × 2 points and 2 time bins"),
+                format!("{name} has shape {shape:?}; a confocal scan needs at least 2 × 2 points and 2 time bins"),
             ));
         }
         if let Some(v) = data.iter().find(|v| !v.is_finite()) {
             return Err(Error::format(
                 path,
-                format!("'{var}' holds a non-finite value ({v})"),
+                format!("{name} holds a non-finite value ({v})"),
             ));
         }
-        Limits::get().elements(&format!("{}: '{var}'", path.display()), &[nx, ny, nt], 4)?;
+        Limits::get().elements(&format!("{}: {name}", path.display()), &[nx, ny, nt], 4)?;
         Ok(Scan {
             nx,
             ny,
@@ -305,11 +317,20 @@ impl Scan {
     /// A confocal capture on murk's regular grid over [−side/2, side/2]², first point to last.
     fn confocal(mut self, path: &Path, f: &Framing) -> Result<Capture> {
         let bin_width_m = f.bin_width.metres();
-        if !(f.side_m.is_finite() && f.side_m > 0.0 && bin_width_m.is_finite() && bin_width_m > 0.0)
-        {
+        if !(f.side_m.is_finite() && f.side_m > 0.0) {
             return Err(Error::param(format!(
-                "scan side ({} m) and bin width ({} m) must be positive",
-                f.side_m, bin_width_m
+                "the scan side must be a positive length, got {} m",
+                murk_core::short(f.side_m)
+            )));
+        }
+        // Named in the unit it was given in: 1e300 ps is inf m.
+        if !(bin_width_m.is_finite() && bin_width_m > 0.0) {
+            return Err(Error::param(format!(
+                "the bin width must be a positive, finite length, got {}",
+                match f.bin_width {
+                    BinWidth::Ps(ps) => format!("{} ps", murk_core::short(ps)),
+                    BinWidth::M(m) => format!("{} m", murk_core::short(m)),
+                }
             )));
         }
         self.gate(path, f.gate_bins)?;

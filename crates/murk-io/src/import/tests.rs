@@ -119,8 +119,7 @@ fn cdt_meas_t_a_b() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("cones.mat")
-            && e.contains("a 256 × 8 scan of 8 bins, but fk scans are square"),
+        e.contains("cones.mat") && e.contains("a 256 × 8 scan of 8 bins, but fk scans are square"),
         "{e}"
     );
     // A scan side that makes every point coincide is refused naming the file.
@@ -587,5 +586,42 @@ fn bad_inputs_fail_with_one_line() {
     };
     let e = err(&huge, &non_confocal);
     assert!(e.contains("confocal"), "{e}");
+
+    // A .npy with bytes past its array, --var on a .npy, a bin width that is inf in metres, and a
+    // wrong rank, which names "the array" (a .npy's has no name).
+    let small = dir.join("small.npy");
+    crate::write_npy_f32(&small, &[2, 2, 4], &[0.0; 16]).unwrap();
+    let mut bytes = std::fs::read(&small).unwrap();
+    bytes.extend_from_slice(b"junk");
+    let extra = dir.join("extra.npy");
+    std::fs::write(&extra, &bytes).unwrap();
+    let e = err(&extra, &generic);
+    assert!(
+        e.contains("extra.npy: 4 bytes after the array's data"),
+        "{e}"
+    );
+    let named = ImportOptions {
+        layout: Layout::Generic(Generic {
+            var: "meas".into(),
+            axes: [Dim::T, Dim::X, Dim::Y],
+            confocal: true,
+        }),
+        ..generic.clone()
+    };
+    let e = err(&small, &named);
+    assert!(
+        e.contains("small.npy: a .npy file holds one unnamed array"),
+        "{e}"
+    );
+    let inf_bins = ImportOptions {
+        bin_width: Some(BinWidth::Ps(1e300)),
+        ..generic.clone()
+    };
+    let e = err(&small, &inf_bins);
+    assert!(e.contains("positive, finite length, got 1e300 ps"), "{e}");
+    let flat = dir.join("flat.npy");
+    crate::write_npy_f32(&flat, &[4, 4], &[0.0; 16]).unwrap();
+    let e = err(&flat, &generic);
+    assert!(e.contains("flat.npy: the array should be T × N × N"), "{e}");
     std::fs::remove_dir_all(dir).ok();
 }

@@ -475,7 +475,13 @@ impl ObjectDef {
             ));
         }
         let limits = murk_core::Limits::get();
-        for v in obj.bounds.min.to_array().into_iter().chain(obj.bounds.max.to_array()) {
+        for v in obj
+            .bounds
+            .min
+            .to_array()
+            .into_iter()
+            .chain(obj.bounds.max.to_array())
+        {
             limits
                 .length("a coordinate of its bounds", v)
                 .map_err(|e| bad(&field("shape"), e.to_string()))?;
@@ -484,7 +490,8 @@ impl ObjectDef {
         if obj.bounds.max.z <= 0.0 {
             return Err(bad(
                 &field("shape"),
-                "lies in the relay's plane z = 0, where no light from the hidden side reaches it".into(),
+                "lies in the relay's plane z = 0, where no light from the hidden side reaches it"
+                    .into(),
             ));
         }
         Ok(obj)
