@@ -100,7 +100,7 @@ impl SlabParams {
             .iter()
             .enumerate()
             .fold((0, f64::MIN), |a, (i, &v)| if v > a.1 { (i, v) } else { a });
-        if best.1.is_nan() || best.1 <= 0.0 || best.0 + 1 >= n {
+        if best.1 <= 0.0 || best.0 + 1 >= n {
             return Err(Error::param(format!(
                 "the slab ({} m, μs′ {} /m, μa {} /m, n {}) does not return its light within 4 ns, the span its delay is modelled over",
                 murk_core::short(self.thickness_m),
@@ -236,10 +236,13 @@ impl CdtPlan {
             .for_each(|(b, f)| *b *= f);
         // The deconvolved transient spills out of the first octant (the kernel is acausal after
         // regularisation), so the whole padded volume is kept and migrated, as the reference does.
-        // Wavefield amplitude √τ. No t² scaling: the reference CDT omits it.
-        self.stolt
-            .fft
-            .map_real(&mut spec, |v| v.max(0.0).sqrt(), &steps);
+        // Wavefield amplitude √τ. No t² scaling: the reference CDT omits it. A NaN (sums that
+        // overflowed f32) stays NaN so that the overflow is reported, not clamped to zero.
+        self.stolt.fft.map_real(
+            &mut spec,
+            |v| if v.is_nan() { v } else { v.max(0.0).sqrt() },
+            &steps,
+        );
         let volume = self.stolt.migrate_and_crop(spec, &steps);
         steps.finish("confocal diffuse tomography")?;
         let (p, s) = (&self.params, &self.params.slab);

@@ -455,8 +455,12 @@ pub fn default_volume(cap: &Capture) -> Result<Volume> {
     } else {
         &cap.illum
     };
-    let spacing = crate::wall_spacing_m(cap)
-        .ok_or_else(|| Error::param("the capture has a single wall point; give a volume"))?;
+    let spacing = crate::wall_spacing_m(cap).ok_or_else(|| {
+        Error::param(match side.len() {
+            1 => "the capture has a single wall point, so no spacing to derive a volume from; give a volume".to_string(),
+            n => format!("the capture's {n} wall points all coincide, so no spacing to derive a volume from; give a volume"),
+        })
+    })?;
     let (lo, hi) = side
         .points
         .iter()
