@@ -754,7 +754,9 @@ pub fn check_shard(i: usize, n: usize) -> std::result::Result<(), String> {
 }
 
 /// Sums shard parts into the capture an unsharded render gives, bit for bit: shards own disjoint
-/// histograms, so each sum adds exact zeros.
+/// histograms, so each sum adds exact zeros. Two parts with signal in one histogram (a part renamed
+/// or relabelled as another shard) are refused, as is a part whose wall points or device legs
+/// differ from the first's.
 pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
     let Some((p0, first)) = parts.first() else {
         return Err(Error::param("merge needs at least one part"));
@@ -782,6 +784,7 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
     };
     let (base, _, n) = split(p0, first)?;
     let mut seen = vec![false; n];
+    let mut owner: Vec<Option<usize>> = vec![None; first.n_hist()];
     let mut out = first.clone();
     out.h.iter_mut().for_each(|v| *v = 0.0);
     out.scene_info = base.clone();
@@ -792,13 +795,37 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
             || c.h.len() != out.h.len()
             || !c.time.same_as_stored(&out.time)
             || c.pairing != out.pairing
+            || c.illum.points != first.illum.points
+            || c.sensor.points != first.sensor.points
+            || (
+                c.laser_xyz,
+                c.sensor_xyz,
+                c.t_accounts_first_and_last_bounces,
+            ) != (
+                first.laser_xyz,
+                first.sensor_xyz,
+                first.t_accounts_first_and_last_bounces,
+            )
         {
             return Err(Error::format(path, "belongs to a different render (scene, spp, seed, shard count or layout differ from the first part)"));
         }
         if std::mem::replace(&mut seen[i], true) {
             return Err(Error::format(path, format!("shard {i}/{n} given twice")));
         }
-        out.h.iter_mut().zip(&c.h).for_each(|(o, v)| *o += v);
+        let bins = out.time.bins;
+        for (h, (o, v)) in out.h.chunks_mut(bins).zip(c.h.chunks(bins)).enumerate() {
+            if v.iter().any(|x| *x != 0.0) {
+                if let Some(other) = owner[h].replace(i) {
+                    return Err(Error::format(
+                        path,
+                        format!(
+                            "shard {i}/{n} has signal in histogram {h}, which shard {other}/{n} holds too: one of them is not the shard it says"
+                        ),
+                    ));
+                }
+            }
+            o.iter_mut().zip(v).for_each(|(o, v)| *o += v);
+        }
     }
     if let Some(missing) = seen.iter().position(|s| !s) {
         return Err(Error::param(format!("shard {missing}/{n} is missing")));

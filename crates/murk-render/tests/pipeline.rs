@@ -91,6 +91,25 @@ fn seeded_render_is_bitwise_reproducible() {
         let err = merge(&forged).unwrap_err().to_string();
         assert!(err.contains("part3") && err.contains(bad), "{bad}: {err}");
     }
+    // Shard 2's file relabelled as shard 3 (shard 3's own file dropped): its histograms overlap
+    // shard 2's, so the merge would double them.
+    let mut relabelled = parts.clone();
+    relabelled[3].1 = parts[2].1.clone();
+    relabelled[3].1.scene_info = parts[2].1.scene_info.replace("2/4", "3/4");
+    let err = merge(&relabelled).unwrap_err().to_string();
+    assert!(
+        err.starts_with("part3: shard 3/4 has signal in histogram")
+            && err.contains("shard 2/4 holds too"),
+        "{err}"
+    );
+    // A part whose wall points were moved belongs to another render.
+    let mut moved = parts.clone();
+    moved[2].1.illum.points[0].x += 0.01;
+    let err = merge(&moved).unwrap_err().to_string();
+    assert!(
+        err.contains("part2") && err.contains("different render"),
+        "{err}"
+    );
 
     // A checkpoint cut in the middle of a record (a kill) resumes to the same numbers.
     let dir = std::env::temp_dir().join(format!("murk-render-ckpt-{}", std::process::id()));
