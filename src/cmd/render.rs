@@ -163,10 +163,11 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         (None, Some(b)) => plan.spp_for_budget(b, a.shard)?,
         (None, None) => plan.scene.settings.spp,
     };
-    if a.resume && !checkpoint_path(&a.out).exists() && !quiet {
+    let ckpt_path = checkpoint_path(&a.out);
+    if a.resume && !ckpt_path.exists() && !quiet {
         eprintln!(
             "murk: no checkpoint at {}; starting from scratch",
-            checkpoint_path(&a.out).display()
+            ckpt_path.display()
         );
     }
     let ckpt = output_checkpoint(&a.out, a.resume, a.checkpoint_every)?;

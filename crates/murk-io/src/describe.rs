@@ -19,10 +19,10 @@ fn side(name: &str, p: &murk_core::PointSet) -> String {
     let spacing = p
         .regular_grid()
         .map(|g| (g.step_x.length(), g.step_y.length()))
-        .map(|(sx, sy)| match (sx - sy).abs() <= 1e-9 * sx.max(sy) {
-            true => format!(", spacing {sx:.4} m"),
+        .map(|(step_x_m, step_y_m)| match (step_x_m - step_y_m).abs() <= 1e-9 * step_x_m.max(step_y_m) {
+            true => format!(", spacing {step_x_m:.4} m"),
             false => format!(
-                ", spacing {sx:.4} m along the grid's first index, {sy:.4} m along its second"
+                ", spacing {step_x_m:.4} m along the grid's first index, {step_y_m:.4} m along its second"
             ),
         })
         .unwrap_or_default();

@@ -410,9 +410,10 @@ impl<'a> Plan<'a> {
     ) -> Result<Vec<Capture>> {
         if !outs.is_empty() && outs.len() != self.ratios.len() {
             return Err(Error::param(format!(
-                "{} outputs for a render of {} captures",
+                "{} outputs for a render of {} capture{}",
                 outs.len(),
-                self.ratios.len()
+                self.ratios.len(),
+                if self.ratios.len() == 1 { "" } else { "s" }
             )));
         }
         let (caps, unflushed) = self.render_unflushed(opt, progress, stop)?;

@@ -651,7 +651,7 @@ fn stored_renders_drop_their_checkpoint_only_once_written() {
     assert!(e
         .unwrap_err()
         .to_string()
-        .contains("2 outputs for a render of 1 captures"));
+        .ends_with("2 outputs for a render of 1 capture"));
     std::fs::remove_dir_all(&dir).unwrap();
 
     let mut huge = opts(None, None);
@@ -674,5 +674,5 @@ fn stored_renders_drop_their_checkpoint_only_once_written() {
     // A thousand times the budget buys more paths (the pilot's timing noise is far below 1000×).
     let small = plan.spp_for_budget(0.01, None).unwrap();
     let large = plan.spp_for_budget(10.0, None).unwrap();
-    assert!(small >= 1 && large > 10 * small, "{small} vs {large}");
+    assert!(large > 10 * small, "{small} vs {large}");
 }

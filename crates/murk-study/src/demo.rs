@@ -69,10 +69,11 @@ pub fn demo(dir: &Path, progress: &dyn Progress) -> Result<Demo> {
     murk_io::write_capture(&capture, &cap)?;
     let synth_s = t0.elapsed().as_secs_f64();
 
-    let c = 0.5 - 0.5 / 64.0;
+    // The 64 wall points' pixel centres on the 1 m wall.
+    let edge_m = 0.5 - 0.5 / 64.0;
     let volume = Volume {
-        x: Axis::new(-c, c, 64),
-        y: Axis::new(-c, c, 64),
+        x: Axis::new(-edge_m, edge_m, 64),
+        y: Axis::new(-edge_m, edge_m, 64),
         z: Axis::new(0.5, 1.5, 51),
     };
     let t1 = Instant::now();

@@ -325,8 +325,8 @@ impl Plan {
             albedo: 0.5,
             g: 0.0,
         };
-        let fog = |mu_t, albedo, g| MediumParams {
-            mu_t_per_m: mu_t,
+        let fog = |mu_t_per_m, albedo, g| MediumParams {
+            mu_t_per_m,
             albedo,
             g,
         };
