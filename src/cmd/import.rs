@@ -72,8 +72,8 @@ pub struct ImportArgs {
     pub confocal: bool,
     /// Full side of the square scan (m), first point to last. Overrides the preset's
     /// (cdt: by scene name; lct, wu2021: twice the file's `width`).
-    #[arg(long)]
-    pub wall_size: Option<f64>,
+    #[arg(long = "wall-size", value_name = "M")]
+    pub wall_size_m: Option<f64>,
     /// Time bin width in picoseconds (converted with c = 3e8 m/s, as the reference codes do).
     #[arg(long, conflicts_with = "bin_width_m")]
     pub bin_width_ps: Option<f64>,
@@ -142,7 +142,7 @@ impl ImportArgs {
         };
         Ok(ImportOptions {
             layout,
-            wall_size_m: self.wall_size,
+            wall_size_m: self.wall_size_m,
             bin_width: self
                 .bin_width_ps
                 .map(BinWidth::Ps)

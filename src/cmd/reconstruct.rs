@@ -85,11 +85,11 @@ pub struct ReconstructArgs {
     #[arg(long)]
     pub png: Option<PathBuf>,
     /// Medium compensation of the intensity (needs --mu-t; paper also --albedo).
-    #[arg(long, value_enum, requires = "mu_t")]
+    #[arg(long, value_enum, requires = "mu_t_per_m")]
     pub compensate: Option<CompensateArg>,
     /// Extinction coefficient μt of the medium (1/m), for --compensate.
-    #[arg(long, requires = "compensate")]
-    pub mu_t: Option<f64>,
+    #[arg(long = "mu-t", value_name = "PER_M", requires = "compensate")]
+    pub mu_t_per_m: Option<f64>,
     /// Single-scattering albedo α of the medium, for --compensate.
     #[arg(long, default_value_t = 0.0, requires = "compensate")]
     pub albedo: f64,
@@ -208,7 +208,7 @@ impl ReconstructArgs {
                 c.to_possible_value()
                     .context("a choice without a name")?
                     .get_name(),
-                self.mu_t.unwrap_or(0.0),
+                self.mu_t_per_m.unwrap_or(0.0),
                 self.albedo,
             )?,
         };

@@ -23,8 +23,8 @@ pub struct SynthArgs {
     #[arg(long, default_value = "laser-grid")]
     pub kind: String,
     /// Side of the square relay wall at z = 0, centred on the origin (m).
-    #[arg(long, default_value_t = 1.0)]
-    pub wall_size: f64,
+    #[arg(long = "wall-size", value_name = "M", default_value_t = 1.0)]
+    pub wall_size_m: f64,
     /// Grid points per side of the wall (pixel centres).
     #[arg(long, default_value_t = 32)]
     pub grid: usize,
@@ -39,11 +39,11 @@ pub struct SynthArgs {
     #[arg(long, default_value_t = 2048)]
     pub bins: usize,
     /// Bin width as optical path (m); 0.003 m ≈ 10 ps.
-    #[arg(long, default_value_t = 0.003)]
-    pub bin_width: f64,
+    #[arg(long = "bin-width", value_name = "M", default_value_t = 0.003)]
+    pub bin_width_m: f64,
     /// Optical path at the start of bin 0 (m).
-    #[arg(long, default_value_t = 0.0)]
-    pub start: f64,
+    #[arg(long = "start", value_name = "M", default_value_t = 0.0)]
+    pub start_m: f64,
     /// Laser device position x,y,z: paths then include laser → wall (needs --sensor-xyz too).
     #[arg(long, value_parser = parse_xyz, requires = "sensor_xyz")]
     pub laser_xyz: Option<DVec3>,
@@ -51,11 +51,11 @@ pub struct SynthArgs {
     #[arg(long, value_parser = parse_xyz, requires = "laser_xyz")]
     pub sensor_xyz: Option<DVec3>,
     /// Extinction of a medium filling the hidden side (1/m): ballistic attenuation exp(−μt·path).
-    #[arg(long, default_value_t = 0.0)]
-    pub mu_t: f64,
+    #[arg(long = "mu-t", value_name = "PER_M", default_value_t = 0.0)]
+    pub mu_t_per_m: f64,
     /// Standard deviation of a Gaussian timing jitter (m of path).
-    #[arg(long, default_value_t = 0.0)]
-    pub jitter: f64,
+    #[arg(long = "jitter", value_name = "M", default_value_t = 0.0)]
+    pub jitter_m: f64,
     /// Apply Lambertian cosines at the wall and at surfaces.
     #[arg(long)]
     pub cosines: bool,
@@ -74,12 +74,12 @@ pub fn build(a: &SynthArgs) -> anyhow::Result<Capture> {
     Ok(synthesize(&Synthesis {
         layout: CaptureLayout {
             kind: a.kind.parse()?,
-            wall_size_m: a.wall_size,
+            wall_size_m: a.wall_size_m,
             grid: a.grid,
             point: DVec3::new(a.point[0], a.point[1], 0.0),
             time: TimeAxis {
-                start_m: a.start,
-                bin_width_m: a.bin_width,
+                start_m: a.start_m,
+                bin_width_m: a.bin_width_m,
                 bins: a.bins,
             },
             laser_xyz: a.laser_xyz,
@@ -88,8 +88,8 @@ pub fn build(a: &SynthArgs) -> anyhow::Result<Capture> {
         targets: a.targets.clone(),
         options: SynthOptions {
             cosines: a.cosines,
-            mu_t_per_m: a.mu_t,
-            jitter_sigma_m: a.jitter,
+            mu_t_per_m: a.mu_t_per_m,
+            jitter_sigma_m: a.jitter_m,
         },
     })?)
 }

@@ -274,7 +274,7 @@ impl Tracer<'_> {
     /// target (∝ radius/distance).
     pub(super) fn target_draws(&self, x: DVec3, origin: bool, tgt: &Endpoint) -> u32 {
         let set = &self.scene.settings;
-        let r = set.target_split_radius;
+        let r = set.target_split_radius_m;
         if origin || r <= 0.0 {
             return 1;
         }

@@ -262,7 +262,7 @@ impl<'a> Tracer<'a> {
         s: &mut Sampler,
     ) {
         let t = &self.scene.capture.time;
-        let jitter = self.scene.settings.time_jitter;
+        let jitter = self.scene.settings.time_jitter_m;
         let opl = if jitter > 0.0 {
             opl + jitter * s.gauss()
         } else {
@@ -347,7 +347,7 @@ impl<'a> Tracer<'a> {
     /// position and device leg bounds it by the triangle inequality where the medium's ior is 1). None
     /// with timing jitter, which can move any contribution into the window.
     fn window_reach(&self, origins: &[Endpoint]) -> Option<f64> {
-        if self.scene.settings.time_jitter > 0.0 {
+        if self.scene.settings.time_jitter_m > 0.0 {
             return None;
         }
         let end_m = self.scene.capture.time.end_m();

@@ -31,7 +31,8 @@ pub enum RelayKind {
 #[serde(deny_unknown_fields)]
 pub struct RelayDef {
     pub kind: RelayKind,
-    pub size: [f64; 2],
+    #[serde(rename = "size")]
+    pub size_m: [f64; 2],
     /// Lambertian albedo that hidden light meets when it returns to the relay (default: wall 1, diffuser 0,
     /// i.e. light reaching a diffuser leaves the scene).
     pub albedo: Option<f64>,
@@ -56,24 +57,32 @@ pub struct CaptureDef {
     /// Points along x and y.
     pub grid: [usize; 2],
     /// Grid extent (m); default: the whole relay. Points are pixel centres, as `tal render` places them.
-    pub extent: Option<[f64; 2]>,
+    #[serde(rename = "extent")]
+    pub extent_m: Option<[f64; 2]>,
     #[serde(default)]
-    pub center: [f64; 2],
+    #[serde(rename = "center")]
+    pub center_m: [f64; 2],
     /// The one laser point of a `single` capture (default: the relay centre).
-    pub laser_point: Option<[f64; 2]>,
+    #[serde(rename = "laser_point")]
+    pub laser_point_m: Option<[f64; 2]>,
     /// The one SPAD point of a `laser-grid` capture (default: the relay centre).
-    pub spad_point: Option<[f64; 2]>,
+    #[serde(rename = "spad_point")]
+    pub spad_point_m: Option<[f64; 2]>,
     pub bins: usize,
     /// Bin width in metres of optical path.
-    pub bin_width: f64,
+    #[serde(rename = "bin_width")]
+    pub bin_width_m: f64,
     /// Optical path at the start of bin 0 (m).
     #[serde(default)]
-    pub start: f64,
+    #[serde(rename = "start")]
+    pub start_m: f64,
     /// Whether times include laser device → laser point and SPAD point → SPAD device.
     #[serde(default)]
     pub account_first_and_last_bounces: bool,
-    pub laser_position: Option<[f64; 3]>,
-    pub spad_position: Option<[f64; 3]>,
+    #[serde(rename = "laser_position")]
+    pub laser_position_m: Option<[f64; 3]>,
+    #[serde(rename = "spad_position")]
+    pub spad_position_m: Option<[f64; 3]>,
     /// Apply the visible side's radiometry: the projector's cos/d² irradiance at each laser point
     /// and the SPAD aperture's cos/d² collection from each sensor point (needs both positions).
     /// Off: H between wall points, murk's and y-tal's convention.
@@ -102,7 +111,8 @@ pub struct RenderDef {
     /// (see the integrator).
     pub rr_depth: Option<u32>,
     /// Standard deviation (m of path) of a Gaussian SPAD timing jitter added before binning; 0 = box.
-    pub time_jitter: f64,
+    #[serde(rename = "time_jitter")]
+    pub time_jitter_m: f64,
     /// Probability of sampling the first direction toward the hidden geometry (mixed with cosine sampling).
     /// Default: 1 where no medium scatters (every first direction that contributes then meets the hidden
     /// geometry), else 0.8; below 1 where a medium scatters (first vertices lie in every direction).
@@ -136,7 +146,8 @@ pub struct RenderDef {
     /// draws toward it (∝ radius/distance; counted as n·pdf in the balance weights). 0 or 1: off.
     pub target_split: u32,
     /// Distance (m) from a target within which `target_split` applies; 0: off.
-    pub target_split_radius: f64,
+    #[serde(rename = "target_split_radius")]
+    pub target_split_radius_m: f64,
     /// Probability that a target-side draw leaves the target in the phase function's lobe around the
     /// direction to the path vertex instead of the target's cosine lobe: in forward-scattering fog the
     /// connections through a vertex peak where the vertex lies between the target and the path.
@@ -155,7 +166,7 @@ impl Default for RenderDef {
             spp: 256,
             max_depth: 8,
             rr_depth: None,
-            time_jitter: 0.0,
+            time_jitter_m: 0.0,
             hidden_geometry_sampling: None,
             first_vertex_survival: None,
             object_connections: true,
@@ -165,7 +176,7 @@ impl Default for RenderDef {
             first_time_samples: None,
             target_sampling: true,
             target_split: 64,
-            target_split_radius: 0.5,
+            target_split_radius_m: 0.5,
             target_lobe: None,
             share_tile: 4,
             trace_from: TraceFrom::Auto,
@@ -189,8 +200,10 @@ pub struct MediumDef {
     /// Refractive index: optical path = ior × geometric path inside the medium (no refraction at its boundary).
     #[serde(default = "one")]
     pub ior: f64,
-    pub min: [f64; 3],
-    pub max: [f64; 3],
+    #[serde(rename = "min")]
+    pub min_m: [f64; 3],
+    #[serde(rename = "max")]
+    pub max_m: [f64; 3],
 }
 
 fn one() -> f64 {
@@ -202,8 +215,10 @@ fn one() -> f64 {
 pub enum ObjectDef {
     /// A rectangle `size` centred at `center` with normal `normal` (default: facing the relay) and `up`.
     Quad {
-        center: [f64; 3],
-        size: [f64; 2],
+        #[serde(rename = "center")]
+        center_m: [f64; 3],
+        #[serde(rename = "size")]
+        size_m: [f64; 2],
         #[serde(default = "toward_relay")]
         normal: [f64; 3],
         #[serde(default = "y_up")]
@@ -215,8 +230,10 @@ pub enum ObjectDef {
     },
     /// An axis-aligned box; `omit` drops faces ("-x", "+x", "-y", "+y", "-z", "+z"), e.g. a room's relay side.
     Box {
-        min: [f64; 3],
-        max: [f64; 3],
+        #[serde(rename = "min")]
+        min_m: [f64; 3],
+        #[serde(rename = "max")]
+        max_m: [f64; 3],
         #[serde(default)]
         omit: Vec<String>,
         #[serde(default = "one")]
@@ -226,7 +243,8 @@ pub enum ObjectDef {
     },
     /// y-tal's planar Z letter (0.8 m × 0.8 m at `scale` 1) in the plane z = center.z.
     ZLetter {
-        center: [f64; 3],
+        #[serde(rename = "center")]
+        center_m: [f64; 3],
         #[serde(default = "one")]
         scale: f64,
         #[serde(default = "one")]
@@ -240,7 +258,8 @@ pub enum ObjectDef {
         #[serde(default = "one")]
         scale: f64,
         #[serde(default)]
-        translate: [f64; 3],
+        #[serde(rename = "translate")]
+        translate_m: [f64; 3],
         #[serde(default = "one")]
         albedo: f64,
         /// A label for ground truth and reports (default: `object[i] (shape)`).

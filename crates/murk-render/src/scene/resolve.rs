@@ -14,13 +14,13 @@ impl RelayDef {
     pub(super) fn resolve(&self, bad: Bad) -> Result<Relay> {
         let r = self;
         let limits = murk_core::Limits::get();
-        if !r.size.iter().all(|s| s.is_finite() && *s > 0.0) {
+        if !r.size_m.iter().all(|s| s.is_finite() && *s > 0.0) {
             return Err(bad(
                 "relay.size",
-                format!("must be two positive lengths in metres, got {:?}", r.size),
+                format!("must be two positive lengths in metres, got {:?}", r.size_m),
             ));
         }
-        for s in r.size {
+        for s in r.size_m {
             limits
                 .length("a side", s)
                 .map_err(|e| bad("relay.size", e.to_string()))?;
@@ -32,7 +32,7 @@ impl RelayDef {
         check_albedo(relay_albedo, "relay.albedo", bad)?;
         let relay = Relay {
             kind: r.kind,
-            half: [r.size[0] / 2.0, r.size[1] / 2.0],
+            half: [r.size_m[0] / 2.0, r.size_m[1] / 2.0],
             albedo: relay_albedo,
         };
         Ok(relay)
@@ -79,7 +79,7 @@ impl CaptureDef {
         limits
             .elements("H", &[hists, c.bins], std::mem::size_of::<f32>())
             .map_err(|e| bad("capture.grid/capture.bins", e.to_string()))?;
-        let extent = c.extent.unwrap_or(size);
+        let extent = c.extent_m.unwrap_or(size);
         if !extent.iter().all(|e| e.is_finite() && *e > 0.0) {
             return Err(bad(
                 "capture.extent",
@@ -89,14 +89,14 @@ impl CaptureDef {
         for (sx, sy) in [(-1.0, -1.0), (1.0, 1.0)] {
             on_relay(
                 [
-                    c.center[0] + sx * extent[0] / 2.0,
-                    c.center[1] + sy * extent[1] / 2.0,
+                    c.center_m[0] + sx * extent[0] / 2.0,
+                    c.center_m[1] + sy * extent[1] / 2.0,
                 ],
                 "capture.grid (center ± extent/2)",
             )?;
         }
         let grid = PointSet::wall_grid(
-            DVec3::new(c.center[0], c.center[1], 0.0),
+            DVec3::new(c.center_m[0], c.center_m[1], 0.0),
             extent[0],
             extent[1],
             c.grid[0],
@@ -111,11 +111,11 @@ impl CaptureDef {
             CaptureKindDef::Confocal => (grid.clone(), grid, Pairing::Paired),
             CaptureKindDef::LaserGrid => (
                 grid,
-                point(c.spad_point, "capture.spad_point")?,
+                point(c.spad_point_m, "capture.spad_point")?,
                 Pairing::Product,
             ),
             CaptureKindDef::Single => (
-                point(c.laser_point, "capture.laser_point")?,
+                point(c.laser_point_m, "capture.laser_point")?,
                 grid,
                 Pairing::Product,
             ),
@@ -124,24 +124,24 @@ impl CaptureDef {
         if c.bins == 0 {
             return Err(bad("capture.bins", "must be at least 1".into()));
         }
-        if !(c.bin_width.is_finite() && c.bin_width > 0.0) {
+        if !(c.bin_width_m.is_finite() && c.bin_width_m > 0.0) {
             return Err(bad(
                 "capture.bin_width",
                 format!(
                     "must be a positive path length in metres, got {}",
-                    short(c.bin_width)
+                    short(c.bin_width_m)
                 ),
             ));
         }
-        if !c.start.is_finite() {
+        if !c.start_m.is_finite() {
             return Err(bad(
                 "capture.start",
-                format!("must be finite, got {}", c.start),
+                format!("must be finite, got {}", c.start_m),
             ));
         }
         let time = TimeAxis {
-            start_m: c.start,
-            bin_width_m: c.bin_width,
+            start_m: c.start_m,
+            bin_width_m: c.bin_width_m,
             bins: c.bins,
         };
         limits
@@ -176,11 +176,11 @@ impl CaptureDef {
             pairing,
             time,
             account_first_and_last_bounces: c.account_first_and_last_bounces,
-            laser_xyz: device(c.laser_position, "capture.laser_position")?,
-            sensor_xyz: device(c.spad_position, "capture.spad_position")?,
+            laser_xyz: device(c.laser_position_m, "capture.laser_position")?,
+            sensor_xyz: device(c.spad_position_m, "capture.spad_position")?,
             device_radiometry: c.device_radiometry,
         };
-        if c.device_radiometry && (c.laser_position.is_none() || c.spad_position.is_none()) {
+        if c.device_radiometry && (c.laser_position_m.is_none() || c.spad_position_m.is_none()) {
             return Err(bad(
                 "capture.device_radiometry",
                 "needs capture.laser_position and capture.spad_position".into(),
@@ -199,10 +199,10 @@ impl RenderDef {
                 "must be at least 1 (one hidden vertex)".into(),
             ));
         }
-        if !(s.time_jitter.is_finite() && s.time_jitter >= 0.0) {
+        if !(s.time_jitter_m.is_finite() && s.time_jitter_m >= 0.0) {
             return Err(bad(
                 "render.time_jitter",
-                format!("must be ≥ 0, got {}", short(s.time_jitter)),
+                format!("must be ≥ 0, got {}", short(s.time_jitter_m)),
             ));
         }
         if let Some(p) = s
@@ -234,10 +234,10 @@ impl RenderDef {
                 format!("must be at most 16, got {}", s.share_tile),
             ));
         }
-        if !(s.target_split_radius.is_finite() && s.target_split_radius >= 0.0) {
+        if !(s.target_split_radius_m.is_finite() && s.target_split_radius_m >= 0.0) {
             return Err(bad(
                 "render.target_split_radius",
-                format!("must be ≥ 0 m, got {}", short(s.target_split_radius)),
+                format!("must be ≥ 0 m, got {}", short(s.target_split_radius_m)),
             ));
         }
         if let Some(p) = s.target_lobe.filter(|p| !(0.0..1.0).contains(p)) {
@@ -282,16 +282,24 @@ impl MediumDef {
                 format!("must be ≥ 1, got {}", short(m.ior)),
             ));
         }
-        if !(0..3).all(|i| m.min[i].is_finite() && m.max[i].is_finite() && m.min[i] < m.max[i]) {
+        if !(0..3)
+            .all(|i| m.min_m[i].is_finite() && m.max_m[i].is_finite() && m.min_m[i] < m.max_m[i])
+        {
             return Err(bad(
                 "medium.min/max",
-                format!("must bound a non-empty box, got {:?}..{:?}", m.min, m.max),
+                format!(
+                    "must bound a non-empty box, got {:?}..{:?}",
+                    m.min_m, m.max_m
+                ),
             ));
         }
-        if m.min[2] < 0.0 {
+        if m.min_m[2] < 0.0 {
             return Err(bad(
                 "medium.min",
-                format!("z = {} reaches behind the relay surface (z = 0)", m.min[2]),
+                format!(
+                    "z = {} reaches behind the relay surface (z = 0)",
+                    m.min_m[2]
+                ),
             ));
         }
         Ok((m.mu_t_per_m > 0.0).then(|| Medium {
@@ -300,8 +308,8 @@ impl MediumDef {
             phase: Phase::new(m.g),
             ior: m.ior,
             region: Aabb {
-                min: v3(m.min),
-                max: v3(m.max),
+                min: v3(m.min_m),
+                max: v3(m.max_m),
             },
         }))
     }
@@ -314,8 +322,8 @@ impl ObjectDef {
         let field = |name: &str| format!("object[{i}].{name}");
         let (albedo, prims) = match o {
             ObjectDef::Quad {
-                center,
-                size,
+                center_m,
+                size_m,
                 normal,
                 up,
                 albedo,
@@ -330,31 +338,31 @@ impl ObjectDef {
                         "normal and up must be non-zero and not parallel".into(),
                     ));
                 }
-                if !size.iter().all(|s| s.is_finite() && *s > 0.0) {
+                if !size_m.iter().all(|s| s.is_finite() && *s > 0.0) {
                     return Err(bad(
                         &field("size"),
-                        format!("must be positive, got {size:?}"),
+                        format!("must be positive, got {size_m:?}"),
                     ));
                 }
                 let ey = n.cross(ex);
-                let (e1, e2) = (ex * size[0], ey * size[1]);
+                let (e1, e2) = (ex * size_m[0], ey * size_m[1]);
                 (
                     *albedo,
-                    vec![Shape::rect(v3(*center) - 0.5 * (e1 + e2), e1, e2)],
+                    vec![Shape::rect(v3(*center_m) - 0.5 * (e1 + e2), e1, e2)],
                 )
             }
             ObjectDef::Box {
-                min,
-                max,
+                min_m,
+                max_m,
                 omit,
                 albedo,
                 ..
             } => {
-                let (a, b) = (v3(*min), v3(*max));
+                let (a, b) = (v3(*min_m), v3(*max_m));
                 if !(a.cmplt(b).all()) {
                     return Err(bad(
                         &field("min"),
-                        format!("must be below max in every axis, got {min:?}..{max:?}"),
+                        format!("must be below max in every axis, got {min_m:?}..{max_m:?}"),
                     ));
                 }
                 let d = b - a;
@@ -389,14 +397,14 @@ impl ObjectDef {
                 (*albedo, prims)
             }
             ObjectDef::ZLetter {
-                center,
+                center_m,
                 scale,
                 albedo,
                 ..
             } => {
                 check_scale(*scale, &field("scale"), bad)?;
                 let outline = murk_synth::z_letter_outline();
-                let c = v3(*center);
+                let c = v3(*center_m);
                 let p = |k: usize| c + DVec3::new(outline[k][0], outline[k][1], 0.0) * *scale;
                 let prims = triangulate(&outline)
                     .into_iter()
@@ -411,7 +419,7 @@ impl ObjectDef {
             ObjectDef::Mesh {
                 file,
                 scale,
-                translate,
+                translate_m,
                 albedo,
                 ..
             } => {
@@ -440,7 +448,7 @@ impl ObjectDef {
                     let p = |k: u32| {
                         let k = k as usize * 3;
                         DVec3::new(pos[k] as f64, pos[k + 1] as f64, pos[k + 2] as f64) * *scale
-                            + v3(*translate)
+                            + v3(*translate_m)
                     };
                     for t in m.mesh.indices.chunks_exact(3) {
                         let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
