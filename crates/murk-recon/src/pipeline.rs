@@ -92,8 +92,39 @@ impl Method {
         ("cdt", "Confocal diffuse tomography: slab deconvolution, then f-k (confocal grid behind a slab; own volume)"),
     ];
 
-    /// The method called `name`, with its parameters from `o`, for a capture of `kind`.
+    /// The method called `name`, with its parameters from `o`, for a capture of `kind`. A knob of
+    /// `o` set away from its default that this method does not read is refused, naming it: a
+    /// compensation that lct silently dropped looked applied.
     pub fn from_name(name: &str, kind: CaptureKind, o: &Options) -> Result<Method> {
+        let d = Options::default();
+        // (what, set, the methods that read it)
+        let knobs: [(&str, bool, &[&str]); 7] = [
+            ("a wavelength", o.wavelength.is_some(), &["pf", "pf-exact"]),
+            ("cycles", o.cycles != d.cycles, &["pf", "pf-exact"]),
+            ("a falloff", o.falloff != d.falloff, &["pf", "pf-exact"]),
+            (
+                "compensation",
+                o.compensation != d.compensation,
+                &["pf", "pf-exact"],
+            ),
+            ("a lateral band", o.lateral != d.lateral, &["pf"]),
+            ("a Wiener snr", o.snr.is_some(), &["lct", "cdt"]),
+            (
+                "a reflectance weighting",
+                o.reflectance != d.reflectance,
+                &["lct"],
+            ),
+        ];
+        let known = Method::NAMES.iter().any(|(n, _)| *n == name);
+        if let Some((what, _, users)) = knobs
+            .iter()
+            .find(|(_, set, users)| known && *set && !users.contains(&name))
+        {
+            return Err(Error::param(format!(
+                "{what} does not apply to {name}, which would ignore it (it applies to {})",
+                users.join(" and ")
+            )));
+        }
         Ok(match name {
             "pf" => Method::Pf(o.pf(kind)),
             "pf-exact" => Method::PfExact(o.pf(kind)),

@@ -837,3 +837,47 @@ fn a_plan_serves_every_capture_of_its_geometry() {
         .to_string()
         .contains("unknown method 'lcd'; expected one of pf, pf-exact, bp"));
 }
+
+/// A knob that the named method would ignore is refused, naming the knob and the methods that read
+/// it; the same knob for a method that reads it is accepted.
+#[test]
+fn methods_refuse_knobs_they_ignore() {
+    use crate::pipeline::{Method, Options};
+    use murk_baselines::Reflectance;
+    let kind = capture(LayoutKind::Confocal, 0.0, false).kind();
+    let compensated = Options {
+        compensation: Compensation::named("paper", 1.0, 0.5).unwrap(),
+        ..Options::default()
+    };
+    let snr = Options {
+        snr: Some(3.0),
+        ..Options::default()
+    };
+    let weighted = Options {
+        reflectance: Reflectance::Retroreflective,
+        ..Options::default()
+    };
+    let full = Options {
+        lateral: Lateral::Full,
+        ..Options::default()
+    };
+    for (name, o, want) in [
+        ("lct", &compensated, "compensation does not apply to lct, which would ignore it (it applies to pf and pf-exact)"),
+        ("fk", &snr, "a Wiener snr does not apply to fk, which would ignore it (it applies to lct and cdt)"),
+        ("cdt", &weighted, "a reflectance weighting does not apply to cdt"),
+        ("pf-exact", &full, "a lateral band does not apply to pf-exact"),
+    ] {
+        let e = Method::from_name(name, kind, o).unwrap_err().to_string();
+        assert!(e.starts_with(want), "{name}: {e}");
+    }
+    for (name, o) in [
+        ("pf", &compensated),
+        ("pf-exact", &compensated),
+        ("lct", &snr),
+        ("cdt", &snr),
+        ("lct", &weighted),
+        ("pf", &full),
+    ] {
+        assert!(Method::from_name(name, kind, o).is_ok(), "{name}");
+    }
+}

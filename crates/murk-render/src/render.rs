@@ -588,6 +588,14 @@ impl<'a> Plan<'a> {
         }
         if let Some((i, n)) = opt.shard {
             check_shard(i, n).map_err(Error::param)?;
+            // Shard i holds units i, i + n, …: more shards than units would leave some empty.
+            if n > self.n_units() {
+                return Err(Error::param(format!(
+                    "shard {i}/{n}: this render has {} work units (tiles of traced points), so at most {} shards",
+                    self.n_units(),
+                    self.n_units()
+                )));
+            }
         }
         let units = self.shard_units(opt.shard);
         let total = units.len();
@@ -766,8 +774,15 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
         let mut base = String::new();
         let mut shard = None;
         for line in c.scene_info.lines() {
-            match line.strip_prefix(SHARD_KEY).and_then(|r| r.split_once('/')) {
-                Some((i, n)) => shard = i.parse().ok().zip(n.parse().ok()),
+            match line.strip_prefix(SHARD_KEY) {
+                Some(r) => {
+                    let parsed = r
+                        .split_once('/')
+                        .and_then(|(i, n)| i.parse().ok().zip(n.parse().ok()));
+                    shard = Some(parsed.ok_or_else(|| {
+                        Error::format(path, format!("scene_info's shard '{r}' is not i/N"))
+                    })?);
+                }
                 None => {
                     base.push_str(line);
                     base.push('\n');
@@ -781,6 +796,16 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
             )
         })?;
         check_shard(i, n).map_err(|e| Error::format(path, format!("{e} in scene_info")))?;
+        // Every shard holds at least one histogram: checked before anything is sized by n.
+        if n > c.n_hist() {
+            return Err(Error::format(
+                path,
+                format!(
+                    "shard {i}/{n} in scene_info, but the capture has only {} histograms to shard",
+                    c.n_hist()
+                ),
+            ));
+        }
         Ok((base, i, n))
     };
     let (base, _, n) = split(p0, first)?;

@@ -84,13 +84,19 @@ fn seeded_render_is_bitwise_reproducible() {
         .to_string()
         .contains("missing"));
     // A part whose scene_info claims an impossible shard is refused, naming it (not an index panic).
-    for bad in ["4/4", "5/4", "0/0"] {
+    for bad in ["4/4", "5/4", "0/0", "0/99999999999999999999", "0/1000000"] {
         let mut forged = parts.clone();
         let info = &mut forged[3].1.scene_info;
         *info = info.replace("3/4", bad);
         let err = merge(&forged).unwrap_err().to_string();
         assert!(err.contains("part3") && err.contains(bad), "{bad}: {err}");
     }
+    // More shards than work units (six here) would leave shards empty: refused before rendering.
+    let e = plan
+        .render(&opts(Some((0, 7)), None), &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("shard 0/7: this render has 6 work units"), "{e}");
     // Shard 2's file relabelled as shard 3 (shard 3's own file dropped): its histograms overlap
     // shard 2's, so the merge would double them.
     let mut relabelled = parts.clone();

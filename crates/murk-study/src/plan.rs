@@ -498,7 +498,8 @@ impl Plan {
         if let Some(job) = self.captures.iter().find(|c| c.id == id) {
             return Ok(capture_id(job));
         }
-        let n = opt.shards;
+        // No more shards than the render has work units: each shard must hold one.
+        let n = opt.shards.min(render.n_units());
         let tasks = (0..n)
             .map(|i| {
                 let shard = (n > 1).then_some((i, n));
