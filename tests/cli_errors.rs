@@ -816,6 +816,16 @@ fn usage_errors_say_what_is_wrong() {
             &["--runs", runs],
         );
     }
+    // The figure's folder may not be the folder of captures it reads (it wrote grid.png there).
+    let data = std::env::temp_dir().join(format!("murk-cli-figdata-{}", std::process::id()));
+    std::fs::create_dir_all(&data).unwrap();
+    let d = data.to_str().unwrap();
+    fails(
+        &["figure", "real", "--data", d, "--out", &format!("{d}/."), "--runs", "1"],
+        &["is the --data folder"],
+    );
+    assert_eq!(std::fs::read_dir(&data).unwrap().count(), 0);
+    std::fs::remove_dir_all(&data).unwrap();
     // A memory budget that is set but meaningless (or not UTF-8) is refused, not silently replaced
     // by the machine's.
     use std::os::unix::ffi::OsStrExt;

@@ -95,6 +95,13 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
             out.display()
         )));
     }
+    // Results do not go among the captures they are made from.
+    if murk_io::same_target(out, data) {
+        return Err(Error::param(format!(
+            "{}: is the --data folder; the figure needs a folder of its own",
+            out.display()
+        )));
+    }
     // The paper's "λ = 4Δc, 8 cycles" for these confocal captures, read two ways. On the depth axis
     // (one-way distance, as confocal codes such as Lindell's define their wavelength) it is 8Δc of round-trip
     // path; read on the path axis, the round-trip kernel e^{2ikr} puts λ/2 = 2Δc at the lateral Nyquist
