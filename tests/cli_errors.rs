@@ -821,7 +821,16 @@ fn usage_errors_say_what_is_wrong() {
     std::fs::create_dir_all(&data).unwrap();
     let d = data.to_str().unwrap();
     fails(
-        &["figure", "real", "--data", d, "--out", &format!("{d}/."), "--runs", "1"],
+        &[
+            "figure",
+            "real",
+            "--data",
+            d,
+            "--out",
+            &format!("{d}/."),
+            "--runs",
+            "1",
+        ],
         &["is the --data folder"],
     );
     assert_eq!(std::fs::read_dir(&data).unwrap().count(), 0);

@@ -2,9 +2,6 @@
 
 use murk_core::{DVec3, Error, Result};
 
-/// Gains above this are clamped: exp(μt·d) overflows quickly and only amplifies noise beyond it.
-const MAX_GAIN: f64 = 1e6;
-
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Compensation {
     None,
@@ -22,6 +19,9 @@ pub enum Compensation {
 }
 
 impl Compensation {
+    /// Gains above this are clamped: exp(μt·d) overflows quickly and only amplifies noise beyond it.
+    pub const MAX_GAIN: f64 = 1e6;
+
     /// Every compensation's name ("none" is no compensation).
     pub const NAMES: [&'static str; 3] = ["none", "paper", "ballistic"];
 
@@ -77,7 +77,7 @@ impl Compensation {
                 (2.0 * mu_t_per_m * legs).exp()
             }
         };
-        k.min(MAX_GAIN)
+        k.min(Self::MAX_GAIN)
     }
 }
 
@@ -121,7 +121,7 @@ mod tests {
         };
         assert_eq!(
             slab.gain(DVec3::new(0.0, 0.0, 2.0), DVec3::ZERO, DVec3::ZERO, false),
-            MAX_GAIN
+            Compensation::MAX_GAIN
         );
     }
 }

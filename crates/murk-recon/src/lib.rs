@@ -343,6 +343,7 @@ impl PfPlan {
                 }
             }
         };
+        warnings.extend(clamped_gain_warning(cap, volume, params.compensation));
         Ok(PfPlan {
             geometry: cap.geometry(),
             volume: *volume,
@@ -456,6 +457,32 @@ pub fn intensity(
             (u.norm_sqr() as f64 * compensation.gain(v, point, aperture, confocal)) as f32
         })
         .collect()
+}
+
+/// A warning when `compensation`'s gain reaches its cap at some voxels of `volume`: there the
+/// intensity is scaled by the cap, not by the gain the formula gives, so depths are not comparable.
+fn clamped_gain_warning(
+    cap: &Capture,
+    volume: &Volume,
+    compensation: Compensation,
+) -> Option<String> {
+    let confocal = cap.kind() == CaptureKind::Confocal;
+    let (point, aperture) = compensation_points(cap);
+    let clamped = (0..volume.len())
+        .into_par_iter()
+        .filter(|&i| {
+            let (ix, iy, iz) = volume.unravel(i);
+            compensation.gain(volume.centre(ix, iy, iz), point, aperture, confocal)
+                >= Compensation::MAX_GAIN
+        })
+        .count();
+    (clamped > 0).then(|| {
+        format!(
+            "the compensation's gain reaches its cap of {} at {:.1} % of the voxels (μt too large for their distance); there it no longer follows the formula",
+            Compensation::MAX_GAIN,
+            100.0 * clamped as f64 / volume.len() as f64
+        )
+    })
 }
 
 /// The paper's x_c for K(x_v) (the single wall point of a one-point capture, else the sensor centroid)

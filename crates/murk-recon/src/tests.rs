@@ -881,3 +881,28 @@ fn methods_refuse_knobs_they_ignore() {
         assert!(Method::from_name(name, kind, o).is_ok(), "{name}");
     }
 }
+
+/// A compensation whose gain reaches its cap at some voxels says so, with their share; one that
+/// stays below it says nothing.
+#[test]
+fn clamped_compensation_is_reported() {
+    let cap = capture(LayoutKind::Confocal, 0.0, false);
+    let vol = aligned_volume();
+    let with = |mu_t_per_m: f64| {
+        let params = PfParams {
+            compensation: Compensation::Ballistic { mu_t_per_m },
+            ..PfParams::default()
+        };
+        reconstruct(&cap, &vol, &params, PfForm::Fast, &NoProgress)
+            .unwrap()
+            .warnings
+    };
+    let capped = |w: &Vec<String>| w.iter().any(|w| w.contains("reaches its cap of 1000000"));
+    assert!(!capped(&with(0.5)));
+    // e^{4·μt·z} passes 1e6 beyond z = ln(1e6)/(4·20) ≈ 0.17 m: every voxel of this volume (z ≥ 0.3 m).
+    let w = with(20.0);
+    assert!(
+        w.iter().any(|w| w.contains("at 100.0 % of the voxels")),
+        "{w:?}"
+    );
+}
