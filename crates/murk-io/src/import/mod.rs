@@ -178,6 +178,13 @@ fn generic(path: &Path, g: &Generic, o: &ImportOptions) -> Result<Capture> {
         )));
     }
     let (shape, data) = file.require(path, &g.var)?;
+    check_square(
+        path,
+        &g.var,
+        &shape,
+        g.axes,
+        "a generic import reads square scans (--wall-size is the side of both axes): check --axes",
+    )?;
     let scan = Scan::new(path, &g.var, &shape, &data, g.axes, o.flip)?;
     let axes = g.axes.map(|d| format!("{d:?}").to_lowercase()).join(", ");
     scan.confocal(
@@ -192,6 +199,39 @@ fn generic(path: &Path, g: &Generic, o: &ImportOptions) -> Result<Capture> {
             extra: flip_line(o.flip),
         },
     )
+}
+
+/// How messages name array `var` (a .npy file's one array has no name).
+fn array_name(var: &str) -> String {
+    if var.is_empty() {
+        "the array".to_string()
+    } else {
+        format!("'{var}'")
+    }
+}
+
+/// Every array layout scans a square grid (one side for both axes). A scan that is not square read
+/// this way is almost always a misread layout (a CDT `meas` (t, a, b) read as f-k's (a, b, t) gives
+/// a 512 × 32 scan of 32 bins), so it is refused before it is read; `why` says what to check.
+fn check_square(path: &Path, var: &str, shape: &[usize], axes: [Dim; 3], why: &str) -> Result<()> {
+    let side: Vec<usize> = shape
+        .iter()
+        .zip(axes)
+        .filter(|(_, d)| *d != Dim::T)
+        .map(|(n, _)| *n)
+        .collect();
+    if shape.len() == 3 && side[0] != side[1] {
+        let bins = shape[axes.iter().position(|d| *d == Dim::T).expect("a time axis")];
+        let name = array_name(var);
+        return Err(Error::format(
+            path,
+            format!(
+                "{name} of shape {shape:?} is a {} × {} scan of {bins} bins, but {why}",
+                side[0], side[1]
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// `scene_info` lines for the user's extra flips (none when there are none, so a preset's default
@@ -243,12 +283,7 @@ impl Scan {
         axes: [Dim; 3],
         flip: Flip,
     ) -> Result<Scan> {
-        // A .npy file's one array has no name.
-        let name = if var.is_empty() {
-            "the array".to_string()
-        } else {
-            format!("'{var}'")
-        };
+        let name = array_name(var);
         let names = axes.map(|d| match d {
             Dim::T => "T",
             Dim::X | Dim::Y => "N",
@@ -434,11 +469,22 @@ fn confocal_capture(
     h: Vec<f32>,
     scene_info: String,
 ) -> Result<Capture> {
-    let cap = Capture::confocal(grid, time, h, scene_info);
-    // The check names the file read, as the reader's own errors do.
+    checked(path, Capture::confocal(grid, time, h, scene_info))
+}
+
+/// `cap` read from `path`, once it is a valid capture with some signal. The checks name the file, as
+/// the reader's own errors do; histograms of zeros (after any gate or shift) are refused, since every
+/// method would return zeros.
+fn checked(path: &Path, cap: Capture) -> Result<Capture> {
     cap.validate().map_err(|e| match e {
         Error::Parameter(m) | Error::Limits(m) => Error::format(path, m),
         other => other,
     })?;
+    if cap.h.iter().all(|v| *v == 0.0) {
+        return Err(Error::format(
+            path,
+            "the histograms hold only zeros (after any gate or tof shift): there is no signal to import",
+        ));
+    }
     Ok(cap)
 }

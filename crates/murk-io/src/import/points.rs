@@ -112,8 +112,7 @@ impl Walls {
             h,
             scene_info,
         };
-        cap.validate()?;
-        Ok(cap)
+        super::checked(path, cap)
     }
 }
 

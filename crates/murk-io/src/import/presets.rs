@@ -345,32 +345,6 @@ fn scan_side_m(path: &Path, file: &ArrayFile, side: Side) -> Result<f64> {
     }
 }
 
-/// Every array layout's dataset scans a square grid: a scan that is not square read this way is
-/// almost always another dataset's file (a CDT `meas` (t, a, b) read as f-k's (a, b, t) gives a
-/// 512 × 32 scan of 32 bins), so it is refused before it is read.
-fn check_square(path: &Path, p: Preset, var: &str, shape: &[usize], axes: [Dim; 3]) -> Result<()> {
-    let side: Vec<usize> = shape
-        .iter()
-        .zip(axes)
-        .filter(|(_, d)| *d != Dim::T)
-        .map(|(n, _)| *n)
-        .collect();
-    if shape.len() == 3 && side[0] != side[1] {
-        let bins = shape[axes.iter().position(|d| *d == Dim::T).expect("a time axis")];
-        return Err(Error::format(
-            path,
-            format!(
-                "'{var}' of shape {shape:?} read as {} is a {} × {} scan of {bins} bins, but {} scans are square: is this a file of another dataset (--format)?",
-                p.name(),
-                side[0],
-                side[1],
-                p.name()
-            ),
-        ));
-    }
-    Ok(())
-}
-
 /// `[N², T]` as `[N, N, T]` (a column-major reshape is, in C order, axes (j, i, t)).
 fn split_square(path: &Path, var: &str, shape: &[usize]) -> Result<Vec<usize>> {
     let &[points, nt] = shape else {
@@ -399,7 +373,13 @@ pub(super) fn import(path: &Path, p: Preset, o: &ImportOptions) -> Result<Captur
     if s.square_split {
         shape = split_square(path, s.var, &shape)?;
     }
-    check_square(path, p, s.var, &shape, s.axes)?;
+    super::check_square(
+        path,
+        s.var,
+        &shape,
+        s.axes,
+        &format!("{} scans are square: is this a file of another dataset (--format)?", p.name()),
+    )?;
     let flip = s.flip.xor(o.flip);
     let mut scan = Scan::new(path, s.var, &shape, &data, s.axes, flip)?;
     drop(data);

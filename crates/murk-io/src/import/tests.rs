@@ -590,7 +590,7 @@ fn bad_inputs_fail_with_one_line() {
     // A .npy with bytes past its array, --var on a .npy, a bin width that is inf in metres, and a
     // wrong rank, which names "the array" (a .npy's has no name).
     let small = dir.join("small.npy");
-    crate::write_npy_f32(&small, &[2, 2, 4], &[0.0; 16]).unwrap();
+    crate::write_npy_f32(&small, &[4, 2, 2], &[0.0; 16]).unwrap();
     let mut bytes = std::fs::read(&small).unwrap();
     bytes.extend_from_slice(b"junk");
     let extra = dir.join("extra.npy");
@@ -619,6 +619,17 @@ fn bad_inputs_fail_with_one_line() {
     };
     let e = err(&small, &inf_bins);
     assert!(e.contains("positive, finite length, got 1e300 ps"), "{e}");
+    // Histograms of zeros have nothing to reconstruct.
+    let e = err(&small, &generic);
+    assert!(e.contains("small.npy: the histograms hold only zeros"), "{e}");
+    // A scan that is not square has no one --wall-size.
+    let oblong = dir.join("oblong.npy");
+    crate::write_npy_f32(&oblong, &[4, 2, 3], &[0.0; 24]).unwrap();
+    let e = err(&oblong, &generic);
+    assert!(
+        e.contains("oblong.npy: the array of shape [4, 2, 3] is a 2 × 3 scan of 4 bins, but a generic import reads square scans"),
+        "{e}"
+    );
     let flat = dir.join("flat.npy");
     crate::write_npy_f32(&flat, &[4, 4], &[0.0; 16]).unwrap();
     let e = err(&flat, &generic);
