@@ -116,8 +116,14 @@ impl PointSet {
             .chain(&self.normals)
             .position(|p| !p.is_finite())
         {
+            let n = self.points.len();
+            let which = if i < n {
+                format!("point {i}")
+            } else {
+                format!("the normal of point {}", i - n)
+            };
             return Err(Error::param(format!(
-                "{what}: non-finite coordinate at entry {i}"
+                "{what}: non-finite coordinate in {which}"
             )));
         }
         let limits = crate::Limits::get();

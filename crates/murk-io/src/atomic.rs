@@ -117,6 +117,14 @@ fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
 /// names one of `inputs`.
 pub fn check_output(out: &Path, inputs: &[&Path]) -> Result<()> {
     refuse_special(out)?;
+    // Checked here, not when the rename fails after all the work.
+    if let Some(n) = out.file_name().filter(|n| n.len() > 255) {
+        return Err(Error::param(format!(
+            "{}: its file name is {} bytes long; file systems allow 255",
+            out.display(),
+            n.len()
+        )));
+    }
     let parent = folder_of(out);
     if !parent.is_dir() {
         return Err(Error::param(format!(
@@ -191,5 +199,24 @@ fn file_id(p: &Path) -> std::io::Result<(u64, u64)> {
         let mut h = std::collections::hash_map::DefaultHasher::new();
         std::hash::Hash::hash(&c, &mut h);
         Ok((0, std::hash::Hasher::finish(&h)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file name longer than file systems allow is refused before any work (a render of
+    /// `--albedos 1e-300` failed only at its rename, with "File name too long").
+    #[test]
+    fn long_file_names_are_refused_up_front() {
+        let long = std::env::temp_dir().join(format!("{}.h5", "x".repeat(300)));
+        let e = check_output(&long, &[]).unwrap_err().to_string();
+        assert!(
+            e.contains("its file name is 303 bytes long; file systems allow 255"),
+            "{e}"
+        );
+        let fine = std::env::temp_dir().join(format!("{}.h5", "x".repeat(252)));
+        assert!(check_output(&fine, &[]).is_ok());
     }
 }

@@ -36,7 +36,8 @@ pub fn checkpoint_interval(seconds: f64) -> Result<Duration> {
     match seconds {
         s if (0.0..=MAX_SECONDS).contains(&s) => Ok(Duration::from_secs_f64(s)),
         s => Err(Error::param(format!(
-            "a checkpoint interval needs 0 ≤ seconds ≤ {MAX_SECONDS} (one year), got {s}"
+            "a checkpoint interval needs 0 ≤ seconds ≤ {MAX_SECONDS} (one year), got {}",
+            murk_core::short(s)
         ))),
     }
 }
@@ -47,7 +48,8 @@ pub fn time_budget(seconds: f64) -> Result<f64> {
         Ok(seconds)
     } else {
         Err(Error::param(format!(
-            "a time budget needs 0 < seconds ≤ {MAX_SECONDS} (one year), got {seconds}"
+            "a time budget needs 0 < seconds ≤ {MAX_SECONDS} (one year), got {}",
+            murk_core::short(seconds)
         )))
     }
 }
@@ -710,6 +712,11 @@ pub fn sweep_output(out: &Path, albedo: f64) -> PathBuf {
         .file_stem()
         .map(|s| s.to_string_lossy())
         .unwrap_or_default();
+    // Below 1e-4 in exponent form: Display writes 1e-300 with 300 digits, too long for a file name.
+    let albedo = match albedo {
+        a if a == 0.0 || a.abs() >= 1e-4 => format!("{a}"),
+        a => format!("{a:e}"),
+    };
     let name = match out.extension() {
         Some(ext) => format!("{stem}-albedo{albedo}.{}", ext.to_string_lossy()),
         None => format!("{stem}-albedo{albedo}"),

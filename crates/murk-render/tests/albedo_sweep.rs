@@ -153,3 +153,13 @@ fn bad_sweeps_are_refused() {
     let e = Plan::sweep(&clear, &[0.5]).err().unwrap().to_string();
     assert!(e.contains("scattering medium"), "{e}");
 }
+
+/// A sweep's file names: the albedo as written, or in exponent form when it is tiny (1e-300 as
+/// written has 300 digits, more than a file name may hold).
+#[test]
+fn sweep_outputs_are_named_by_albedo() {
+    let name = |a: f64| murk_render::sweep_output(Path::new("d/z.h5"), a);
+    assert_eq!(name(0.83), Path::new("d/z-albedo0.83.h5"));
+    assert_eq!(name(0.0), Path::new("d/z-albedo0.h5"));
+    assert_eq!(name(1e-300), Path::new("d/z-albedo1e-300.h5"));
+}

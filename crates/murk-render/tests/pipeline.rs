@@ -400,6 +400,16 @@ fn bad_scenes_name_file_and_field() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("object[0].file") && e.contains("bad.obj"), "{e}");
+    // A vertex at 1e300 (inf as the f32 OBJ reader holds it) is named, not dropped with its triangle.
+    std::fs::write(
+        dir.join("bad.obj"),
+        "v 0 0 1\nv 1 0 1\nv 0 1e300 1\nf 1 2 3\n",
+    )
+    .unwrap();
+    let e = Scene::from_str(&text, &dir.join("s.toml"), &Overrides::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("vertex 3 has the coordinate inf"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -426,6 +436,7 @@ fn overrides_are_named_recorded_and_guard_resume() {
             "medium.albedo: must be in [0, 1], got 1.5",
         ),
         ("object[4].albedo=1", "object[4] does not exist"),
+        ("medium.ior=1000", "medium.ior: must be in [1, 4], got 1000"),
         (
             "object[0].scale=0",
             "object[0].scale: must be a finite, non-zero factor, got 0",

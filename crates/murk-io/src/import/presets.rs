@@ -378,7 +378,10 @@ pub(super) fn import(path: &Path, p: Preset, o: &ImportOptions) -> Result<Captur
         s.var,
         &shape,
         s.axes,
-        &format!("{} scans are square: is this a file of another dataset (--format)?", p.name()),
+        &format!(
+            "{} scans are square: is this a file of another dataset (--format)?",
+            p.name()
+        ),
     )?;
     let flip = s.flip.xor(o.flip);
     let mut scan = Scan::new(path, s.var, &shape, &data, s.axes, flip)?;

@@ -621,7 +621,10 @@ fn bad_inputs_fail_with_one_line() {
     assert!(e.contains("positive, finite length, got 1e300 ps"), "{e}");
     // Histograms of zeros have nothing to reconstruct.
     let e = err(&small, &generic);
-    assert!(e.contains("small.npy: the histograms hold only zeros"), "{e}");
+    assert!(
+        e.contains("small.npy: the histograms hold only zeros"),
+        "{e}"
+    );
     // A scan that is not square has no one --wall-size.
     let oblong = dir.join("oblong.npy");
     crate::write_npy_f32(&oblong, &[4, 2, 3], &[0.0; 24]).unwrap();

@@ -276,10 +276,12 @@ impl MediumDef {
                 format!("must satisfy |g| < 1, got {}", short(m.g)),
             ));
         }
-        if !(m.ior.is_finite() && m.ior >= 1.0) {
+        // Past 4 (germanium's index; water's is 1.33) every path is stretched beyond any window
+        // set for the geometry, and the capture would be all zeros.
+        if !(m.ior.is_finite() && (1.0..=4.0).contains(&m.ior)) {
             return Err(bad(
                 "medium.ior",
-                format!("must be ≥ 1, got {}", short(m.ior)),
+                format!("must be in [1, 4], got {}", short(m.ior)),
             ));
         }
         if !(0..3)
@@ -443,8 +445,27 @@ impl ObjectDef {
                         )
                     })?;
                 let mut prims = Vec::new();
+                let limits = murk_core::Limits::get();
                 for m in &models {
                     let pos = &m.mesh.positions;
+                    // A vertex beyond the length limit would make its triangles' areas inf or NaN.
+                    if let Some(k) = pos.iter().position(|v| {
+                        let v = *v as f64 * *scale;
+                        !(v.is_finite() && v.abs() <= limits.max_length_m)
+                    }) {
+                        return Err(Error::format(
+                            path,
+                            format!(
+                                "{}: OBJ {}: vertex {} has the coordinate {} (scaled by {}); murk accepts finite coordinates up to {} m",
+                                field("file"),
+                                full.display(),
+                                k / 3 + 1,
+                                short(pos[k] as f64),
+                                short(*scale),
+                                short(limits.max_length_m)
+                            ),
+                        ));
+                    }
                     let p = |k: u32| {
                         let k = k as usize * 3;
                         DVec3::new(pos[k] as f64, pos[k + 1] as f64, pos[k + 2] as f64) * *scale
