@@ -387,6 +387,26 @@ fn nonsense_parameters() {
     );
     fails(
         &[
+            "synth", "--out", synth_out, "--target", "z:1", "--mu-t", "60",
+        ],
+        &["attenuation", "μt = 60 /m"],
+    );
+    fails(
+        &["synth", "--out", synth_out, "--target", "point:0,0,1e-19"],
+        &["depth 1e-19 m is closer to the wall than"],
+    );
+    fails(
+        &[
+            "synth",
+            "--out",
+            synth_out,
+            "--target",
+            "polygon:1:1e300,0;1,0;0,1",
+        ],
+        &["polygon vertex's coordinate is 1e300 m"],
+    );
+    fails(
+        &[
             "synth", "--out", synth_out, "--target", "z:1", "--bins", "0",
         ],
         &["bins must be at least 1"],

@@ -379,7 +379,7 @@ impl Capture {
             let (l, s) = self.hist_pair(hist);
             return Err(Error::param(format!(
                 "H contains a non-finite value ({}) at illumination {l}, sensor {s}, bin {bin}",
-                self.h[i]
+                crate::non_finite(self.h[i])
             )));
         }
         if self.t_accounts_first_and_last_bounces

@@ -27,7 +27,7 @@ pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
 pub use error::{Error, Result};
 pub use glam::DVec3;
 pub use input::{open_input, read_input};
-pub use limits::{short, Limits};
+pub use limits::{non_finite, short, Limits};
 pub use named::Named;
 pub use points::{PointLayout, PointSet, RegularGrid};
 pub use progress::{NoProgress, Progress};

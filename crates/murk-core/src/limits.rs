@@ -160,6 +160,16 @@ pub fn short(v: f64) -> String {
     trim_zeros(&format!("{v:.decimals$}")).to_string()
 }
 
+/// What a non-finite f32 read from a file may have been: data are held as 32-bit floats, so a finite
+/// f64 beyond their range arrives as inf.
+pub fn non_finite(v: f32) -> String {
+    if v.is_nan() {
+        "NaN".into()
+    } else {
+        format!("{v}: infinite, or beyond the ±3.4e38 that 32-bit floats hold")
+    }
+}
+
 fn trim_zeros(s: &str) -> &str {
     if s.contains('.') {
         s.trim_end_matches('0').trim_end_matches('.')

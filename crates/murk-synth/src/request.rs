@@ -96,6 +96,19 @@ pub fn synthesize(s: &Synthesis) -> Result<Capture> {
     }
     add_first_bounce(&mut cap, &scatterers, &s.options)?;
     if cap.h.iter().all(|&v| v == 0.0) {
+        // Without the medium's attenuation, is there signal? Then e^{−μt·path} underflowed.
+        let mut clear = l.empty_capture()?;
+        let no_medium = SynthOptions {
+            mu_t_per_m: 0.0,
+            ..s.options
+        };
+        add_first_bounce(&mut clear, &scatterers, &no_medium)?;
+        if s.options.mu_t_per_m > 0.0 && clear.h.iter().any(|&v| v != 0.0) {
+            return Err(Error::param(format!(
+                "the medium's attenuation e^(−μt·path) with μt = {} /m leaves every return below what 32-bit floats hold; use a smaller μt",
+                murk_core::short(s.options.mu_t_per_m)
+            )));
+        }
         return Err(Error::param(format!(
             "the time window ({:.3}..{:.3} m of path) contains none of the scene's paths; adjust its start, bins or bin width",
             cap.time.start_m,

@@ -35,6 +35,7 @@ impl Target {
                         pos.z
                     )));
                 }
+                check_depth(pos.z)?;
                 Ok(vec![Scatterer {
                     pos: *pos,
                     weight: *albedo,
@@ -55,6 +56,13 @@ impl Target {
                     return Err(Error::param(format!(
                         "polygon depth ({depth_m} m) and spacing ({spacing_m} m) must be > 0"
                     )));
+                }
+                check_depth(*depth_m)?;
+                let limits = murk_core::Limits::get();
+                for v in outline {
+                    for c in v.iter().chain(offset) {
+                        limits.length("a polygon vertex's coordinate", *c)?;
+                    }
                 }
                 let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
                 for v in outline {
@@ -100,6 +108,20 @@ impl Target {
             }
         }
     }
+}
+
+/// A target this close to the wall makes the 1/r² of its returns overflow 32-bit floats; nothing
+/// is imaged that close anyway.
+fn check_depth(z_m: f64) -> Result<()> {
+    let least = murk_core::Limits::get().min_bin_width_m;
+    if z_m < least {
+        return Err(Error::param(format!(
+            "a target at depth {} m is closer to the wall than the {} m murk accepts",
+            murk_core::short(z_m),
+            murk_core::short(least)
+        )));
+    }
+    murk_core::Limits::get().length("a target's depth", z_m)
 }
 
 /// Even-odd point-in-polygon test.

@@ -321,7 +321,10 @@ impl Scan {
         if let Some(v) = data.iter().find(|v| !v.is_finite()) {
             return Err(Error::format(
                 path,
-                format!("{name} holds a non-finite value ({v})"),
+                format!(
+                    "{name} holds a non-finite value ({})",
+                    murk_core::non_finite(*v)
+                ),
             ));
         }
         Limits::get().elements(&format!("{}: {name}", path.display()), &[nx, ny, nt], 4)?;

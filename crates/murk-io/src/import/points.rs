@@ -366,7 +366,10 @@ fn znlos(path: &Path, file: &ArrayFile) -> Result<Walls> {
     if let Some(v) = data.iter().find(|v| !v.is_finite()) {
         return Err(Error::format(
             path,
-            format!("'data' holds a non-finite value ({v})"),
+            format!(
+                "'data' holds a non-finite value ({})",
+                murk_core::non_finite(*v)
+            ),
         ));
     }
     Limits::get().elements(&format!("{}: 'data'", path.display()), &[np, nq, nt], 4)?;
