@@ -44,14 +44,14 @@ fn help_lists_every_preset() {
     assert!(out.contains("Examples:") && out.contains("--axes"), "{out}");
 }
 
-/// A confocal 6 × 4 scan stored (t, x, y) with its x axis reversed and path 0 at bin 10: the bright
-/// point at x index 1 of the file (ix 4 after the flip), y index 3, comes back at its place.
+/// A confocal 6 × 6 scan stored (t, x, y) with its x axis reversed and path 0 at bin 10: the bright
+/// point at x index 1 of the file (ix 4 after the flip), y index 5, comes back at its place.
 #[test]
 fn generic_npy_with_flip_and_t0() {
     let dir = tmpdir("generic");
-    let (nt, nx, ny) = (64, 6, 4);
+    let (nt, nx, ny) = (64, 6, 6);
     let mut v = vec![0f32; nt * nx * ny];
-    v[(30 * nx + 1) * ny + 3] = 5.0;
+    v[(30 * nx + 1) * ny + 5] = 5.0;
     let npy = dir.join("scan.npy");
     murk_io::write_npy_f32(&npy, &[nt, nx, ny], &v).unwrap();
     let out = dir.join("scan.h5");
@@ -76,7 +76,7 @@ fn generic_npy_with_flip_and_t0() {
     assert_eq!(code, 0, "{err}");
     let cap = murk_io::read_capture(&out).unwrap();
     let k = (0..cap.h.len()).fold(0, |b, k| if cap.h[k] > cap.h[b] { k } else { b });
-    assert_eq!((k / nt, k % nt), (4 * ny + 3, 30));
+    assert_eq!((k / nt, k % nt), (4 * ny + 5, 30));
     let p = cap.sensor.points[k / nt];
     assert!(
         (p.x - 0.15).abs() < 1e-6 && (p.y - 0.25).abs() < 1e-6,
@@ -129,5 +129,17 @@ fn generic_npy_with_flip_and_t0() {
     assert!(e.contains("a gate of 64 bins leaves nothing"), "{e}");
     let e = base(&[&framed[..], &["--confocal", "--t0-bin", "64"]].concat());
     assert!(e.contains("before the wall"), "{e}");
+    // One --wall-size cannot describe a 6 × 4 scan.
+    let oblong = dir.join("oblong.npy");
+    murk_io::write_npy_f32(&oblong, &[nt, 6, 4], &v[..nt * 24]).unwrap();
+    let e = fails(
+        &[
+            &["import", s(&oblong), "--out", s(&other)],
+            &framed[..],
+            &["--confocal"],
+        ]
+        .concat(),
+    );
+    assert!(e.contains("6 × 4 scan") && e.contains("square"), "{e}");
     std::fs::remove_dir_all(dir).ok();
 }
