@@ -283,6 +283,11 @@ fn nonsense_parameters() {
             &["--method", "fk", "--t-offset", "4"],
             "before any depth behind the wall",
         ),
+        (
+            &["--method", "pf", "--slab-thickness", "0.02"],
+            "a slab does not apply to pf without a time offset of 'slab'",
+        ),
+        (&["--t-offset", "4m"], "t-offset '4m': expected metres"),
     ] {
         fails(
             &[&["reconstruct", c, "--out", out][..], extra].concat(),
@@ -332,6 +337,21 @@ fn nonsense_parameters() {
             "2",
         ],
         &["albedo"],
+    );
+    fails(
+        &[
+            "reconstruct",
+            g,
+            "--out",
+            out,
+            "--compensate",
+            "ballistic",
+            "--mu-t",
+            "1",
+            "--albedo",
+            "0.5",
+        ],
+        &["'ballistic' does not read an albedo"],
     );
     fails(
         &["reconstruct", g, "--out", d.join("v.txt").to_str().unwrap()],

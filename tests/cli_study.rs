@@ -105,7 +105,7 @@ fn bad_options_fail_on_one_line() {
         (vec!["--seeds", "0"], "--seeds must be in 1..=64"),
         (
             vec!["--scenes", "/nonexistent"],
-            "/nonexistent: no z-letter.toml",
+            "/nonexistent: no such scenes folder",
         ),
     ] {
         let mut a = vec!["experiment", "paper", "--out", out];

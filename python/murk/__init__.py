@@ -300,7 +300,7 @@ def reconstruct(
     cycles: float = 4.0,
     compensate: Optional[str] = None,
     mu_t: Optional[float] = None,
-    albedo: float = 0.0,
+    albedo: Optional[float] = None,
     falloff: str = "none",
     lateral: str = "propagating",
     gate: Union[str, float] = "auto",

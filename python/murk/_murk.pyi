@@ -95,7 +95,7 @@ class _ReconstructArgs(TypedDict):
     cycles: float
     compensate: Optional[str]
     mu_t: Optional[float]
-    albedo: float
+    albedo: Optional[float]
     falloff: str
     lateral: str
     gate: str

@@ -27,7 +27,7 @@ pub struct Args {
     cycles: f64,
     compensate: Option<String>,
     mu_t: Option<f64>,
-    albedo: f64,
+    albedo: Option<f64>,
     falloff: String,
     lateral: String,
     gate: String,
@@ -42,13 +42,14 @@ impl Args {
     /// The library request for a capture of `kind`, as `murk reconstruct` builds it from its flags.
     fn request(&self, kind: murk_core::CaptureKind) -> Result<Request> {
         let o = self.options()?;
+        let method = Method::from_name(&self.method, kind, &o)?;
         Ok(Request {
-            method: Method::from_name(&self.method, kind, &o)?,
+            method,
             volume: match &self.volume {
                 Some(spec) => VolumeSpec::Given(Volume::parse(spec)?),
                 None => VolumeSpec::Default,
             },
-            t_offset: TOffset::parse(self.t_offset.as_deref(), o.slab)?,
+            t_offset: TOffset::parse(self.t_offset.as_deref(), &o, &method)?,
             gate: self.gate.parse::<Gate>()?,
             window_end: WindowEnd::named(&self.window_end)?,
         })

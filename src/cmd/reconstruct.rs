@@ -90,9 +90,9 @@ pub struct ReconstructArgs {
     /// Extinction coefficient μt of the medium (1/m), for --compensate.
     #[arg(long = "mu-t", value_name = "PER_M", requires = "compensate")]
     pub mu_t_per_m: Option<f64>,
-    /// Single-scattering albedo α of the medium, for --compensate.
-    #[arg(long, default_value_t = 0.0, requires = "compensate")]
-    pub albedo: f64,
+    /// Single-scattering albedo α of the medium, for --compensate paper (default 0).
+    #[arg(long, requires = "compensate")]
+    pub albedo: Option<f64>,
     /// Amplitude factor per leg.
     #[arg(long, value_enum, default_value = "none")]
     pub falloff: FalloffArg,
@@ -183,13 +183,14 @@ impl ReconstructArgs {
     /// The library request these arguments make for `cap`.
     pub fn request(&self, kind: CaptureKind) -> anyhow::Result<Request> {
         let o = self.options()?;
+        let method = Method::from_name(&self.method, kind, &o)?;
         Ok(Request {
-            method: Method::from_name(&self.method, kind, &o)?,
+            method,
             volume: match &self.volume {
                 Some(spec) => VolumeSpec::Given(Volume::parse(spec)?),
                 None => VolumeSpec::Default,
             },
-            t_offset: TOffset::parse(self.t_offset.as_deref(), o.slab).context("--t-offset")?,
+            t_offset: TOffset::parse(self.t_offset.as_deref(), &o, &method)?,
             gate: self.gate.parse::<Gate>().context("--gate")?,
             window_end: library(self.window_end)?,
         })

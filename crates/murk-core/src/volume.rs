@@ -116,6 +116,16 @@ impl Volume {
         for (name, a) in [("x", &self.x), ("y", &self.y), ("z", &self.z)] {
             limits.length(&format!("the volume's {name} start"), a.start)?;
             limits.length(&format!("the volume's {name} end"), a.end)?;
+            // Voxels that all but coincide (1e-12 m apart) repeat one value: a mistyped unit, not a volume.
+            let span = (a.end - a.start).abs();
+            if a.n > 1 && span < limits.min_bin_width_m {
+                return Err(Error::Limits(format!(
+                    "the volume's {name} axis spans {} m over {} voxels; murk accepts axes of several voxels spanning at least {} m",
+                    crate::short(span),
+                    a.n,
+                    crate::short(limits.min_bin_width_m)
+                )));
+            }
         }
         let zmin = self.z.start.min(self.z.end);
         if zmin <= 0.0 {
@@ -155,6 +165,8 @@ mod tests {
             "0:1:0,0:1:2,1:2:2",
             "0:1:2,0:1:2,-1:2:2",
             "0:1:2,0:1:2,0:1:2",
+            "0:1e-12:4,0:1:2,1:2:2",
+            "0:1:2,0:1:2,0.5:0.5:3",
         ] {
             assert!(Volume::parse(s).is_err(), "{s}");
         }

@@ -25,12 +25,19 @@ impl Compensation {
     /// Every compensation's name ("none" is no compensation).
     pub const NAMES: [&'static str; 3] = ["none", "paper", "ballistic"];
 
-    /// The compensation called `name`, for a medium of `mu_t_per_m` and `albedo`.
-    pub fn named(name: &str, mu_t_per_m: f64, albedo: f64) -> Result<Compensation> {
-        match name {
-            "none" => Ok(Compensation::None),
-            "paper" => Ok(Compensation::Paper { mu_t_per_m, albedo }),
-            "ballistic" => Ok(Compensation::Ballistic { mu_t_per_m }),
+    /// The compensation called `name`, for a medium of `mu_t_per_m` and `albedo` (0 if not given).
+    /// An albedo is refused where the compensation does not read it, so it cannot look applied.
+    pub fn named(name: &str, mu_t_per_m: f64, albedo: Option<f64>) -> Result<Compensation> {
+        match (name, albedo) {
+            ("none", None) => Ok(Compensation::None),
+            ("paper", _) => Ok(Compensation::Paper {
+                mu_t_per_m,
+                albedo: albedo.unwrap_or(0.0),
+            }),
+            ("ballistic", None) => Ok(Compensation::Ballistic { mu_t_per_m }),
+            ("none" | "ballistic", Some(_)) => Err(Error::param(format!(
+                "compensate '{name}' does not read an albedo; only 'paper' does"
+            ))),
             _ => Err(Error::param(format!(
                 "compensate '{name}': expected {}",
                 Self::NAMES.join(", ")

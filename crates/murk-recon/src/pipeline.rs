@@ -216,16 +216,25 @@ pub enum TOffset {
 }
 
 impl TOffset {
-    /// Reads `metres` or `slab` (the delay of `slab`'s round trip); `None` is no offset.
-    pub fn parse(text: Option<&str>, slab: SlabParams) -> Result<TOffset> {
+    /// Reads `metres` or `slab` (the delay of `o.slab`'s round trip); `None` is no offset. A slab
+    /// other than the default that neither `method` (cdt) nor the offset reads is refused, so that it
+    /// cannot look applied.
+    pub fn parse(text: Option<&str>, o: &Options, method: &Method) -> Result<TOffset> {
+        let slab_read = text == Some("slab") || matches!(method, Method::Cdt(_));
+        if !slab_read && o.slab != SlabParams::default() {
+            return Err(Error::param(format!(
+                "a slab does not apply to {} without a time offset of 'slab', which would ignore it (it applies to cdt and to t-offset slab)",
+                method.name()
+            )));
+        }
         Ok(match text {
             None => TOffset::None,
-            Some("slab") => TOffset::Slab(slab),
+            Some("slab") => TOffset::Slab(o.slab),
             Some(s) => match s.parse::<f64>() {
                 Ok(v) if v.is_finite() => TOffset::Metres(v),
                 _ => {
                     return Err(Error::param(format!(
-                        "time offset '{s}': expected metres or 'slab'"
+                        "t-offset '{s}': expected metres or 'slab'"
                     )))
                 }
             },
@@ -389,7 +398,16 @@ impl Plan {
         };
         let open_m = match (req.gate, &volume) {
             (Gate::Auto, Some(v)) => {
-                Some(shortest_path_m(&geometry, v) - GATE_MARGIN_EDGES * edge_m)
+                let shortest_m = shortest_path_m(&geometry, v);
+                let open_m = shortest_m - GATE_MARGIN_EDGES * edge_m;
+                if open_m >= geometry.time.end_m() {
+                    // Blaming the gate would send the user to --gate; the volume is what is out of reach.
+                    return Err(Error::param(format!(
+                        "the volume lies beyond the capture's window: its nearest voxel is {shortest_m:.3} m of path away, the window ends at {:.3} m (after the time offset); choose a volume nearer the wall",
+                        geometry.time.end_m()
+                    )));
+                }
+                Some(open_m)
             }
             // Own-grid methods have no volume to derive it from.
             (Gate::Auto, None) | (Gate::Off, _) => None,

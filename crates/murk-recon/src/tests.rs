@@ -846,7 +846,7 @@ fn methods_refuse_knobs_they_ignore() {
     use murk_baselines::Reflectance;
     let kind = capture(LayoutKind::Confocal, 0.0, false).kind();
     let compensated = Options {
-        compensation: Compensation::named("paper", 1.0, 0.5).unwrap(),
+        compensation: Compensation::named("paper", 1.0, Some(0.5)).unwrap(),
         ..Options::default()
     };
     let snr = Options {
@@ -905,4 +905,41 @@ fn clamped_compensation_is_reported() {
         w.iter().any(|w| w.contains("at 100.0 % of the voxels")),
         "{w:?}"
     );
+}
+
+/// A volume out of the window's reach is refused when planning, naming the volume; a gate set by
+/// hand after the window is refused naming the gate.
+#[test]
+fn a_volume_or_gate_beyond_the_window_is_refused() {
+    use crate::pipeline::{Gate, Method, Options, Plan, Request, VolumeSpec};
+    let cap = capture(LayoutKind::Confocal, 0.0, false);
+    for name in ["pf", "bp"] {
+        let method = Method::from_name(name, cap.kind(), &Options::default()).unwrap();
+        // The window ends at 5.6 m of path; a confocal voxel 4 m deep is 8 m away.
+        let far = Request {
+            volume: VolumeSpec::Given(Volume {
+                z: Axis::new(4.0, 5.0, 5),
+                ..aligned_volume()
+            }),
+            ..Request::new(method)
+        };
+        let e = Plan::new(&cap, &far, &NoProgress)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("the volume lies beyond the capture's window")
+                && e.contains("8.000 m")
+                && e.contains("5.600 m"),
+            "{name}: {e}"
+        );
+        let late_gate = Request {
+            gate: Gate::At(6.0),
+            ..Request::new(method)
+        };
+        let e = crate::pipeline::run(cap.clone(), &late_gate, &NoProgress)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the gate at 6.000 m opens after"), "{name}: {e}");
+    }
 }

@@ -450,6 +450,7 @@ fn overrides_are_named_recorded_and_guard_resume() {
             "object[0].shape: lies in the relay's plane z = 0",
         ),
         ("medium", "expected KEY=VALUE"),
+        ("render.spp=0", "render.spp: must be between 1 and"),
     ] {
         let e = load(&set(&[ov])).unwrap_err().to_string();
         assert!(e.starts_with("ov.toml: ") && e.contains(want), "{ov}: {e}");

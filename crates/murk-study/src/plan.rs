@@ -399,6 +399,12 @@ impl Plan {
         }
         // Before anything is written, so that a mistyped folder leaves no plan behind; only the
         // scenes the chosen cells render.
+        if !opt.scenes_dir.is_dir() {
+            return Err(Error::param(format!(
+                "{}: no such scenes folder",
+                opt.scenes_dir.display()
+            )));
+        }
         for scene in [SceneKind::ZLetter, SceneKind::Shelf] {
             let used = cells.iter().any(|(.., k, _, _)| *k == scene);
             if used && !opt.scenes_dir.join(scene.file()).is_file() {
@@ -637,6 +643,8 @@ mod tests {
         let e = Plan::new(&opt).unwrap_err().to_string();
         assert!(e.contains("no shelf.toml in this scenes folder"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+        let e = Plan::new(&opt).unwrap_err().to_string();
+        assert!(e.ends_with("no such scenes folder"), "{e}");
     }
 
     /// Cells as the paper lays them out; a capture serves every cell that needs it (Fig. 4 and the

@@ -304,7 +304,9 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
             let reference = &references[&key];
             for (name, scores, first) in by_comp.iter_mut() {
                 let m = cell.medium;
-                let comp = Compensation::named(name, m.mu_t_per_m, m.albedo)?;
+                // Only the paper's K reads the albedo.
+                let albedo = (*name == "paper").then_some(m.albedo);
+                let comp = Compensation::named(name, m.mu_t_per_m, albedo)?;
                 let i = murk_recon::intensity(&cap, &volume, &field, comp);
                 let v = views(&volume, &i);
                 scores.push(score(&v.front, &v.depth, reference, &truth, cell.scene));

@@ -193,6 +193,17 @@ impl CaptureDef {
 impl RenderDef {
     pub(super) fn check(&self, bad: Bad) -> Result<()> {
         let s = self;
+        // Checked here too (the render checks --spp) so that the file and key are named.
+        if !(1..=murk_core::Limits::MAX_SPP).contains(&s.spp) {
+            return Err(bad(
+                "render.spp",
+                format!(
+                    "must be between 1 and {}, got {}",
+                    murk_core::Limits::MAX_SPP,
+                    s.spp
+                ),
+            ));
+        }
         if s.max_depth == 0 {
             return Err(bad(
                 "render.max_depth",
