@@ -91,7 +91,8 @@ Progress = Union[None, bool, Callable[[int, int], Any]]
 
 
 def _progress(progress: Progress, label: str):
-    """``True``: a tqdm bar; a callable: called as ``progress(done, total)``; None/False: nothing."""
+    """``True``: a tqdm bar; a callable: called as ``progress(done, total)`` on every change and at
+    least every half second (an exception it raises stops the call); None/False: nothing."""
     if progress is None or progress is False:
         return None
     if callable(progress):

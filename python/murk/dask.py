@@ -16,6 +16,8 @@ On a cluster the workers must see ``workdir`` (a shared file system) and the sce
 import os
 import shutil
 import tempfile
+import time
+import uuid
 from typing import Any, Dict, List, Optional, Sequence, Union
 
 import murk
@@ -64,17 +66,53 @@ def render_shard(
     checkpoint_every=60.0,
     progress=None,
     albedos=None,
+    stop=None,
 ) -> str:
     """One Dask task: renders shard ``(i, n)`` of ``scene`` (of the sweep over ``albedos`` when
     given) into the checkpoint ``part``, which holds every unit of the shard when this returns (at
     once if it already did; an interrupted task's part resumes); returns ``part``. ``progress`` as
-    for ``murk.render``."""
+    for ``murk.render``. ``stop``: a file whose appearance ends the render after its next finished
+    unit, with the units done so far in ``part`` (``render`` creates one on Ctrl-C, so that its
+    tasks end by themselves instead of being killed with their unsaved units)."""
     part = os.fspath(part)
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid,
                                    bins=bins, checkpoint=part, checkpoint_every=checkpoint_every,
                                    albedos=albedos)
-    murk._murk.render_part(path, args, threads, murk._progress(progress, "shard"))
+    report = murk._progress(progress, "shard")
+    if stop is not None:
+        report = _stoppable(report, os.fspath(stop))
+    try:
+        murk._murk.render_part(path, args, threads, report)
+    except _Stopped:
+        pass
     return part
+
+
+class _Stopped(Exception):
+    """Raised from a shard's progress calls when its stop file appears: the renderer then ends
+    through its stop flag, which appends its finished units to the checkpoint."""
+
+
+def _stoppable(report, stop: str):
+    def update(done, total):
+        if os.path.exists(stop):
+            raise _Stopped()
+        if report is not None:
+            report(done, total)
+
+    return update
+
+
+# How long a Ctrl-C'd render waits for its tasks to save their finished units and end.
+STOP_GRACE_S = 30.0
+
+
+def _wait(futures):
+    """Returns once every task has ended or one has failed. Polling here rather than in
+    ``client.gather`` lets a Ctrl-C land in this thread and not in Dask's event loop (which then
+    prints the gather's abandoned tasks)."""
+    while not all(f.done() for f in futures) and not any(f.status == "error" for f in futures):
+        time.sleep(0.1)
 
 
 def assemble(scene, parts, *, spp=None, seed=0, set=None, grid=None, bins=None, albedos=None):
@@ -165,15 +203,25 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
     tmp = workdir is None
     workdir = tempfile.mkdtemp(prefix="murk-dask-") if tmp else os.fspath(workdir)
     os.makedirs(workdir, exist_ok=True)
+    stop = os.path.abspath(os.path.join(workdir, f"stop-{uuid.uuid4().hex}"))
     try:
         futures = [
             client.submit(render_shard, scene, (i, shards),
                           os.path.abspath(os.path.join(workdir, f"part{i}.ckpt")), spp=spp,
                           seed=seed, set=set, grid=grid, bins=bins, threads=threads,
-                          checkpoint_every=checkpoint_every, albedos=albedos, retries=retries,
-                          pure=False)
+                          checkpoint_every=checkpoint_every, albedos=albedos, stop=stop,
+                          retries=retries, pure=False)
             for i in range(shards)
         ]
+        try:
+            _wait(futures)
+        except KeyboardInterrupt:
+            # The tasks save their finished units and end; a second Ctrl-C stops waiting for them.
+            open(stop, "w").close()
+            deadline = time.monotonic() + STOP_GRACE_S
+            while not all(f.done() for f in futures) and time.monotonic() < deadline:
+                time.sleep(0.1)
+            raise
         parts = client.gather(futures)
         caps = _assemble_all(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins,
                              albedos=albedos)
@@ -182,6 +230,8 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
                 murk.write_capture(path, cap)
         return caps if albedos is not None else caps[0]
     finally:
+        if os.path.exists(stop):
+            os.remove(stop)
         if own:
             client.close()
             cluster.close()

@@ -10,7 +10,10 @@ use pyo3::types::PyType;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::mpsc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
+
+/// The longest a progress callback waits between calls while the counts stand still.
+const HEARTBEAT: Duration = Duration::from_millis(500);
 
 /// The `murk.errors` class for a library error: the kind says whose fault it was, the message is the
 /// library's one line.
@@ -133,6 +136,7 @@ pub(crate) fn compute<T: Send>(
             .map_err(|e| error("Error", format!("cannot start a thread: {e}")))?;
         let mut stop: Option<PyErr> = None;
         let mut shown = (u64::MAX, u64::MAX);
+        let mut shown_at = Instant::now();
         loop {
             let got = py.detach(|| {
                 rx.lock()
@@ -141,8 +145,14 @@ pub(crate) fn compute<T: Send>(
             });
             if stop.is_none() {
                 let now = (ticker.done.load(Relaxed), ticker.total.load(Relaxed));
+                // Repeated while nothing changes too, so that a callback can stop a long unit's
+                // successors (murk.dask's stop file) without waiting for the next count.
+                let due = now != shown || shown_at.elapsed() >= HEARTBEAT;
                 let report = match progress {
-                    Some(cb) if now != shown && now.1 > 0 => cb.call1(now).map(|_| ()),
+                    Some(cb) if due && now.1 > 0 => {
+                        shown_at = Instant::now();
+                        cb.call1(now).map(|_| ())
+                    }
                     _ => Ok(()),
                 };
                 shown = now;

@@ -11,9 +11,10 @@ Z = SCENES / "z-letter.toml"
 
 @needs_cli
 def test_render_and_merged_shards_give_the_cli_bytes(tmp_path):
+    # Tiles of 4 × 4 laser points: four work units, for three shards.
     cli("render", Z, "--out", tmp_path / "cli.h5", "--grid", "8", "--spp", "32", "--seed", "3",
-        "--set", "medium.albedo=0.8", "--quiet")
-    kw = dict(grid=8, spp=32, seed=3, set={"medium.albedo": 0.8})
+        "--set", "medium.albedo=0.8", "--set", "render.share_tile=4", "--quiet")
+    kw = dict(grid=8, spp=32, seed=3, set={"medium.albedo": 0.8, "render.share_tile": 4})
     whole = murk.render(Z, out=tmp_path / "py.h5", **kw)
     assert (tmp_path / "py.h5").read_bytes() == (tmp_path / "cli.h5").read_bytes()
     parts = [murk.render(Z, shard=(i, 3), **kw) for i in (2, 0, 1)]
@@ -81,7 +82,9 @@ def test_capture_pickles_exactly_and_crosses_processes():
     import multiprocessing
     import pickle
 
-    cap = murk.render(Z, grid=4, spp=8, seed=2, shard=(1, 2))
+    # Tiles of 2 × 2 laser points: four work units, for two shards.
+    kw = dict(grid=4, spp=8, seed=2, set={"render.share_tile": 2})
+    cap = murk.render(Z, shard=(1, 2), **kw)
     back = pickle.loads(pickle.dumps(cap))
     for name in ("H", "laser_points", "laser_normals", "sensor_points", "sensor_normals", "t"):
         assert np.array_equal(getattr(back, name), getattr(cap, name)), name
@@ -89,7 +92,7 @@ def test_capture_pickles_exactly_and_crosses_processes():
                  "t_accounts_first_and_last_bounces"):
         assert getattr(back, name) == getattr(cap, name), name
     # A pickled shard is still a shard of the same render.
-    other = murk.render(Z, grid=4, spp=8, seed=2, shard=(0, 2))
+    other = murk.render(Z, shard=(0, 2), **kw)
     assert np.array_equal(murk.merge([back, other]).H, murk.merge([cap, other]).H)
     with concurrent.futures.ProcessPoolExecutor(
             1, mp_context=multiprocessing.get_context("spawn")) as pool:
