@@ -401,7 +401,7 @@ impl Plan {
         // scenes the chosen cells render.
         if !opt.scenes_dir.is_dir() {
             return Err(Error::param(format!(
-                "{}: no such scenes folder",
+                "{}: no such scenes folder (the study reads z-letter.toml and shelf.toml from it; murk's own are in its repository's scenes/)",
                 opt.scenes_dir.display()
             )));
         }
@@ -644,7 +644,10 @@ mod tests {
         assert!(e.contains("no shelf.toml in this scenes folder"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
         let e = Plan::new(&opt).unwrap_err().to_string();
-        assert!(e.ends_with("no such scenes folder"), "{e}");
+        assert!(
+            e.contains(": no such scenes folder (the study reads z-letter.toml"),
+            "{e}"
+        );
     }
 
     /// Cells as the paper lays them out; a capture serves every cell that needs it (Fig. 4 and the
