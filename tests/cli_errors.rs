@@ -285,7 +285,7 @@ fn nonsense_parameters() {
         ),
         (
             &["--method", "pf", "--slab-thickness", "0.02"],
-            "a slab does not apply to pf without a time offset of 'slab'",
+            "slab parameters are read only by cdt and by t-offset 'slab'; pf would ignore them",
         ),
         (&["--t-offset", "4m"], "t-offset '4m': expected metres"),
     ] {

@@ -38,7 +38,8 @@ QUIET_MONITORS = {
 
 def local_cluster(monitors=QUIET_MONITORS, **kwargs):
     """A LocalCluster of single-threaded worker processes for murk's tasks, with Dask's monitors
-    set by ``monitors`` (slowed down by default; ``{}`` keeps Dask's own settings).
+    set by ``monitors`` (slowed down by default; ``{}`` keeps Dask's own settings). Its workers
+    ignore Ctrl-C, which the client handles (:func:`render`).
 
     Dask's nannies set ``MALLOC_TRIM_THRESHOLD_`` in their workers to hand freed Python memory back
     to the system; any fixed threshold also turns off glibc's adaptive mmap threshold, so the
@@ -49,7 +50,8 @@ def local_cluster(monitors=QUIET_MONITORS, **kwargs):
 
     config = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None, **monitors}
     with dask.config.set(config):
-        return LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None, **kwargs)
+        return LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None,
+                            preload=["murk._worker"], **kwargs)
 
 
 def render_shard(
@@ -71,48 +73,76 @@ def render_shard(
     """One Dask task: renders shard ``(i, n)`` of ``scene`` (of the sweep over ``albedos`` when
     given) into the checkpoint ``part``, which holds every unit of the shard when this returns (at
     once if it already did; an interrupted task's part resumes); returns ``part``. ``progress`` as
-    for ``murk.render``. ``stop``: a file whose appearance ends the render after its next finished
-    unit, with the units done so far in ``part`` (``render`` creates one on Ctrl-C, so that its
-    tasks end by themselves instead of being killed with their unsaved units)."""
+    for ``murk.render``. ``stop``: a file whose appearance ends the render after its unit in flight;
+    ``part`` then holds the units done so far and is returned incomplete (``assemble`` says so), not
+    raised as an error that Dask would log and retry. ``render`` creates one on Ctrl-C, so that its
+    tasks end by themselves instead of being killed with their unsaved units."""
     part = os.fspath(part)
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid,
                                    bins=bins, checkpoint=part, checkpoint_every=checkpoint_every,
                                    albedos=albedos)
-    report = murk._progress(progress, "shard")
-    if stop is not None:
-        report = _stoppable(report, os.fspath(stop))
     try:
-        murk._murk.render_part(path, args, threads, report)
+        murk._murk.render_part(path, args, threads,
+                               _stoppable(murk._progress(progress, "shard"), stop))
     except _Stopped:
         pass
     return part
 
 
 class _Stopped(Exception):
-    """Raised from a shard's progress calls when its stop file appears: the renderer then ends
-    through its stop flag, which appends its finished units to the checkpoint."""
+    """Raised from a task's progress calls once its stop file exists."""
 
 
-def _stoppable(report, stop: str):
+def _stoppable(progress, stop):
+    """``progress`` (a callable or None) that raises :class:`_Stopped` once the file ``stop``
+    exists; the renderer then ends through its stop flag, which keeps its finished units. ``stop``
+    None: ``progress`` itself."""
+    if stop is None:
+        return progress
+    stop = os.fspath(stop)
+
     def update(done, total):
         if os.path.exists(stop):
             raise _Stopped()
-        if report is not None:
-            report(done, total)
+        if progress is not None:
+            progress(done, total)
 
     return update
 
 
-# How long a Ctrl-C'd render waits for its tasks to save their finished units and end.
+# How long a Ctrl-C'd run waits for its tasks to save their finished units and end.
 STOP_GRACE_S = 30.0
 
 
-def _wait(futures):
-    """Returns once every task has ended or one has failed. Polling here rather than in
-    ``client.gather`` lets a Ctrl-C land in this thread and not in Dask's event loop (which then
-    prints the gather's abandoned tasks)."""
-    while not all(f.done() for f in futures) and not any(f.status == "error" for f in futures):
-        time.sleep(0.1)
+def _stop_file(folder) -> str:
+    """A fresh stop file's path in ``folder`` (not created)."""
+    return os.path.abspath(os.path.join(os.fspath(folder), f"murk-stop-{uuid.uuid4().hex}"))
+
+
+def _gather(client, futures, stop: str):
+    """``client.gather(futures)`` for tasks that watch the file ``stop``. On Ctrl-C it creates the
+    file, waits up to ``STOP_GRACE_S`` for the tasks to save their work and end (a second Ctrl-C
+    stops waiting), cancels those still queued or running, and raises ``KeyboardInterrupt``. The
+    waiting polls here rather than in ``client.gather``, so that a Ctrl-C lands in this thread and
+    not in Dask's event loop, which would print the gather's abandoned tasks."""
+    try:
+        while not all(f.done() for f in futures) and not any(f.status == "error" for f in futures):
+            time.sleep(0.1)
+    except KeyboardInterrupt:
+        open(stop, "w").close()
+        deadline = time.monotonic() + STOP_GRACE_S
+        while not all(f.done() for f in futures) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        client.cancel([f for f in futures if not f.done()])
+        raise
+    return client.gather(futures)
+
+
+def _remove_stop_file(futures, stop: str):
+    """Removes ``stop`` once no task can still be watching it (a task running on past the grace
+    period must still see it)."""
+    if os.path.exists(stop) and all(f.done() for f in futures):
+        os.remove(stop)
 
 
 def assemble(scene, parts, *, spp=None, seed=0, set=None, grid=None, bins=None, albedos=None):
@@ -203,7 +233,8 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
     tmp = workdir is None
     workdir = tempfile.mkdtemp(prefix="murk-dask-") if tmp else os.fspath(workdir)
     os.makedirs(workdir, exist_ok=True)
-    stop = os.path.abspath(os.path.join(workdir, f"stop-{uuid.uuid4().hex}"))
+    stop = _stop_file(workdir)
+    futures = []
     try:
         futures = [
             client.submit(render_shard, scene, (i, shards),
@@ -213,16 +244,7 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
                           retries=retries, pure=False)
             for i in range(shards)
         ]
-        try:
-            _wait(futures)
-        except KeyboardInterrupt:
-            # The tasks save their finished units and end; a second Ctrl-C stops waiting for them.
-            open(stop, "w").close()
-            deadline = time.monotonic() + STOP_GRACE_S
-            while not all(f.done() for f in futures) and time.monotonic() < deadline:
-                time.sleep(0.1)
-            raise
-        parts = client.gather(futures)
+        parts = _gather(client, futures, stop)
         caps = _assemble_all(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins,
                              albedos=albedos)
         if out is not None:
@@ -230,8 +252,7 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
                 murk.write_capture(path, cap)
         return caps if albedos is not None else caps[0]
     finally:
-        if os.path.exists(stop):
-            os.remove(stop)
+        _remove_stop_file(futures, stop)
         if own:
             client.close()
             cluster.close()

@@ -61,18 +61,25 @@ def pending(tasks: Sequence[dict]) -> List[dict]:
     return [t for t in tasks if not there(t["outs"]) and not there(t["capture_outs"])]
 
 
-def render_task(task: dict, threads=None) -> str:
+def render_task(task: dict, threads=None, stop=None) -> str:
     """One Dask task: the study's render ``task`` as its ``murk render`` command runs it, into the
     files ``task["outs"]`` (kept if already there), resuming from ``out + ".ckpt"``; returns
-    ``task["out"]``."""
+    ``task["out"]``. ``stop``: as for ``murk.dask.render_shard``: once that file exists the render
+    ends after its unit in flight, its finished units in the checkpoint and ``outs`` not written."""
+    from .dask import _stoppable, _Stopped
+
     out = os.fspath(task["out"])
     if not all(os.path.exists(p) for p in task["outs"]):
         kw = dict(spp=task["spp"], seed=task["seed"], shard=task["shard"], set=task["set"],
-                  checkpoint=out + ".ckpt", out=out, threads=threads)
-        if task["albedos"]:
-            murk.render_albedos(task["scene"], task["albedos"], **kw)
-        else:
-            murk.render(task["scene"], **kw)
+                  checkpoint=out + ".ckpt", out=out, threads=threads,
+                  progress=_stoppable(None, stop))
+        try:
+            if task["albedos"]:
+                murk.render_albedos(task["scene"], task["albedos"], **kw)
+            else:
+                murk.render(task["scene"], **kw)
+        except _Stopped:
+            pass
     return out
 
 
@@ -83,7 +90,7 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
     Returns index.html's path, or the list of rendered task outputs when ``finish`` is False."""
     from dask.distributed import Client
 
-    from .dask import local_cluster
+    from .dask import _gather, _remove_stop_file, _stop_file, local_cluster
 
     opts = dict(scale=scale, only=only, cells=cells, seeds=seeds, shards=shards, spp=spp,
                 scenes=os.path.abspath(os.fspath(scenes)))
@@ -93,14 +100,17 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
     if own:
         cluster = local_cluster()
         client = Client(cluster)
+    stop = _stop_file(out)
+    futures = []
     try:
         futures = [
-            client.submit(render_task, t, threads=threads, retries=3, pure=False,
+            client.submit(render_task, t, threads=threads, stop=stop, retries=3, pure=False,
                           key=f"murk-render-{t['id']}")
             for t in todo
         ]
-        done = client.gather(futures)
+        done = _gather(client, futures, stop)
     finally:
+        _remove_stop_file(futures, stop)
         if own:
             client.close()
             cluster.close()

@@ -65,6 +65,12 @@ impl Args {
             (None, None) => None,
         };
         let compensation = match self.compensate.as_deref() {
+            // As the CLI's --mu-t and --albedo require --compensate: alone they would be ignored.
+            None if self.mu_t.is_some() || self.albedo.is_some() => {
+                return Err(Error::param(
+                    "mu_t and albedo are read by a compensation only; give compensate too",
+                ))
+            }
             None => Compensation::None,
             Some(c) => {
                 let comp = Compensation::named(c, self.mu_t.unwrap_or(0.0), self.albedo)?;

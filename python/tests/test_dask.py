@@ -118,7 +118,8 @@ def test_an_interrupted_shard_task_resumes_its_part(tmp_path):
     # A complete part is not rendered again.
     again = []
     murk.dask.render_shard(str(Z), (0, 2), part, progress=lambda d, t: again.append((d, t)), **kw)
-    assert again == [calls[-1]]
+    # Repeated while a complete part is read back (progress calls come at least every 0.5 s).
+    assert set(again) == {calls[-1]}
 
 
 def test_a_part_of_another_render_is_refused(client, tmp_path):
@@ -130,6 +131,8 @@ def test_a_part_of_another_render_is_refused(client, tmp_path):
         murk.dask.assemble(Z, [part], grid=4, spp=8, seed=3)
 
 
+@pytest.mark.skipif((os.cpu_count() or 1) < 2,
+                    reason="needs two cores: the LocalCluster runs both shards at once on two workers")
 def test_ctrl_c_keeps_the_finished_units_quietly_and_a_rerun_completes_them(tmp_path):
     # About 7 s per shard on one core, in two units (8 × 8 laser points each) of about 3.5 s.
     kw = dict(grid=16, spp=4096, seed=2)
@@ -146,7 +149,10 @@ if __name__ == "__main__":
     except KeyboardInterrupt:
         sys.exit(3)
 """)
-    p = subprocess.Popen([sys.executable, str(script)], stderr=subprocess.PIPE, text=True)
+    # Its own process group, which the Ctrl-C reaches as a terminal's would: the client and the
+    # LocalCluster's workers alike.
+    p = subprocess.Popen([sys.executable, str(script)], stderr=subprocess.PIPE, text=True,
+                         start_new_session=True)
     try:
         parts = [work / "part0.ckpt", work / "part1.ckpt"]
         deadline = time.time() + 60
@@ -155,23 +161,23 @@ if __name__ == "__main__":
             time.sleep(0.05)
         time.sleep(1.5)
         t0 = time.time()
-        p.send_signal(signal.SIGINT)
+        os.killpg(p.pid, signal.SIGINT)
         _, err = p.communicate(timeout=60)
         stopped_s = time.time() - t0
     finally:
-        p.kill()
+        try:
+            os.killpg(p.pid, signal.SIGKILL)  # what a failed test leaves must not outlive it
+        except ProcessLookupError:
+            pass
         p.wait()
     assert p.returncode == 3, err
     # Each task ends after its unit in flight; none is killed, and Dask prints nothing.
     assert stopped_s < 10, stopped_s
     assert err.strip() == "", err
     assert sorted(os.listdir(work)) == ["part0.ckpt", "part1.ckpt"], "the stop file was left behind"
-    with pytest.raises(murk.FormatError, match=r"part 0/2 is incomplete: (\d+) of"):
+    with pytest.raises(murk.FormatError, match=r"part 0/2 is incomplete: \d+ of") as e:
         murk.dask.assemble(Z, [str(f) for f in parts], **kw)
-    try:
-        murk.dask.assemble(Z, [str(f) for f in parts], **kw)
-    except murk.FormatError as e:
-        saved = int(re.search(r"incomplete: (\d+) of", str(e)).group(1))
+    saved = int(re.search(r"incomplete: (\d+) of", str(e.value)).group(1))
     assert saved >= 1, "no finished unit was saved"
 
     cap = murk.dask.render(Z, shards=2, workdir=work, **kw)

@@ -60,6 +60,18 @@ def test_bad_parameters(cap, kw):
     one_line(e)
 
 
+@pytest.mark.parametrize("kw, needle", [
+    (dict(albedo=0.5), "give compensate too"),
+    (dict(mu_t=1.0), "give compensate too"),
+    (dict(compensate="ballistic", mu_t=1.0, albedo=0.5), "'ballistic' does not read an albedo"),
+    (dict(slab_thickness=0.02), "slab parameters are read only by cdt"),
+])
+def test_knobs_that_would_be_ignored_are_refused(cap, kw, needle):
+    with pytest.raises(murk.InputError) as e:
+        murk.reconstruct(cap, volume=VOL, **kw)
+    assert needle in one_line(e)
+
+
 def test_confocal_methods_refuse_a_laser_grid(cap):
     with pytest.raises(murk.Error) as e:
         murk.reconstruct(cap, "fk")

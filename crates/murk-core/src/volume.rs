@@ -119,7 +119,7 @@ impl Volume {
             // Voxels that all but coincide (1e-12 m apart) repeat one value: a mistyped unit, not a volume.
             let span = (a.end - a.start).abs();
             if a.n > 1 && span < limits.min_bin_width_m {
-                return Err(Error::Limits(format!(
+                return Err(Error::param(format!(
                     "the volume's {name} axis spans {} m over {} voxels; murk accepts axes of several voxels spanning at least {} m",
                     crate::short(span),
                     a.n,

@@ -220,14 +220,7 @@ impl TOffset {
     /// other than the default that neither `method` (cdt) nor the offset reads is refused, so that it
     /// cannot look applied.
     pub fn parse(text: Option<&str>, o: &Options, method: &Method) -> Result<TOffset> {
-        let slab_read = text == Some("slab") || matches!(method, Method::Cdt(_));
-        if !slab_read && o.slab != SlabParams::default() {
-            return Err(Error::param(format!(
-                "a slab does not apply to {} without a time offset of 'slab', which would ignore it (it applies to cdt and to t-offset slab)",
-                method.name()
-            )));
-        }
-        Ok(match text {
+        let offset = match text {
             None => TOffset::None,
             Some("slab") => TOffset::Slab(o.slab),
             Some(s) => match s.parse::<f64>() {
@@ -238,7 +231,15 @@ impl TOffset {
                     )))
                 }
             },
-        })
+        };
+        let slab_read = matches!(offset, TOffset::Slab(_)) || matches!(method, Method::Cdt(_));
+        if !slab_read && o.slab != SlabParams::default() {
+            return Err(Error::param(format!(
+                "slab parameters are read only by cdt and by t-offset 'slab'; {} would ignore them",
+                method.name()
+            )));
+        }
+        Ok(offset)
     }
 }
 

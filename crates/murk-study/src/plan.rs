@@ -397,14 +397,14 @@ impl Plan {
                 opt.cells
             )));
         }
-        // Before anything is written, so that a mistyped folder leaves no plan behind; only the
-        // scenes the chosen cells render.
+        // Before anything is written, so that a mistyped folder leaves no plan behind.
         if !opt.scenes_dir.is_dir() {
             return Err(Error::param(format!(
                 "{}: no such scenes folder (the study reads z-letter.toml and shelf.toml from it; murk's own are in its repository's scenes/)",
                 opt.scenes_dir.display()
             )));
         }
+        // Only the scenes the chosen cells render.
         for scene in [SceneKind::ZLetter, SceneKind::Shelf] {
             let used = cells.iter().any(|(.., k, _, _)| *k == scene);
             if used && !opt.scenes_dir.join(scene.file()).is_file() {
