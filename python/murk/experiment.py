@@ -150,6 +150,10 @@ def main(argv=None) -> int:
     except murk.Error as e:
         print(f"murk: {e}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print(f"murk: interrupted; the finished renders and units are kept in {a.out}: the same "
+              "command resumes them", file=sys.stderr)
+        return 130
     print(r if isinstance(r, str) else f"rendered {len(r)} tasks into {a.out}")
     return 0
 

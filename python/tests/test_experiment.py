@@ -1,6 +1,8 @@
 import os
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -54,6 +56,51 @@ def test_a_sweep_task_on_dask_writes_the_cli_captures(tmp_path):
         name = os.path.basename(p)
         assert open(p, "rb").read() == (tmp_path / "cli" / "renders" / name).read_bytes()
     assert murk.experiment.pending(murk.experiment.plan(tmp_path / "dask", **args)) == []
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores for two render tasks at once")
+def test_ctrl_c_keeps_the_studys_unfinished_renders_and_the_same_command_resumes(tmp_path):
+    out = tmp_path / "study"
+    # Fig. 3b at the quick scale: three rows of sweeps, several seconds each on one core.
+    args = ["paper", "--out", str(out), "--only", "fig3b", "--scenes", str(SCENES), "--render-only"]
+    script = tmp_path / "run.py"
+    # A process started in the background inherits SIGINT ignored; a terminal's shell does not.
+    script.write_text("""
+import signal, sys, murk.experiment
+if __name__ == "__main__":
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    sys.exit(murk.experiment.main(sys.argv[1:]))
+""")
+    p = subprocess.Popen([sys.executable, str(script), *args], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        renders = out / "renders"
+        deadline = time.time() + 60
+        while not (renders.exists() and any(f.suffix == ".ckpt" for f in renders.iterdir())):
+            assert time.time() < deadline and p.poll() is None, "no render started"
+            time.sleep(0.05)
+        time.sleep(1.0)
+        t0 = time.time()
+        os.killpg(p.pid, signal.SIGINT)  # as a terminal does: the client and its workers
+        _, err = p.communicate(timeout=60)
+        stopped_s = time.time() - t0
+    finally:
+        try:
+            os.killpg(p.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        p.wait()
+    assert p.returncode == 130, err
+    assert err.startswith("murk: interrupted;") and err.count("\n") == 1, err
+    assert stopped_s < 10, stopped_s
+    assert not [f for f in os.listdir(out) if f.startswith("murk-stop-")]
+    assert [f for f in os.listdir(renders) if f.endswith(".ckpt")], "nothing unfinished was kept"
+    r = subprocess.run([sys.executable, "-m", "murk.experiment", *args], capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stderr
+    assert not [f for f in os.listdir(renders) if f.endswith(".ckpt")]
+    tasks = murk.experiment.plan(out, only=["fig3b"], scenes=SCENES)
+    assert murk.experiment.pending(tasks) == []
 
 
 def test_bad_study_arguments(tmp_path):
