@@ -122,9 +122,10 @@ def _stop_file(folder) -> str:
 def _gather(client, futures, stop: str):
     """``client.gather(futures)`` for tasks that watch the file ``stop``. On Ctrl-C it creates the
     file, waits up to ``STOP_GRACE_S`` for the tasks to save their work and end (a second Ctrl-C
-    stops waiting), cancels those still queued or running, and raises ``KeyboardInterrupt``. The
-    waiting polls here rather than in ``client.gather``, so that a Ctrl-C lands in this thread and
-    not in Dask's event loop, which would print the gather's abandoned tasks."""
+    stops waiting), cancels those still queued or running, and raises ``KeyboardInterrupt``; the
+    file is removed only if every task ended (cancelling does not stop a running one, which must
+    still see it). The waiting polls here rather than in ``client.gather``, so that a Ctrl-C lands
+    in this thread and not in Dask's event loop, which would print the gather's abandoned tasks."""
     try:
         while not all(f.done() for f in futures) and not any(f.status == "error" for f in futures):
             time.sleep(0.1)
@@ -133,16 +134,12 @@ def _gather(client, futures, stop: str):
         deadline = time.monotonic() + STOP_GRACE_S
         while not all(f.done() for f in futures) and time.monotonic() < deadline:
             time.sleep(0.1)
-        client.cancel([f for f in futures if not f.done()])
+        left = [f for f in futures if not f.done()]
+        client.cancel(left)
+        if not left:
+            os.remove(stop)
         raise
     return client.gather(futures)
-
-
-def _remove_stop_file(futures, stop: str):
-    """Removes ``stop`` once no task can still be watching it (a task running on past the grace
-    period must still see it)."""
-    if os.path.exists(stop) and all(f.done() for f in futures):
-        os.remove(stop)
 
 
 def assemble(scene, parts, *, spp=None, seed=0, set=None, grid=None, bins=None, albedos=None):
@@ -234,7 +231,6 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
     workdir = tempfile.mkdtemp(prefix="murk-dask-") if tmp else os.fspath(workdir)
     os.makedirs(workdir, exist_ok=True)
     stop = _stop_file(workdir)
-    futures = []
     try:
         futures = [
             client.submit(render_shard, scene, (i, shards),
@@ -252,7 +248,6 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
                 murk.write_capture(path, cap)
         return caps if albedos is not None else caps[0]
     finally:
-        _remove_stop_file(futures, stop)
         if own:
             client.close()
             cluster.close()

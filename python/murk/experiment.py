@@ -90,7 +90,7 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
     Returns index.html's path, or the list of rendered task outputs when ``finish`` is False."""
     from dask.distributed import Client
 
-    from .dask import _gather, _remove_stop_file, _stop_file, local_cluster
+    from .dask import _gather, _stop_file, local_cluster
 
     opts = dict(scale=scale, only=only, cells=cells, seeds=seeds, shards=shards, spp=spp,
                 scenes=os.path.abspath(os.fspath(scenes)))
@@ -101,7 +101,6 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
         cluster = local_cluster()
         client = Client(cluster)
     stop = _stop_file(out)
-    futures = []
     try:
         futures = [
             client.submit(render_task, t, threads=threads, stop=stop, retries=3, pure=False,
@@ -110,7 +109,6 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
         ]
         done = _gather(client, futures, stop)
     finally:
-        _remove_stop_file(futures, stop)
         if own:
             client.close()
             cluster.close()
