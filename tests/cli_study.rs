@@ -107,6 +107,10 @@ fn bad_options_fail_on_one_line() {
             vec!["--scenes", "/nonexistent"],
             "/nonexistent: no such scenes folder",
         ),
+        (
+            vec!["--list-tasks", "--threads", "2"],
+            "'--list-tasks' cannot be used with '--threads <THREADS>'",
+        ),
     ] {
         let mut a = vec!["experiment", "paper", "--out", out];
         a.extend(args);

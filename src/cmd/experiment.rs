@@ -61,8 +61,8 @@ pub struct ExperimentArgs {
     /// Print one `murk render` command per task (for any executor) and exit.
     #[arg(long)]
     pub list_tasks: bool,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = crate::cmd::parse_threads)]
+    /// Worker threads (default: all cores). The commands of --list-tasks leave threads to their executor.
+    #[arg(long, value_parser = crate::cmd::parse_threads, conflicts_with = "list_tasks")]
     pub threads: Option<usize>,
 }
 
