@@ -295,6 +295,19 @@ fn read_points(
             )))
         }
     };
+    // The layout comes from the shape; a format y-tal could not even name marks a damaged or foreign file.
+    let fmt_name = format!("{side}_grid_format");
+    if let Ok(fds) = h5::dataset(path, file, &fmt_name) {
+        let f = h5::read_enum_name(path, &fds, &fmt_name)?;
+        if !GRID_FORMATS
+            .iter()
+            .any(|(n, v)| *n == f || v.to_string() == f)
+        {
+            return Err(bad(format!(
+                "'{fmt_name}' is {f}, not a grid format (UNKNOWN = 0, N_3 = 1, X_Y_3 = 2)"
+            )));
+        }
+    }
     let points: Vec<DVec3> = xyz
         .chunks_exact(3)
         .map(|p| DVec3::new(p[0], p[1], p[2]))
@@ -712,6 +725,50 @@ pub(crate) mod tests {
             e.contains("H has shape [4, 2, 3]") && e.contains("bad.hdf5"),
             "{e}"
         );
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// A grid format outside y-tal's enum, stored as a plain integer, is named; a known one passes.
+    #[test]
+    fn unknown_grid_formats_are_reported() {
+        let dir = tmpdir("gridfmt");
+        let p = dir.join("fmt.hdf5");
+        for (code, ok) in [(2, true), (9, false)] {
+            let mut fb = FileBuilder::new();
+            fb.create_dataset("H")
+                .with_shape(&[4, 2, 2])
+                .with_f32_data(&[1.0; 16]);
+            let ht = enum_type_for_test(&H_FORMATS);
+            fb.create_dataset("H_format").with_enum_i32_data(ht, &[1]);
+            fb.create_dataset("sensor_grid_xyz")
+                .with_shape(&[2, 2, 3])
+                .with_f32_data(&[0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0]);
+            fb.create_dataset("sensor_grid_format")
+                .with_shape(&[1])
+                .with_i32_data(&[code]);
+            fb.create_dataset("laser_grid_xyz")
+                .with_shape(&[1, 3])
+                .with_f32_data(&[0.5, 0.5, 0.0]);
+            fb.create_dataset("delta_t")
+                .with_shape(&[])
+                .with_f32_data(&[0.01]);
+            fb.create_dataset("t_start")
+                .with_shape(&[])
+                .with_f32_data(&[0.0]);
+            fb.write(&p).unwrap();
+            match read_capture(&p) {
+                Ok(_) => assert!(ok, "format {code} was accepted"),
+                Err(e) => {
+                    let e = e.to_string();
+                    assert!(!ok, "format {code}: {e}");
+                    assert!(
+                        e.contains("'sensor_grid_format' is 9, not a grid format")
+                            && e.contains("fmt.hdf5"),
+                        "{e}"
+                    );
+                }
+            }
+        }
         std::fs::remove_dir_all(dir).ok();
     }
 
