@@ -701,24 +701,11 @@ pub(crate) mod tests {
     fn inconsistent_shapes_are_reported() {
         let dir = tmpdir("shape");
         let p = dir.join("bad.hdf5");
-        let mut fb = FileBuilder::new();
-        fb.create_dataset("H")
-            .with_shape(&[4, 2, 3])
-            .with_f32_data(&[0.0; 24]);
-        let ht = enum_type_for_test(&H_FORMATS);
-        fb.create_dataset("H_format").with_enum_i32_data(ht, &[1]);
-        fb.create_dataset("sensor_grid_xyz")
-            .with_shape(&[3, 3, 3])
-            .with_f32_data(&[0.0; 27]);
-        fb.create_dataset("laser_grid_xyz")
-            .with_shape(&[1, 1, 3])
-            .with_f32_data(&[0.0; 3]);
-        fb.create_dataset("delta_t")
-            .with_shape(&[])
-            .with_f32_data(&[0.01]);
-        fb.create_dataset("t_start")
-            .with_shape(&[])
-            .with_f32_data(&[0.0]);
+        let fb = field_by_field(
+            (&[4, 2, 3], &[0.0; 24]),
+            (&[3, 3, 3], &[0.0; 27]),
+            (&[1, 1, 3], &[0.0; 3]),
+        );
         fb.write(&p).unwrap();
         let e = err_of(&p);
         assert!(
@@ -734,27 +721,17 @@ pub(crate) mod tests {
         let dir = tmpdir("gridfmt");
         let p = dir.join("fmt.hdf5");
         for (code, ok) in [(2, true), (9, false)] {
-            let mut fb = FileBuilder::new();
-            fb.create_dataset("H")
-                .with_shape(&[4, 2, 2])
-                .with_f32_data(&[1.0; 16]);
-            let ht = enum_type_for_test(&H_FORMATS);
-            fb.create_dataset("H_format").with_enum_i32_data(ht, &[1]);
-            fb.create_dataset("sensor_grid_xyz")
-                .with_shape(&[2, 2, 3])
-                .with_f32_data(&[0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0]);
+            let mut fb = field_by_field(
+                (&[4, 2, 2], &[1.0; 16]),
+                (
+                    &[2, 2, 3],
+                    &[0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0],
+                ),
+                (&[1, 3], &[0.5, 0.5, 0.0]),
+            );
             fb.create_dataset("sensor_grid_format")
                 .with_shape(&[1])
                 .with_i32_data(&[code]);
-            fb.create_dataset("laser_grid_xyz")
-                .with_shape(&[1, 3])
-                .with_f32_data(&[0.5, 0.5, 0.0]);
-            fb.create_dataset("delta_t")
-                .with_shape(&[])
-                .with_f32_data(&[0.01]);
-            fb.create_dataset("t_start")
-                .with_shape(&[])
-                .with_f32_data(&[0.0]);
             fb.write(&p).unwrap();
             match read_capture(&p) {
                 Ok(_) => assert!(ok, "format {code} was accepted"),
@@ -770,6 +747,32 @@ pub(crate) mod tests {
             }
         }
         std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// A time-domain capture (H_format T_Sx_Sy, 1 cm bins from 0) written dataset by dataset from
+    /// (shape, values) of H and of the sensor and laser grids, as a foreign writer might.
+    fn field_by_field(
+        h: (&[u64], &[f32]),
+        sensor: (&[u64], &[f32]),
+        laser: (&[u64], &[f32]),
+    ) -> FileBuilder {
+        let mut fb = FileBuilder::new();
+        fb.create_dataset("H").with_shape(h.0).with_f32_data(h.1);
+        let ht = enum_type_for_test(&H_FORMATS);
+        fb.create_dataset("H_format").with_enum_i32_data(ht, &[1]);
+        fb.create_dataset("sensor_grid_xyz")
+            .with_shape(sensor.0)
+            .with_f32_data(sensor.1);
+        fb.create_dataset("laser_grid_xyz")
+            .with_shape(laser.0)
+            .with_f32_data(laser.1);
+        fb.create_dataset("delta_t")
+            .with_shape(&[])
+            .with_f32_data(&[0.01]);
+        fb.create_dataset("t_start")
+            .with_shape(&[])
+            .with_f32_data(&[0.0]);
+        fb
     }
 
     fn enum_type_for_test(m: &[(&str, i32)]) -> hdf5_pure::Datatype {
