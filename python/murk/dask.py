@@ -219,6 +219,10 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
     scene = os.fspath(scene)
     if "\n" not in scene:
         scene = os.path.abspath(scene)
+    # Here once, before a cluster starts: in the tasks each refusal would be logged and retried.
+    path, args = murk._render_args(scene, spp=spp, seed=seed, shard=(0, shards), set=set,
+                                   grid=grid, bins=bins, albedos=albedos)
+    murk._murk.check_render(path, args)
     own = client is None
     if own:
         cores = os.cpu_count() or 1

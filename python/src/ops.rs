@@ -181,6 +181,17 @@ pub fn render_part(
     })
 }
 
+/// Refuses, without rendering, what `render_part` would refuse in every task: a bad scene or
+/// override, spp out of range, more shards than work units.
+#[pyfunction]
+#[pyo3(signature = (scene, args))]
+pub fn check_render(py: Python<'_>, scene: PathBuf, args: RenderArgs) -> PyResult<()> {
+    compute(py, None, None, |_| {
+        let scene = args.scene(&scene)?;
+        args.plan(&scene)?.check(&args.options(&scene)?)
+    })
+}
+
 /// The captures an unsharded render gives (one, or one per albedo of a sweep), bit for bit, from
 /// the parts `render_part` completed (`parts[i]` holds shard i of `len(parts)`), for the same scene,
 /// overrides, spp, seed and albedos.

@@ -182,3 +182,12 @@ if __name__ == "__main__":
 
     cap = murk.dask.render(Z, shards=2, workdir=work, **kw)
     assert cap.H.tobytes() == murk.render(Z, **kw).H.tobytes()
+
+
+def test_a_render_the_tasks_would_refuse_is_refused_before_any_task():
+    # In the tasks each refusal would be logged by Dask and retried; here it is one exception,
+    # raised before a cluster starts.
+    with pytest.raises(murk.InputError, match=r"1 work units .* so at most 1 shards"):
+        murk.dask.render(Z, shards=4, grid=4, spp=8)
+    with pytest.raises(murk.FormatError, match=r"medium\.nope"):
+        murk.dask.render(Z, shards=2, grid=16, spp=8, set={"medium.nope": 1})

@@ -571,17 +571,9 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// Renders the units of `opt.shard` that its checkpoint does not hold yet, into `h` when given.
-    /// A capture's checkpoint is deleted by its caller once the capture is written, so the units
-    /// left pending by the interval are appended only when the render stops early (to resume from) or
-    /// when there is no `h` (the checkpoint is then the result).
-    fn run(
-        &self,
-        opt: &RenderOptions,
-        progress: &(dyn Fn(usize, usize) + Sync),
-        stop: &AtomicBool,
-        mut h: Option<&mut [Capture]>,
-    ) -> Result<Option<Unflushed>> {
+    /// Refuses options this plan cannot render (spp out of range, a shard beyond its work units)
+    /// before any work: an executor checks them once rather than in every task.
+    pub fn check(&self, opt: &RenderOptions) -> Result<()> {
         if !(1..=MAX_SPP).contains(&opt.spp) {
             return Err(Error::param(format!(
                 "spp must be between 1 and {MAX_SPP}, got {}",
@@ -599,6 +591,21 @@ impl<'a> Plan<'a> {
                 )));
             }
         }
+        Ok(())
+    }
+
+    /// Renders the units of `opt.shard` that its checkpoint does not hold yet, into `h` when given.
+    /// A capture's checkpoint is deleted by its caller once the capture is written, so the units
+    /// left pending by the interval are appended only when the render stops early (to resume from) or
+    /// when there is no `h` (the checkpoint is then the result).
+    fn run(
+        &self,
+        opt: &RenderOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+        stop: &AtomicBool,
+        mut h: Option<&mut [Capture]>,
+    ) -> Result<Option<Unflushed>> {
+        self.check(opt)?;
         let units = self.shard_units(opt.shard);
         let total = units.len();
         let mut done = vec![false; self.n_units()];
