@@ -482,7 +482,39 @@ fn nonsense_parameters() {
         &["reconstruct", g, "--out", out, "--gate", "1e30"],
         &["gate '1e30'", "100000 m"],
     );
-    no_leftovers(&d, &["good.h5", "conf.h5"]);
+    // A window cut at the T's return: the end's trim would clear every voxel, a volume of zeros.
+    let cut = d.join("cut.h5");
+    let cut = cut.to_str().unwrap();
+    let (code, _, err) = murk(&[
+        "synth",
+        "--out",
+        cut,
+        "--kind",
+        "confocal",
+        "--wall-size",
+        "0.8",
+        "--grid",
+        "8",
+        "--bins",
+        "128",
+        "--bin-width",
+        "0.0096",
+        "--target",
+        "t:0.6",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    fails(
+        &["reconstruct", cut, "--out", out],
+        &[
+            "cut.h5",
+            "the window-end handling cleared every voxel",
+            "window-end keep",
+        ],
+    );
+    let (code, _, err) = murk(&["reconstruct", cut, "--out", out, "--window-end", "keep"]);
+    assert_eq!(code, 0, "{err}");
+    std::fs::remove_file(out).unwrap();
+    no_leftovers(&d, &["good.h5", "conf.h5", "cut.h5"]);
     std::fs::remove_dir_all(&d).ok();
 }
 

@@ -21,7 +21,13 @@ from . import _murk
 
 
 def _study(scale, only, cells, seeds, shards, spp, scenes) -> dict:
-    """The study's options as the extension takes them."""
+    """The study's options as the extension takes them. ``only`` may also be one comma-separated
+    string, as the CLI's flag takes it, and ``cells`` one label (a string is not read letter by
+    letter)."""
+    if isinstance(only, str):
+        only = [f for f in only.split(",") if f]
+    if isinstance(cells, str):
+        cells = [cells]
     return dict(scale=scale, only=list(only), cells=list(cells), seeds=seeds, shards=shards,
                 spp=spp, scenes=os.fspath(scenes))
 

@@ -249,11 +249,21 @@ pub fn write_capture(
     py: Python<'_>,
     path: PathBuf,
     capture: &Bound<'_, Capture>,
-    compression: u32,
+    compression: i64,
 ) -> PyResult<()> {
     let cap = &capture.get().cap;
+    // Any integer is taken, so that a negative or huge one is named here rather than as an overflow.
+    let level = u32::try_from(compression)
+        .ok()
+        .filter(|l| *l <= 9)
+        .ok_or_else(|| {
+            crate::error(
+                "InputError",
+                format!("compression must be 0 (none) to 9, got {compression}"),
+            )
+        })?;
     compute(py, None, None, |_| {
-        murk_io::write_capture_compressed(&path, cap, compression)
+        murk_io::write_capture_compressed(&path, cap, level)
     })
 }
 

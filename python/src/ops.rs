@@ -110,6 +110,29 @@ impl RenderArgs {
     }
 }
 
+/// The files a render of `args` writes, refused before any work if one cannot be written, is the
+/// scene file itself, or is the checkpoint (which is removed once the captures are written).
+fn checked_outputs(scene: &Path, args: &RenderArgs) -> murk_core::Result<Vec<PathBuf>> {
+    let outs = args.out.as_deref().map_or(Vec::new(), |out| {
+        murk_render::render_outputs(out, args.albedos.as_deref())
+    });
+    let file: Vec<&Path> = args.text.is_none().then_some(scene).into_iter().collect();
+    for out in &outs {
+        murk_io::check_h5_output(out, &file)?;
+        if let Some(c) = args
+            .checkpoint
+            .as_deref()
+            .filter(|c| murk_io::same_target(c, out))
+        {
+            return Err(murk_core::Error::param(format!(
+                "{}: the checkpoint and the output are the same file",
+                c.display()
+            )));
+        }
+    }
+    Ok(outs)
+}
+
 /// A Monte Carlo render of a scene, as `murk render` does it: one capture, or one per albedo of
 /// `args.albedos` (written to `out` as `murk render --albedos` names them); see `murk.render` and
 /// `murk.render_albedos`.
@@ -123,30 +146,7 @@ pub fn render(
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<Capture>> {
     let caps = compute(py, progress, threads, |t: &Ticker| {
-        let outs = args.out.as_deref().map_or(Vec::new(), |out| {
-            murk_render::render_outputs(out, args.albedos.as_deref())
-        });
-        // Before the render: an output that cannot be written, or that is the scene file itself.
-        let file: Vec<&Path> = args
-            .text
-            .is_none()
-            .then_some(scene.as_path())
-            .into_iter()
-            .collect();
-        for out in &outs {
-            murk_io::check_h5_output(out, &file)?;
-            // The checkpoint is removed once the captures are written: it must not be one of them.
-            if let Some(c) = args
-                .checkpoint
-                .as_deref()
-                .filter(|c| murk_io::same_target(c, out))
-            {
-                return Err(murk_core::Error::param(format!(
-                    "{}: the checkpoint and the output are the same file",
-                    c.display()
-                )));
-            }
-        }
+        let outs = checked_outputs(&scene, &args)?;
         let scene = args.scene(&scene)?;
         let caps = args.plan(&scene)?.render_stored(
             &args.options(&scene)?,
@@ -181,12 +181,14 @@ pub fn render_part(
     })
 }
 
-/// Refuses, without rendering, what `render_part` would refuse in every task: a bad scene or
-/// override, spp out of range, more shards than work units.
+/// Refuses, without rendering, what a sharded render would refuse only after its tasks: a bad
+/// scene or override, spp out of range, more shards than work units, an output `args.out` that
+/// cannot be written.
 #[pyfunction]
 #[pyo3(signature = (scene, args))]
 pub fn check_render(py: Python<'_>, scene: PathBuf, args: RenderArgs) -> PyResult<()> {
     compute(py, None, None, |_| {
+        checked_outputs(&scene, &args)?;
         let scene = args.scene(&scene)?;
         args.plan(&scene)?.check(&args.options(&scene)?)
     })

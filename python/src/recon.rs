@@ -64,21 +64,20 @@ impl Args {
             (None, Some(f)) => Some(Wavelength::WallFactor(f)),
             (None, None) => None,
         };
-        let compensation = match self.compensate.as_deref() {
-            // As the CLI's --mu-t and --albedo require --compensate: alone they would be ignored.
-            None if self.mu_t.is_some() || self.albedo.is_some() => {
+        // As the CLI's --mu-t and --albedo require --compensate: alone they would be ignored.
+        let compensation = match (self.compensate.as_deref().unwrap_or("none"), self.mu_t) {
+            ("none", None) if self.albedo.is_none() => Compensation::None,
+            ("none", _) => {
                 return Err(Error::param(
-                    "mu_t and albedo are read by a compensation only; give compensate too",
+                    "mu_t and albedo are read by a compensation (paper or ballistic) only; they would be ignored",
                 ))
             }
-            None => Compensation::None,
-            Some(c) => {
-                let comp = Compensation::named(c, self.mu_t.unwrap_or(0.0), self.albedo)?;
-                if !matches!(comp, Compensation::None) && self.mu_t.is_none() {
-                    return Err(Error::param("compensate needs mu_t"));
-                }
-                comp
+            (c, None) => {
+                // An unknown name is named first.
+                Compensation::named(c, 0.0, self.albedo)?;
+                return Err(Error::param("compensate needs mu_t"));
             }
+            (c, Some(mu_t)) => Compensation::named(c, mu_t, self.albedo)?,
         };
         let (thickness_m, mu_a_per_m, mu_s_prime_per_m, n) = self.slab;
         Ok(Options {

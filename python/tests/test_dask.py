@@ -191,3 +191,9 @@ def test_a_render_the_tasks_would_refuse_is_refused_before_any_task():
         murk.dask.render(Z, shards=4, grid=4, spp=8)
     with pytest.raises(murk.FormatError, match=r"medium\.nope"):
         murk.dask.render(Z, shards=2, grid=16, spp=8, set={"medium.nope": 1})
+    # An output that cannot be written: before, found only after every shard had rendered.
+    with pytest.raises(murk.InputError, match="the folder /nonexistent does not exist"):
+        murk.dask.render(Z, shards=2, grid=16, spp=8, out="/nonexistent/z.h5")
+    for bad in (0, -1, 1.5):
+        with pytest.raises(murk.InputError, match="shards must be a whole number"):
+            murk.dask.render(Z, shards=bad, grid=16, spp=8)

@@ -61,8 +61,9 @@ def test_bad_parameters(cap, kw):
 
 
 @pytest.mark.parametrize("kw, needle", [
-    (dict(albedo=0.5), "give compensate too"),
-    (dict(mu_t=1.0), "give compensate too"),
+    (dict(albedo=0.5), "they would be ignored"),
+    (dict(mu_t=1.0), "they would be ignored"),
+    (dict(compensate="none", mu_t=1.0), "they would be ignored"),
     (dict(compensate="ballistic", mu_t=1.0, albedo=0.5), "'ballistic' does not read an albedo"),
     (dict(slab_thickness=0.02), "slab parameters are read only by cdt"),
 ])
@@ -70,6 +71,13 @@ def test_knobs_that_would_be_ignored_are_refused(cap, kw, needle):
     with pytest.raises(murk.InputError) as e:
         murk.reconstruct(cap, volume=VOL, **kw)
     assert needle in one_line(e)
+
+
+@pytest.mark.parametrize("level", [-1, 10, 2**40])
+def test_a_compression_level_out_of_range_is_named(cap, tmp_path, level):
+    with pytest.raises(murk.InputError) as e:
+        murk.write_capture(tmp_path / "c.h5", cap, compression=level)
+    assert one_line(e) == f"compression must be 0 (none) to 9, got {level}"
 
 
 def test_confocal_methods_refuse_a_laser_grid(cap):

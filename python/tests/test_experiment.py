@@ -108,6 +108,11 @@ def test_bad_study_arguments(tmp_path):
         murk.experiment.plan(tmp_path, only=["fig9"], scenes=SCENES)
     with pytest.raises(murk.InputError):
         murk.experiment.plan(tmp_path, scale="huge", scenes=SCENES)
+    with pytest.raises(murk.InputError, match=r"--spp must be in 1\.\."):
+        murk.experiment.plan(tmp_path, spp=0, scenes=SCENES)
+    # One comma-separated string, as the CLI's --only takes it; one cell label, not its letters.
+    tasks = murk.experiment.plan(tmp_path, only="fig3a", cells="fig3a", spp=4, scenes=SCENES)
+    assert tasks == murk.experiment.plan(tmp_path, only=["fig3a"], spp=4, scenes=SCENES)
 
 
 def test_an_interrupted_study_keeps_its_finished_units(tmp_path):

@@ -236,12 +236,6 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     let cap = murk_io::read_capture(&a.file)?;
     let kind = cap.kind();
     let req = a.request(kind)?;
-    if a.volume.is_some() && req.method.own_grid() && !quiet {
-        eprintln!(
-            "murk: warning: --volume is ignored by {}: it reconstructs on the capture's scan grid",
-            a.method
-        );
-    }
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
     let out = pipeline::run(cap, &req, &bar).with_context(|| a.file.display().to_string())?;

@@ -359,6 +359,8 @@ pub struct Plan {
     /// The geometry the plan was made for, with the time offset applied.
     geometry: Capture,
     engine: Engine,
+    /// The warning for a volume that the method's own grid replaces.
+    ignored_volume: Option<String>,
 }
 
 impl Plan {
@@ -415,7 +417,16 @@ impl Plan {
             (Gate::At(p), _) => Some(p),
         };
         let engine = Engine::new(&geometry, m, volume.as_ref(), progress)?;
+        // Said with the result, so that the CLI and Python both report it.
+        let ignored_volume =
+            (matches!(req.volume, VolumeSpec::Given(_)) && m.own_grid()).then(|| {
+                format!(
+                    "the given volume is ignored by {}: it reconstructs on the capture's scan grid",
+                    m.name()
+                )
+            });
         Ok(Plan {
+            ignored_volume,
             offset_m,
             edge_m,
             open_m,
@@ -466,6 +477,28 @@ impl Plan {
             }));
         }
         end.trim(&cap, &out.volume, &mut out.intensity);
+        if let (true, Some(from_m)) = (out.intensity.iter().all(|&v| v == 0.0), end.trim_from_m) {
+            // The trim cleared what only the cut end of the window reaches: here, every voxel.
+            let short = murk_core::short;
+            let why = if from_m <= cap.time.start_m {
+                format!(
+                    "the window ({} to {} m) is shorter than its tapered end needs ({} m twice)",
+                    short(cap.time.start_m),
+                    short(cap.time.end_m()),
+                    short(end.taper_m)
+                )
+            } else {
+                format!(
+                    "no voxel is reached by a path shorter than {} m, where its tapered end begins",
+                    short(from_m)
+                )
+            };
+            return Err(Error::param(format!(
+                "the window-end handling cleared every voxel: the capture's window is cut while its signal is strong (the last 5 % of bins carry {:.0} % of the peak) and {why}; give a volume nearer the wall, a capture with a longer window, or window-end keep",
+                100.0 * end.level
+            )));
+        }
+        out.warnings.extend(self.ignored_volume.clone());
         out.warnings.extend(end.warning());
         out.warnings.extend(near_face_warning(&out, &gated));
         out.rows.extend(closing_rows(self.offset_m, &gated, &end));

@@ -809,11 +809,12 @@ fn a_plan_serves_every_capture_of_its_geometry() {
     );
     for (name, _) in Method::NAMES {
         let method = Method::from_name(name, a.kind(), &Options::default()).unwrap();
+        let volume = VolumeSpec::Given(Volume {
+            z: Axis::new(0.3, 0.7, 9),
+            ..aligned_volume()
+        });
         let req = Request {
-            volume: VolumeSpec::Given(Volume {
-                z: Axis::new(0.3, 0.7, 9),
-                ..aligned_volume()
-            }),
+            volume,
             ..Request::new(method)
         };
         let plan = Plan::new(&a, &req, &NoProgress).unwrap();
@@ -822,6 +823,16 @@ fn a_plan_serves_every_capture_of_its_geometry() {
             let fresh = crate::pipeline::run(cap.clone(), &req, &NoProgress).unwrap();
             assert_eq!(reused.intensity, fresh.intensity, "{name}");
             assert_eq!(reused.rows, fresh.rows, "{name}");
+            // lct, fk and cdt reconstruct on the scan's own grid and say that the volume is ignored.
+            assert_eq!(
+                reused
+                    .warnings
+                    .iter()
+                    .any(|w| w.contains("the given volume is ignored")),
+                method.own_grid(),
+                "{name}: {:?}",
+                reused.warnings
+            );
         }
         assert_eq!(method.name(), name);
         let mut later = a.clone();

@@ -306,6 +306,15 @@ impl Plan {
                 opt.seeds
             )));
         }
+        if let Some(spp) = opt
+            .spp
+            .filter(|s| !(1..=murk_core::Limits::MAX_SPP).contains(s))
+        {
+            return Err(Error::param(format!(
+                "--spp must be in 1..={}, got {spp}",
+                murk_core::Limits::MAX_SPP
+            )));
+        }
         if opt.shards == 0 || opt.shards > 1024 {
             return Err(Error::param(format!(
                 "--shards must be in 1..=1024, got {}",
