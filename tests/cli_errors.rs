@@ -702,6 +702,44 @@ fn sizes_beyond_memory() {
         ],
         &["z end", "1e30 m"],
     );
+    // Under an address-space limit (as a cluster's worker may run), the budget is that limit, not the
+    // machine's memory: a 4 GiB H (8 GiB with the written copy) is refused instead of aborting.
+    for args in [
+        vec![
+            "synth",
+            "--out",
+            out,
+            "--target",
+            "z:1",
+            "--grid",
+            "128",
+            "--bins",
+            "65536",
+            "--bin-width",
+            "0.001",
+        ],
+        vec![
+            "render", scene, "--out", out, "--grid", "128", "--bins", "65536", "--spp", "1",
+        ],
+    ] {
+        let run = Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 3000000 && exec \"$@\"")
+            .arg("sh")
+            .arg(env!("CARGO_BIN_EXE_murk"))
+            .args(&args)
+            .arg("--quiet")
+            .output()
+            .expect("run sh");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.trim_end().lines().count() == 1
+                && err.contains("H (and the copy a file write makes) of 16384 × 65536 values would take 8.0 GiB")
+                && err.contains("this process may use"),
+            "{args:?}: {err}"
+        );
+    }
     no_leftovers(&d, &["good.h5"]);
     std::fs::remove_dir_all(&d).ok();
 }

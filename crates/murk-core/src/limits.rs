@@ -11,7 +11,8 @@ pub struct Limits {
     /// Smallest time bin (m of path), and smallest span of a grid of wall points; 1e-7 m is 0.3 fs,
     /// finer than any streak camera.
     pub min_bin_width_m: f64,
-    /// Largest single buffer (bytes): the machine's physical memory, or `MURK_MAX_BYTES` when set.
+    /// Largest single buffer (bytes): the memory this process may use (physical memory, lowered by
+    /// a cgroup limit or an address-space rlimit), or `MURK_MAX_BYTES` when set.
     pub max_bytes: u64,
 }
 
@@ -66,7 +67,7 @@ impl Limits {
     pub fn get() -> Limits {
         let max_bytes = env_max_bytes()
             .and_then(|b| b.ok())
-            .unwrap_or_else(physical_memory_bytes);
+            .unwrap_or_else(memory_budget_bytes);
         Limits {
             max_length_m: 1e5,
             min_bin_width_m: 1e-7,
@@ -100,7 +101,7 @@ impl Limits {
         if bytes > self.max_bytes as u128 || n > usize::MAX as u128 {
             let shape: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
             return Err(Error::Limits(format!(
-                "{what} of {} values would take {}, more than this machine's {}",
+                "{what} of {} values would take {}, more than the {} this process may use",
                 shape.join(" × "),
                 human_bytes(bytes),
                 human_bytes(self.max_bytes as u128)
@@ -108,6 +109,45 @@ impl Limits {
         }
         Ok(n as usize)
     }
+}
+
+/// The memory this process may use: physical memory, lowered by a container's cgroup limit or an
+/// address-space rlimit (a cluster's workers often run under one, and an allocation beyond it
+/// aborts instead of failing). Read once.
+fn memory_budget_bytes() -> u64 {
+    static BUDGET: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    *BUDGET.get_or_init(|| {
+        #[allow(unused_mut)]
+        let mut budget = physical_memory_bytes();
+        #[cfg(target_os = "linux")]
+        {
+            // cgroup v2, then v1; "max" (no limit) does not parse and is skipped.
+            for f in [
+                "/sys/fs/cgroup/memory.max",
+                "/sys/fs/cgroup/memory/memory.limit_in_bytes",
+            ] {
+                if let Some(v) = std::fs::read_to_string(f)
+                    .ok()
+                    .and_then(|t| t.trim().parse::<u64>().ok())
+                {
+                    budget = budget.min(v);
+                }
+            }
+            let mut r = libc::rlimit {
+                rlim_cur: 0,
+                rlim_max: 0,
+            };
+            // SAFETY: getrlimit only writes the struct it is given.
+            if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } == 0
+                && r.rlim_cur != libc::RLIM_INFINITY
+            {
+                #[allow(clippy::unnecessary_cast)] // rlim_t is 32-bit on some Linux targets
+                let limit = r.rlim_cur as u64;
+                budget = budget.min(limit);
+            }
+        }
+        budget
+    })
 }
 
 /// Physical memory from the OS; 16 GiB where it cannot be read.

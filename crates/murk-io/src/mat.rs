@@ -7,7 +7,7 @@
 use crate::h5;
 use crate::mat5::MatValue;
 use crate::npy::fortran_to_c;
-use crate::tal::DEFAULT_READ_LIMIT_BYTES;
+use crate::tal::read_limit_bytes;
 use murk_core::{Error, Result};
 use std::path::Path;
 
@@ -54,12 +54,6 @@ fn missing_var(path: &Path, var: &str, present: &[String]) -> Error {
             }
         ),
     )
-}
-
-/// The largest f32 copy of an array murk reads: the file readers' limit or the memory budget,
-/// whichever is smaller.
-fn read_limit_bytes() -> u64 {
-    DEFAULT_READ_LIMIT_BYTES.min(murk_core::Limits::get().max_bytes)
 }
 
 /// An open file of named numeric arrays: MATLAB v5, MATLAB v7.3 or plain HDF5, or a `.npy` array

@@ -1,7 +1,7 @@
 //! NumPy `.npy` arrays (format versions 1–3): f32 writer, any-real-dtype reader.
 
 use crate::atomic::write_atomic;
-use crate::tal::DEFAULT_READ_LIMIT_BYTES;
+use crate::tal::read_limit_bytes;
 use murk_core::{Error, Result};
 use std::path::Path;
 
@@ -60,7 +60,7 @@ pub fn write_npy_f32(path: &Path, shape: &[usize], data: &[f32]) -> Result<()> {
 /// either byte order) as f32, returning its shape and values in C order (Fortran-order files are
 /// transposed).
 pub fn read_npy_f32(path: &Path) -> Result<(Vec<usize>, Vec<f32>)> {
-    read_npy_f32_with_limit(path, DEFAULT_READ_LIMIT_BYTES)
+    read_npy_f32_with_limit(path, read_limit_bytes())
 }
 
 /// As [`read_npy_f32`], refusing arrays whose f32 copy would exceed `max_bytes`.

@@ -67,9 +67,15 @@ pub const TAL_FIELDS: [&str; 15] = [
     "scene_info",
 ];
 
+/// The largest array murk reads from a file: the file readers' limit or the memory budget
+/// (`MURK_MAX_BYTES`, else physical memory), whichever is smaller.
+pub(crate) fn read_limit_bytes() -> u64 {
+    DEFAULT_READ_LIMIT_BYTES.min(murk_core::Limits::get().max_bytes)
+}
+
 /// Reads a y-tal HDF5 capture (see the module docs for the mapping), with the default size limit.
 pub fn read_capture(path: &Path) -> Result<Capture> {
-    read_capture_with_limit(path, DEFAULT_READ_LIMIT_BYTES)
+    read_capture_with_limit(path, read_limit_bytes())
 }
 
 /// As [`read_capture`], refusing any dataset whose declared size exceeds `max_bytes` before
@@ -184,22 +190,6 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
         return Err(bad("H has no time bins".to_string()));
     }
 
-    let (_, tal_h) = h5::read_real::<f32>(path, &h_ds, "H", max_bytes)?;
-    let n_hist = tal_h.len() / bins;
-    let mut h = Vec::new();
-    h.try_reserve_exact(tal_h.len()).map_err(|_| {
-        Error::Limits(format!(
-            "{}: cannot allocate {} MiB for H",
-            path.display(),
-            (tal_h.len() * 4) >> 20
-        ))
-    })?;
-    h.resize(tal_h.len(), 0.0);
-    // tal's [t][histogram] to murk's [histogram][t], blocked: an element-wise copy would stride
-    // through memory once per value.
-    transpose::transpose(&tal_h, &mut h, n_hist, bins);
-    drop(tal_h);
-
     let scalar = |k: &str| -> Result<f64> {
         if !has(k) {
             return Err(bad(format!("missing dataset '{k}'")));
@@ -254,7 +244,7 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
         String::new()
     };
 
-    let cap = Capture {
+    let mut cap = Capture {
         illum,
         sensor,
         laser_xyz: device("laser_xyz")?,
@@ -266,9 +256,27 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
         },
         t_accounts_first_and_last_bounces: t_accounts,
         pairing,
-        h,
+        h: Vec::new(),
         scene_info,
     };
+    // Before H is read: a few bytes declaring an absurd time window must not cost gigabytes first.
+    cap.validate_geometry().map_err(|e| bad(e.to_string()))?;
+    let (_, tal_h) = h5::read_real::<f32>(path, &h_ds, "H", max_bytes)?;
+    let n_hist = tal_h.len() / bins;
+    let mut h = Vec::new();
+    h.try_reserve_exact(tal_h.len()).map_err(|_| {
+        Error::Limits(format!(
+            "{}: cannot allocate {} MiB for H",
+            path.display(),
+            (tal_h.len() * 4) >> 20
+        ))
+    })?;
+    h.resize(tal_h.len(), 0.0);
+    // tal's [t][histogram] to murk's [histogram][t], blocked: an element-wise copy would stride
+    // through memory once per value.
+    transpose::transpose(&tal_h, &mut h, n_hist, bins);
+    drop(tal_h);
+    cap.h = h;
     cap.validate().map_err(|e| bad(e.to_string()))?;
     Ok(cap)
 }
@@ -705,11 +713,35 @@ pub(crate) mod tests {
             (&[4, 2, 3], &[0.0; 24]),
             (&[3, 3, 3], &[0.0; 27]),
             (&[1, 1, 3], &[0.0; 3]),
+            0.01,
         );
         fb.write(&p).unwrap();
         let e = err_of(&p);
         assert!(
             e.contains("H has shape [4, 2, 3]") && e.contains("bad.hdf5"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// An absurd time window is refused before H is read: with a read limit below H's size, the
+    /// window is still what is named.
+    #[test]
+    fn an_absurd_window_is_refused_before_h_is_read() {
+        let dir = tmpdir("window");
+        let p = dir.join("far.hdf5");
+        let grid = [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0];
+        field_by_field(
+            (&[64, 2, 2], &[1.0; 256]),
+            (&[2, 2, 3], &grid),
+            (&[1, 3], &[0.5, 0.5, 0.0]),
+            1e5,
+        )
+        .write(&p)
+        .unwrap();
+        let e = read_capture_with_limit(&p, 512).unwrap_err().to_string();
+        assert!(
+            e.contains("far.hdf5") && e.contains("the time window's end"),
             "{e}"
         );
         std::fs::remove_dir_all(dir).ok();
@@ -728,6 +760,7 @@ pub(crate) mod tests {
                     &[0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0],
                 ),
                 (&[1, 3], &[0.5, 0.5, 0.0]),
+                0.01,
             );
             fb.create_dataset("sensor_grid_format")
                 .with_shape(&[1])
@@ -749,12 +782,13 @@ pub(crate) mod tests {
         std::fs::remove_dir_all(dir).ok();
     }
 
-    /// A time-domain capture (H_format T_Sx_Sy, 1 cm bins from 0) written dataset by dataset from
-    /// (shape, values) of H and of the sensor and laser grids, as a foreign writer might.
+    /// A time-domain capture (H_format T_Sx_Sy, bins of `delta_t` m from 0) written dataset by
+    /// dataset from (shape, values) of H and of the sensor and laser grids, as a foreign writer might.
     fn field_by_field(
         h: (&[u64], &[f32]),
         sensor: (&[u64], &[f32]),
         laser: (&[u64], &[f32]),
+        delta_t: f32,
     ) -> FileBuilder {
         let mut fb = FileBuilder::new();
         fb.create_dataset("H").with_shape(h.0).with_f32_data(h.1);
@@ -768,7 +802,7 @@ pub(crate) mod tests {
             .with_f32_data(laser.1);
         fb.create_dataset("delta_t")
             .with_shape(&[])
-            .with_f32_data(&[0.01]);
+            .with_f32_data(&[delta_t]);
         fb.create_dataset("t_start")
             .with_shape(&[])
             .with_f32_data(&[0.0]);

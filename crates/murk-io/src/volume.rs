@@ -127,7 +127,7 @@ pub struct VolumeData {
 
 /// Reads a volume file written by murk (`murk reconstruct --out v.h5`).
 pub fn read_volume_h5(path: &Path) -> Result<VolumeData> {
-    let limit = crate::tal::DEFAULT_READ_LIMIT_BYTES;
+    let limit = crate::tal::read_limit_bytes();
     let file = crate::h5::open(path)?;
     let read = |name: &str| -> Result<(Vec<usize>, Vec<f64>)> {
         let ds = crate::h5::dataset(path, &file, name)?;

@@ -109,6 +109,12 @@ impl CaptureLayout {
             h: Vec::new(),
             scene_info: String::new(),
         };
+        // H, and the transposed copy that writing it to a file makes.
+        murk_core::Limits::get().elements(
+            "H (and the copy a file write makes)",
+            &[cap.n_hist(), self.time.bins],
+            8,
+        )?;
         let n = cap
             .n_hist()
             .checked_mul(self.time.bins)

@@ -70,14 +70,19 @@ impl CaptureDef {
                 format!("must be at most {}, got {}", u32::MAX, c.bins),
             ));
         }
-        // H (f32 per bin) is the largest buffer a render allocates; checked before the grid's points.
+        // H (f32 per bin) is the largest buffer a render allocates, and writing it makes a transposed
+        // copy; checked before the grid's points.
         let points = c.grid[0].saturating_mul(c.grid[1]);
         let hists = match c.kind {
             CaptureKindDef::Exhaustive => points.saturating_mul(points),
             _ => points,
         };
         limits
-            .elements("H", &[hists, c.bins], std::mem::size_of::<f32>())
+            .elements(
+                "H (and the copy a file write makes)",
+                &[hists, c.bins],
+                2 * std::mem::size_of::<f32>(),
+            )
             .map_err(|e| bad("capture.grid/capture.bins", e.to_string()))?;
         let extent = c.extent_m.unwrap_or(size);
         if !extent.iter().all(|e| e.is_finite() && *e > 0.0) {
