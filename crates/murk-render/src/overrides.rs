@@ -39,6 +39,17 @@ impl Overrides {
             if k.is_empty() {
                 return Err(format!("--set {s}: the key is empty"));
             }
+            if v.contains('\n') {
+                // A second line would be read as a second assignment and dropped.
+                return Err(format!(
+                    "--set {}: the value spans lines; give one KEY=VALUE per --set",
+                    s.escape_debug()
+                ));
+            }
+            // One setting from two places: whichever came last would win unseen.
+            if let Some((_, _, first)) = out.iter().find(|(key, ..)| key == k) {
+                return Err(format!("--set {s}: {k} is also set by {first}"));
+            }
             out.push((k.to_string(), parse_value(v), format!("--set {s}")));
         }
         Ok(out)

@@ -451,11 +451,27 @@ fn overrides_are_named_recorded_and_guard_resume() {
         ),
         ("medium", "expected KEY=VALUE"),
         ("render.spp=0", "render.spp: must be between 1 and"),
+        (
+            "medium.albedo=0.1\nmedium.g=0.5",
+            "the value spans lines; give one KEY=VALUE per --set",
+        ),
     ] {
         let e = load(&set(&[ov])).unwrap_err().to_string();
         assert!(e.starts_with("ov.toml: ") && e.contains(want), "{ov}: {e}");
         assert!(!e.contains('\n'));
     }
+
+    // One setting from two places: whichever came last would win unseen.
+    let e = load(&Overrides {
+        grid: Some(8),
+        ..set(&["capture.grid=[4, 4]"])
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.ends_with("--set capture.grid=[4, 4]: capture.grid is also set by --grid 8"),
+        "{e}"
+    );
 
     // No object and a medium that does not scatter: every histogram would be zero.
     let empty = SCENE.split("[[object]]").next().unwrap();
