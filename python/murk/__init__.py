@@ -255,7 +255,14 @@ def merge(parts: Sequence[Union[Capture, str, os.PathLike]]) -> Capture:
 
     >>> cap = murk.merge([murk.render(scene, shard=(i, 4)) for i in range(4)])
     """
-    return _murk.merge([p if isinstance(p, Capture) else os.fspath(p) for p in parts])
+    return _murk.merge([p if isinstance(p, Capture) else os.fspath(p) for p in _parts(parts)])
+
+
+def _parts(parts) -> list:
+    """``parts`` as a list; one path alone (which would be read as its characters) is refused."""
+    if isinstance(parts, (str, bytes, os.PathLike)):
+        raise InputError(f"parts must be a list of captures or files, got the one path {parts!r}")
+    return list(parts)
 
 
 @dataclass

@@ -157,7 +157,7 @@ def _assemble_all(scene, parts, *, spp, seed, set, grid, bins, albedos):
     """Every capture of the render (one, or one per albedo of a sweep)."""
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=None, set=set, grid=grid,
                                    bins=bins, albedos=albedos)
-    return murk._murk.assemble(path, args, [os.fspath(p) for p in parts])
+    return murk._murk.assemble(path, args, [os.fspath(p) for p in murk._parts(parts)])
 
 
 def render(
@@ -231,6 +231,8 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=(0, shards), set=set,
                                    grid=grid, bins=bins, albedos=albedos, out=out)
     murk._murk.check_render(path, args)
+    if workdir is not None and os.path.exists(workdir) and not os.path.isdir(workdir):
+        raise murk.InputError(f"{os.fspath(workdir)}: the workdir is a file, not a folder")
     own = client is None
     if own:
         cores = os.cpu_count() or 1

@@ -197,3 +197,15 @@ def test_a_render_the_tasks_would_refuse_is_refused_before_any_task():
     for bad in (0, -1, 1.5):
         with pytest.raises(murk.InputError, match="shards must be a whole number"):
             murk.dask.render(Z, shards=bad, grid=16, spp=8)
+
+
+def test_parts_and_workdir_given_wrongly_are_named(tmp_path):
+    # One path where a list belongs was read as its characters ("/: is a directory").
+    with pytest.raises(murk.InputError, match="parts must be a list"):
+        murk.dask.assemble(Z, str(tmp_path / "part0.ckpt"), grid=16, spp=8)
+    with pytest.raises(murk.InputError, match="parts must be a list"):
+        murk.merge(str(tmp_path / "part0.h5"))
+    f = tmp_path / "file"
+    f.write_text("")
+    with pytest.raises(murk.InputError, match="the workdir is a file"):
+        murk.dask.render(Z, shards=2, grid=16, spp=8, workdir=f)
