@@ -730,10 +730,9 @@ pub(crate) mod tests {
     fn an_absurd_window_is_refused_before_h_is_read() {
         let dir = tmpdir("window");
         let p = dir.join("far.hdf5");
-        let grid = [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0];
         field_by_field(
             (&[64, 2, 2], &[1.0; 256]),
-            (&[2, 2, 3], &grid),
+            (&[2, 2, 3], &UNIT_SQUARE),
             (&[1, 3], &[0.5, 0.5, 0.0]),
             1e5,
         )
@@ -755,10 +754,7 @@ pub(crate) mod tests {
         for (code, ok) in [(2, true), (9, false)] {
             let mut fb = field_by_field(
                 (&[4, 2, 2], &[1.0; 16]),
-                (
-                    &[2, 2, 3],
-                    &[0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0],
-                ),
+                (&[2, 2, 3], &UNIT_SQUARE),
                 (&[1, 3], &[0.5, 0.5, 0.0]),
                 0.01,
             );
@@ -781,6 +777,9 @@ pub(crate) mod tests {
         }
         std::fs::remove_dir_all(dir).ok();
     }
+
+    /// The corners of a unit square at z = 0, as a 2 × 2 grid of wall points.
+    const UNIT_SQUARE: [f32; 12] = [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0];
 
     /// A time-domain capture (H_format T_Sx_Sy, bins of `delta_t` m from 0) written dataset by
     /// dataset from (shape, values) of H and of the sensor and laser grids, as a foreign writer might.
