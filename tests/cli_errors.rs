@@ -411,6 +411,34 @@ fn nonsense_parameters() {
         ],
         &["attenuation", "μt = 60 /m"],
     );
+    // An extinction beyond radiative transfer's range is refused alike by every command that reads one.
+    let past = "a mean free path below the 1 µm where radiative transfer holds";
+    fails(
+        &[
+            "synth", "--out", synth_out, "--target", "z:1", "--mu-t", "1e300",
+        ],
+        &["μt is 1e300 /m", past],
+    );
+    fails(
+        &[
+            "reconstruct",
+            g,
+            "--out",
+            out,
+            "--compensate",
+            "ballistic",
+            "--mu-t",
+            "2e6",
+        ],
+        &["μt is 2e6 /m", past],
+    );
+    sweep(
+        &["--set", "medium.mu_t=1e300"],
+        &[
+            "medium.mu_t (from --set medium.mu_t=1e300): is 1e300 /m",
+            past,
+        ],
+    );
     fails(
         &["synth", "--out", synth_out, "--target", "point:0,0,1e-19"],
         &["depth 1e-19 m is closer to the wall than"],

@@ -13,6 +13,7 @@ See docs/python.md for a worked example, Dask (``murk.dask``) and the study (``m
 """
 
 import functools
+import operator
 import os
 import re
 import types
@@ -51,14 +52,16 @@ class _Native:
                 return f(*args, **kwargs)
             except (TypeError, OverflowError) as e:
                 m = re.fullmatch(r"failed to extract field \w+\.(\w+)", str(e))
-                if m is None and isinstance(e, OverflowError):
-                    # Keywords travel in dicts (named above); `threads` is the only integer
-                    # passed on its own.
-                    raise InputError(f"threads: {e}") from e
-                if m is None:
+                if m is not None:
+                    why = e.__cause__ if e.__cause__ is not None else "wrong type"
+                    raise InputError(f"{m.group(1)}: {why}") from e
+                # An argument passed on its own (`threads`, a capture) is named in pyo3's note.
+                notes = (re.fullmatch(r"while processing '(\w+)'", n)
+                         for n in getattr(e, "__notes__", ()))
+                arg = next((n for n in notes if n is not None), None)
+                if arg is None:
                     raise
-                why = e.__cause__ if e.__cause__ is not None else "wrong type"
-                raise InputError(f"{m.group(1)}: {why}") from e
+                raise InputError(f"{arg.group(1)}: {e}") from e
 
         return call
 
@@ -97,6 +100,9 @@ def _progress(progress: Progress, label: str):
         return None
     if callable(progress):
         return progress
+    if progress is not True:
+        raise InputError(f"progress: expected True, False, None or a callable (done, total), got "
+                         f"{progress!r}")
     from tqdm.auto import tqdm
 
     # One bar per stage: a method whose plan reports progress (lct, cdt) starts a second one, with
@@ -230,24 +236,70 @@ def render_albedos(
 
     >>> clear, thick = murk.render_albedos("scenes/z-letter.toml", [0.15, 0.83], grid=32, spp=64)
     """
+    if albedos is None:
+        raise InputError("albedos: expected a list of numbers, got None (murk.render renders one)")
     path, args = _render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
                               checkpoint=checkpoint, checkpoint_every=checkpoint_every, out=out,
                               albedos=albedos)
     return _murk.render(path, args, threads, _progress(progress, "render"))
 
 
+def _path(value, what: str) -> str:
+    """A path keyword as text (bytes decoded as the OS does); an empty one, which would name the
+    current folder, and values that are not paths are refused naming the keyword."""
+    try:
+        p = os.fsdecode(value)
+    except TypeError:
+        raise InputError(f"{what}: expected a path, got {type(value).__name__}") from None
+    if not p:
+        raise InputError(f"{what}: the path is empty")
+    return p
+
+
+def _scene_text(scene) -> Optional[str]:
+    """The scene keyword when it is TOML text rather than a path: it holds a newline, or an ``=``
+    and names no file."""
+    if isinstance(scene, str) and ("\n" in scene or ("=" in scene and not os.path.exists(scene))):
+        return scene
+    return None
+
+
+def _count(value, what: str) -> Optional[int]:
+    """An optional whole-number keyword of at least 1 (``grid``, ``bins``)."""
+    if value is None:
+        return None
+    try:
+        n = None if isinstance(value, bool) else operator.index(value)
+    except TypeError:
+        n = None
+    if n is None or n < 1:
+        raise InputError(f"{what} must be a whole number ≥ 1, got {value!r}")
+    return n
+
+
+def _albedos(albedos) -> List[float]:
+    """A sweep's albedos: a sequence of numbers, or one comma-separated string as ``--albedos``
+    takes it."""
+    if isinstance(albedos, str):
+        albedos = [a for a in albedos.split(",") if a.strip()]
+    try:
+        return [float(a) for a in albedos]
+    except (TypeError, ValueError):
+        raise InputError(f"albedos: expected a list of numbers, got {albedos!r}") from None
+
+
 def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, checkpoint_every=60.0,
                  out=None, albedos=None) -> Tuple[str, dict]:
     """The scene's path and the keywords ``_murk``'s render calls take; a scene given as TOML text
     is read as if from ``./scene.toml``."""
-    path, text = os.fspath(scene), None
-    if "\n" in path:
-        path, text = os.path.join(os.getcwd(), "scene.toml"), path
+    text = _scene_text(scene)
+    path = _path(scene, "scene") if text is None else os.path.join(os.getcwd(), "scene.toml")
     return path, dict(text=text, spp=spp, seed=seed, shard=None if shard is None else tuple(shard),
-                      set=_overrides(set), grid=grid, bins=bins,
-                      checkpoint=None if checkpoint is None else os.fspath(checkpoint),
-                      checkpoint_every=checkpoint_every, out=None if out is None else os.fspath(out),
-                      albedos=None if albedos is None else [float(a) for a in albedos])
+                      set=_overrides(set), grid=_count(grid, "grid"), bins=_count(bins, "bins"),
+                      checkpoint=None if checkpoint is None else _path(checkpoint, "checkpoint"),
+                      checkpoint_every=checkpoint_every,
+                      out=None if out is None else _path(out, "out"),
+                      albedos=None if albedos is None else _albedos(albedos))
 
 
 def merge(parts: Sequence[Union[Capture, str, os.PathLike]]) -> Capture:
@@ -255,7 +307,7 @@ def merge(parts: Sequence[Union[Capture, str, os.PathLike]]) -> Capture:
 
     >>> cap = murk.merge([murk.render(scene, shard=(i, 4)) for i in range(4)])
     """
-    return _murk.merge([p if isinstance(p, Capture) else os.fspath(p) for p in _parts(parts)])
+    return _murk.merge([p if isinstance(p, Capture) else _path(p, "parts") for p in _parts(parts)])
 
 
 def _parts(parts) -> list:
@@ -336,7 +388,7 @@ def reconstruct(
     >>> fk = murk.reconstruct(cap, "fk")     # confocal captures: lct, fk, cdt on their own grid
     """
     intensity, axes, rows, warnings = _murk.reconstruct(
-        capture if isinstance(capture, Capture) else os.fspath(capture),
+        capture if isinstance(capture, Capture) else _path(capture, "capture"),
         dict(method=method, volume=volume, wavelength=wavelength, wavefactor=wavefactor,
              cycles=cycles, compensate=compensate, mu_t=mu_t, albedo=albedo, falloff=falloff,
              lateral=lateral, gate=_text(gate), window_end=window_end, t_offset=_text(t_offset),

@@ -6,6 +6,7 @@ import os
 import tempfile
 
 from . import _murk
+from .errors import Error
 
 
 def to_tal(capture):
@@ -23,4 +24,8 @@ def from_tal(data):
     with tempfile.TemporaryDirectory(prefix="murk-tal-") as d:
         path = os.path.join(d, "capture.hdf5")
         tal.io.write_capture(path, data)
-        return _murk.read_capture(path)
+        try:
+            return _murk.read_capture(path)
+        except Error as e:
+            # The file is gone once this returns: name what the caller gave instead.
+            raise type(e)(str(e).replace(path, "the y-tal capture")) from None

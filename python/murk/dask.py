@@ -78,7 +78,7 @@ def render_shard(
     ``part`` then holds the units done so far and is returned incomplete (``assemble`` says so), not
     raised as an error that Dask would log and retry. ``render`` creates one on Ctrl-C, so that its
     tasks end by themselves instead of being killed with their unsaved units."""
-    part = os.fspath(part)
+    part = murk._path(part, "part")
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid,
                                    bins=bins, checkpoint=part, checkpoint_every=checkpoint_every,
                                    albedos=albedos)
@@ -157,7 +157,7 @@ def _assemble_all(scene, parts, *, spp, seed, set, grid, bins, albedos):
     """Every capture of the render (one, or one per albedo of a sweep)."""
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=None, set=set, grid=grid,
                                    bins=bins, albedos=albedos)
-    return murk._murk.assemble(path, args, [os.fspath(p) for p in murk._parts(parts)])
+    return murk._murk.assemble(path, args, [murk._path(p, "parts") for p in murk._parts(parts)])
 
 
 def render(
@@ -217,9 +217,8 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
             checkpoint_every, retries):
     from dask.distributed import Client
 
-    scene = os.fspath(scene)
-    if "\n" not in scene:
-        scene = os.path.abspath(scene)
+    if murk._scene_text(scene) is None:
+        scene = os.path.abspath(murk._path(scene, "scene"))
     # Here once, before a cluster starts: in the tasks each refusal would be logged and retried,
     # and an output that cannot be written would be found only after every shard had rendered.
     try:
@@ -230,9 +229,11 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
         raise murk.InputError(f"shards must be a whole number ≥ 1, got {shards!r}")
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=(0, shards), set=set,
                                    grid=grid, bins=bins, albedos=albedos, out=out)
-    murk._murk.check_render(path, args)
-    if workdir is not None and os.path.exists(workdir) and not os.path.isdir(workdir):
-        raise murk.InputError(f"{os.fspath(workdir)}: the workdir is a file, not a folder")
+    murk._murk.check_render(path, args, threads)
+    if workdir is not None:
+        workdir = murk._path(workdir, "workdir")
+        if os.path.exists(workdir) and not os.path.isdir(workdir):
+            raise murk.InputError(f"{workdir}: the workdir is a file, not a folder")
     own = client is None
     if own:
         cores = os.cpu_count() or 1
@@ -242,7 +243,7 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
         if threads is None:
             threads = max(1, cores // workers)
     tmp = workdir is None
-    workdir = tempfile.mkdtemp(prefix="murk-dask-") if tmp else os.fspath(workdir)
+    workdir = tempfile.mkdtemp(prefix="murk-dask-") if tmp else workdir
     os.makedirs(workdir, exist_ok=True)
     stop = _stop_file(workdir)
     try:
@@ -258,7 +259,7 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
         caps = _assemble_all(scene, parts, spp=spp, seed=seed, set=set, grid=grid, bins=bins,
                              albedos=albedos)
         if out is not None:
-            for path, cap in zip(murk._murk.render_outputs(os.fspath(out), albedos), caps):
+            for path, cap in zip(murk._murk.render_outputs(murk._path(out, "out"), albedos), caps):
                 murk.write_capture(path, cap)
         return caps if albedos is not None else caps[0]
     finally:

@@ -29,7 +29,7 @@ def _study(scale, only, cells, seeds, shards, spp, scenes) -> dict:
     if isinstance(cells, str):
         cells = [cells]
     return dict(scale=scale, only=list(only), cells=list(cells), seeds=seeds, shards=shards,
-                spp=spp, scenes=os.fspath(scenes))
+                spp=spp, scenes=murk._path(scenes, "scenes"))
 
 
 def plan(
@@ -48,14 +48,14 @@ def plan(
     ``scene``, ``out``, ``spp``, ``seed``, ``shard``, ``set``, ``albedos`` (a sweep's, else empty),
     ``outs`` (the files the task writes), ``captures``, ``capture_outs`` (its merged captures) and
     ``command``."""
-    return _murk.study_plan(os.fspath(out), _study(scale, only, cells, seeds, shards, spp, scenes))
+    return _murk.study_plan(murk._path(out, "out"), _study(scale, only, cells, seeds, shards, spp, scenes))
 
 
 def run(out, *, scale="quick", only=(), cells=(), seeds=1, shards=1, spp=None, scenes="scenes",
         threads=None, progress=None) -> str:
     """``murk experiment paper --out OUT``: renders what is missing (merging finished shards),
     reconstructs, scores and writes the report; returns the path of index.html."""
-    return os.fspath(_murk.run_study(os.fspath(out),
+    return os.fspath(_murk.run_study(murk._path(out, "out"),
                                      _study(scale, only, cells, seeds, shards, spp, scenes),
                                      threads, murk._progress(progress, "study")))
 
@@ -99,8 +99,8 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
     from .dask import _gather, _stop_file, local_cluster
 
     opts = dict(scale=scale, only=only, cells=cells, seeds=seeds, shards=shards, spp=spp,
-                scenes=os.path.abspath(os.fspath(scenes)))
-    out = os.path.abspath(os.fspath(out))
+                scenes=os.path.abspath(murk._path(scenes, "scenes")))
+    out = os.path.abspath(murk._path(out, "out"))
     todo = pending(plan(out, **opts))
     own = client is None
     if own:

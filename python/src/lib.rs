@@ -94,6 +94,14 @@ impl murk_recon::Progress for Ticker {
     }
 }
 
+/// The worker threads `threads=n` asks for (0: one per core), refused if negative or beyond murk's
+/// limit.
+pub(crate) fn thread_count(n: i64) -> PyResult<usize> {
+    usize::try_from(n)
+        .map_err(|_| error("InputError", format!("threads must be ≥ 0, got {n}")))
+        .and_then(|n| murk_core::Limits::threads(n).map_err(to_py))
+}
+
 /// Runs `work` on its own thread (on a pool of `threads` if given) with the GIL released, while this
 /// thread reports progress to `progress(done, total)` and checks for Ctrl-C every 50 ms.
 pub(crate) fn compute<T: Send>(
@@ -107,11 +115,7 @@ pub(crate) fn compute<T: Send>(
     let pool = match threads {
         Some(n) => Some(
             rayon::ThreadPoolBuilder::new()
-                .num_threads(
-                    usize::try_from(n)
-                        .map_err(|_| error("InputError", format!("threads must be ≥ 0, got {n}")))
-                        .and_then(|n| murk_core::Limits::threads(n).map_err(to_py))?,
-                )
+                .num_threads(thread_count(n)?)
                 .build()
                 .map_err(|e| error("Error", format!("cannot start {n} worker threads: {e}")))?,
         ),

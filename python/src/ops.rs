@@ -2,7 +2,7 @@
 //! `murk render`, `murk merge` and `murk experiment`.
 
 use crate::capture::{Capture, Source};
-use crate::{compute, to_py, Ticker};
+use crate::{compute, thread_count, to_py, Ticker};
 use murk_core::{DVec3, TimeAxis};
 use murk_render::{Overrides, Plan, RenderOptions, Scene};
 use murk_study::plan::{Figure, Scale, StudyOptions};
@@ -183,10 +183,16 @@ pub fn render_part(
 
 /// Refuses, without rendering, what a sharded render would refuse only after its tasks: a bad
 /// scene or override, spp out of range, more shards than work units, an output `args.out` that
-/// cannot be written.
+/// cannot be written, a thread count the tasks could not start.
 #[pyfunction]
-#[pyo3(signature = (scene, args))]
-pub fn check_render(py: Python<'_>, scene: PathBuf, args: RenderArgs) -> PyResult<()> {
+#[pyo3(signature = (scene, args, threads))]
+pub fn check_render(
+    py: Python<'_>,
+    scene: PathBuf,
+    args: RenderArgs,
+    threads: Option<i64>,
+) -> PyResult<()> {
+    threads.map(thread_count).transpose()?;
     compute(py, None, None, |_| {
         checked_outputs(&scene, &args)?;
         let scene = args.scene(&scene)?;

@@ -56,6 +56,16 @@ def test_y_tal_capture_goes_in_and_out(kind):
     assert back.start_m == float(np.float32(cap.start_m))
 
 
+def test_from_tal_errors_name_the_data_not_a_deleted_file():
+    data = small().to_tal()
+    data.laser_grid_xyz = data.laser_grid_xyz[:-1]     # y-tal writes it as it is
+    with pytest.raises(murk.FormatError) as e:
+        murk.Capture.from_tal(data)
+    # It named the temporary file the data passed through, deleted by then.
+    assert str(e.value) == ("the y-tal capture: 'laser_grid_normals' has shape [8, 8, 3] but "
+                            "'laser_grid_xyz' has [7, 8, 3]")
+
+
 def test_a_capture_y_tal_wrote_reads_and_reconstructs(tmp_path):
     cap = small()
     path = tmp_path / "tal.hdf5"

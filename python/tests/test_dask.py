@@ -197,6 +197,9 @@ def test_a_render_the_tasks_would_refuse_is_refused_before_any_task():
     for bad in (0, -1, 1.5):
         with pytest.raises(murk.InputError, match="shards must be a whole number"):
             murk.dask.render(Z, shards=bad, grid=16, spp=8)
+    # A thread count the tasks could not start failed inside each of them, retried.
+    with pytest.raises(murk.InputError, match="threads must be ≥ 0, got -1"):
+        murk.dask.render(Z, shards=2, grid=16, spp=8, threads=-1)
 
 
 def test_parts_and_workdir_given_wrongly_are_named(tmp_path):

@@ -1,4 +1,5 @@
 import math
+import os
 
 import numpy as np
 import pytest
@@ -187,3 +188,61 @@ def test_huge_thread_counts_are_input_errors(cap):
         with pytest.raises(murk.InputError) as e:
             call()
         assert one_line(e).startswith("threads: ")
+
+
+def test_keywords_of_the_wrong_kind_are_named(cap, tmp_path):
+    scene = SCENES / "z-letter.toml"
+    for call, want in [
+        (lambda: murk.render(scene, grid=4, spp=1, progress=5),
+         "progress: expected True, False, None or a callable (done, total), got 5"),
+        # None was a plain render, returned as a list of one.
+        (lambda: murk.render_albedos(scene, None, grid=4, spp=1),
+         "albedos: expected a list of numbers, got None"),
+        (lambda: murk.render_albedos(scene, [0.5, "x"], grid=4, spp=1),
+         "albedos: expected a list of numbers, got [0.5, 'x']"),
+        # Before, the scene file was blamed for the keyword's value.
+        (lambda: murk.render(scene, grid=0, spp=1), "grid must be a whole number ≥ 1, got 0"),
+        (lambda: murk.render(scene, bins=True, spp=1), "bins must be a whole number ≥ 1, got True"),
+        (lambda: murk.reconstruct(None), "capture: expected a path, got NoneType"),
+        (lambda: murk.merge([cap, 3]), "parts: expected a path, got int"),
+        # An empty path named the current folder: the study planned into it.
+        (lambda: murk.render(scene, grid=4, spp=1, out=""), "out: the path is empty"),
+        (lambda: murk.experiment.plan(""), "out: the path is empty"),
+        (lambda: murk.render(scene, grid=4, spp=1, threads="2"), "threads: "),
+    ]:
+        with pytest.raises(murk.InputError) as e:
+            call()
+        assert one_line(e).startswith(want), one_line(e)
+
+
+def test_paths_as_bytes_and_sweeps_as_text_are_taken(tmp_path):
+    scene = SCENES / "z-letter.toml"
+    a = murk.render(os.fsencode(scene), grid=2, spp=2)
+    b = murk.render(scene, grid=2, spp=2)
+    assert np.array_equal(a.H, b.H)
+    swept = murk.render_albedos(scene, "0.3,0.6", grid=2, spp=2)
+    listed = murk.render_albedos(scene, [0.3, 0.6], grid=2, spp=2)
+    assert all(np.array_equal(x.H, y.H) for x, y in zip(swept, listed))
+    murk.write_capture(tmp_path / "b.h5", b)
+    rec = murk.reconstruct(os.fsencode(tmp_path / "b.h5"), "bp", volume=VOL)
+    assert rec.intensity.shape == (5, 5, 5)
+
+
+def test_one_line_toml_is_read_as_a_scene_not_a_path():
+    # It was looked up as a file: "medium.albedo = 0.5: No such file or directory".
+    with pytest.raises(murk.FormatError) as e:
+        murk.render("medium.albedo = 0.5", grid=2, spp=1)
+    assert one_line(e).startswith(os.path.join(os.getcwd(), "scene.toml") + ": ")
+
+
+def test_an_extinction_beyond_radiative_transfer_is_refused(cap):
+    past = "a mean free path below the 1 µm where radiative transfer holds"
+    with pytest.raises(murk.InputError) as e:
+        murk.reconstruct(cap, volume=VOL, compensate="ballistic", mu_t=1e300)
+    assert one_line(e).startswith("μt is 1e300 /m, " + past)
+    with pytest.raises(murk.FormatError) as e:
+        murk.render(SCENES / "z-letter.toml", grid=2, spp=1, set={"medium.mu_t": 2e6})
+    assert "medium.mu_t (from --set medium.mu_t=2000000.0): is 2e6 /m, " + past in one_line(e)
+    with pytest.raises(murk.InputError) as e:
+        murk.synth("z:2.0", mu_t=1e7)
+    assert past in one_line(e)

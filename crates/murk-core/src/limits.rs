@@ -42,6 +42,26 @@ impl Limits {
     /// and anything longer is a typo).
     pub const MAX_SECONDS: f64 = 365.0 * 86_400.0;
 
+    /// Largest extinction coefficient: a mean free path of 1 µm, about the wavelength of light,
+    /// below which radiative transfer (what the renderer and the compensations model) does not hold.
+    pub const MAX_MU_T_PER_M: f64 = 1e6;
+
+    /// `mu` (an extinction coefficient in 1/m) is finite, ≥ 0 and at most [`Self::MAX_MU_T_PER_M`];
+    /// the error is the text to follow the caller's name for it.
+    pub fn extinction(mu: f64) -> std::result::Result<(), String> {
+        if !(mu.is_finite() && mu >= 0.0) {
+            return Err(format!("must be ≥ 0 (1/m), got {}", short(mu)));
+        }
+        if mu > Self::MAX_MU_T_PER_M {
+            return Err(format!(
+                "is {} /m, a mean free path below the 1 µm where radiative transfer holds; murk accepts up to {} /m",
+                short(mu),
+                short(Self::MAX_MU_T_PER_M)
+            ));
+        }
+        Ok(())
+    }
+
     /// A worker thread count `n` (0: one per core) that murk will start.
     pub fn threads(n: usize) -> Result<usize> {
         if n > Self::MAX_THREADS {

@@ -51,9 +51,7 @@ impl Compensation {
             Compensation::Paper { mu_t_per_m, albedo } => (mu_t_per_m, albedo),
             Compensation::Ballistic { mu_t_per_m } => (mu_t_per_m, 0.0),
         };
-        if !(mu.is_finite() && mu >= 0.0) {
-            return Err(Error::param(format!("μt must be ≥ 0 per metre, got {mu}")));
-        }
+        murk_core::Limits::extinction(mu).map_err(|e| Error::param(format!("μt {e}")))?;
         if !(0.0..=1.0).contains(&alb) {
             return Err(Error::param(format!("albedo must be in [0, 1], got {alb}")));
         }

@@ -309,6 +309,7 @@ fn checkpoint_parts_assemble_bitwise() {
 fn bad_scenes_name_file_and_field() {
     let cases: &[(&str, &str, &str)] = &[
         ("mu_t = 1.0", "mu_t = -1.0", "medium.mu_t"),
+        ("mu_t = 1.0", "mu_t = 2e6", "medium.mu_t: is 2e6 /m"),
         ("albedo = 0.5", "albedo = 1.5", "medium.albedo"),
         ("albedo = 0.5", "albedo = 0.5\ng = 1.0", "medium.g"),
         (
@@ -433,13 +434,13 @@ fn overrides_are_named_recorded_and_guard_resume() {
         ),
         (
             "medium.albedo=1.5",
-            "medium.albedo: must be in [0, 1], got 1.5",
+            "medium.albedo (from --set medium.albedo=1.5): must be in [0, 1], got 1.5",
         ),
         ("object[4].albedo=1", "object[4] does not exist"),
-        ("medium.ior=1000", "medium.ior: must be in [1, 4], got 1000"),
+        ("medium.ior=1000", "medium.ior (from --set medium.ior=1000): must be in [1, 4], got 1000"),
         (
             "object[0].scale=0",
-            "object[0].scale: must be a finite, non-zero factor, got 0",
+            "object[0].scale (from --set object[0].scale=0): must be a finite, non-zero factor, got 0",
         ),
         (
             "object[0].scale=1e300",
@@ -450,7 +451,11 @@ fn overrides_are_named_recorded_and_guard_resume() {
             "object[0].shape: lies in the relay's plane z = 0",
         ),
         ("medium", "expected KEY=VALUE"),
-        ("render.spp=0", "render.spp: must be between 1 and"),
+        ("render.spp=0", "render.spp (from --set render.spp=0): must be between 1 and"),
+        (
+            "medium={mu_t=1e300, albedo=0.5, min=[-1, -1, 0.1], max=[1, 1, 2]}",
+            "medium.mu_t (from --set medium={mu_t=1e300, albedo=0.5, min=[-1, -1, 0.1], max=[1, 1, 2]}): is 1e300 /m, a mean free path below",
+        ),
         (
             "medium.albedo=0.1\nmedium.g=0.5",
             "the value spans lines; give one KEY=VALUE per --set",
@@ -470,6 +475,17 @@ fn overrides_are_named_recorded_and_guard_resume() {
     .to_string();
     assert!(
         e.ends_with("--set capture.grid=[4, 4]: capture.grid is also set by --grid 8"),
+        "{e}"
+    );
+    // A bad --grid is named as the flag, not only as the file's key it replaced.
+    let e = load(&Overrides {
+        grid: Some(0),
+        ..Overrides::default()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("ov.toml: capture.grid (from --grid 0): needs at least one point"),
         "{e}"
     );
 

@@ -44,12 +44,7 @@ pub fn add_first_bounce(
     scatterers: &[Scatterer],
     opts: &SynthOptions,
 ) -> Result<()> {
-    if !(opts.mu_t_per_m >= 0.0 && opts.mu_t_per_m.is_finite()) {
-        return Err(Error::param(format!(
-            "μt must be ≥ 0, got {}",
-            opts.mu_t_per_m
-        )));
-    }
+    murk_core::Limits::extinction(opts.mu_t_per_m).map_err(|e| Error::param(format!("μt {e}")))?;
     if opts.jitter_sigma_m.is_nan() || opts.jitter_sigma_m < 0.0 {
         return Err(Error::param(format!(
             "jitter must be ≥ 0 m, got {}",

@@ -106,7 +106,21 @@ impl Scene {
         } else {
             toml::to_string(&table).map_err(|e| Error::format(path, e.to_string()))?
         };
-        let bad = |field: &str, msg: String| Error::format(path, format!("{field}: {msg}"));
+        let bad = |field: &str, msg: String| {
+            // A value an override set is named with how it was set, not only by the file it changed.
+            let by = assignments.iter().find(|(key, ..)| {
+                field == key
+                    || field
+                        .strip_prefix(key.as_str())
+                        .is_some_and(|r| r.starts_with('.'))
+            });
+            match by {
+                Some((_, _, written)) => {
+                    Error::format(path, format!("{field} (from {written}): {msg}"))
+                }
+                None => Error::format(path, format!("{field}: {msg}")),
+            }
+        };
         let dir = path.parent().unwrap_or(Path::new("."));
 
         let relay = f.relay.resolve(&bad)?;
@@ -153,7 +167,7 @@ impl Scene {
             settings: f.render.clone(),
             source,
             resolved: canonical(&table),
-            overrides: assignments.into_iter().map(|(_, _, w)| w).collect(),
+            overrides: assignments.iter().map(|(_, _, w)| w.clone()).collect(),
             object_names: f
                 .objects
                 .iter()

@@ -276,12 +276,7 @@ impl MediumDef {
     /// The medium, or `None` where it does not attenuate (μt = 0).
     pub(super) fn resolve(&self, bad: Bad) -> Result<Option<Medium>> {
         let m = self;
-        if !(m.mu_t_per_m.is_finite() && m.mu_t_per_m >= 0.0) {
-            return Err(bad(
-                "medium.mu_t",
-                format!("must be ≥ 0 (1/m), got {}", short(m.mu_t_per_m)),
-            ));
-        }
+        murk_core::Limits::extinction(m.mu_t_per_m).map_err(|e| bad("medium.mu_t", e))?;
         check_albedo(m.albedo, "medium.albedo", bad)?;
         // Written so that NaN fails too.
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
