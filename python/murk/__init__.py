@@ -68,8 +68,6 @@ class _Native:
 
 _murk = _Native(_raw)
 Capture = _murk.Capture
-read_capture = _murk.read_capture
-write_capture = _murk.write_capture
 __version__ = _murk.__version__
 
 __all__ = [
@@ -100,7 +98,7 @@ def _progress(progress: Progress, label: str):
         return None
     if callable(progress):
         return progress
-    if progress is not True:
+    if not isinstance(progress, (bool, np.bool_)):
         raise InputError(f"progress: expected True, False, None or a callable (done, total), got "
                          f"{progress!r}")
     from tqdm.auto import tqdm
@@ -121,6 +119,23 @@ def _progress(progress: Progress, label: str):
             bar.close()
 
     return update
+
+
+def read_capture(path: Union[str, bytes, os.PathLike]) -> Capture:
+    """Reads a y-tal HDF5 capture (any H layout; pure-Rust HDF5, no libhdf5).
+
+    >>> cap = murk.read_capture("z.h5")
+    """
+    return _murk.read_capture(_path(path, "path"))
+
+
+def write_capture(path: Union[str, bytes, os.PathLike], capture: Capture, compression: int = 0):
+    """Writes ``capture`` as a y-tal HDF5 file, atomically; ``compression`` 1..9 gzips H as y-tal's
+    ``compression_level`` does.
+
+    >>> murk.write_capture("copy.h5", cap)
+    """
+    _murk.write_capture(_path(path, "path"), capture, compression)
 
 
 def synth(
@@ -236,11 +251,9 @@ def render_albedos(
 
     >>> clear, thick = murk.render_albedos("scenes/z-letter.toml", [0.15, 0.83], grid=32, spp=64)
     """
-    if albedos is None:
-        raise InputError("albedos: expected a list of numbers, got None (murk.render renders one)")
     path, args = _render_args(scene, spp=spp, seed=seed, shard=shard, set=set, grid=grid, bins=bins,
                               checkpoint=checkpoint, checkpoint_every=checkpoint_every, out=out,
-                              albedos=albedos)
+                              albedos=_albedos(albedos))
     return _murk.render(path, args, threads, _progress(progress, "render"))
 
 
@@ -257,11 +270,9 @@ def _path(value, what: str) -> str:
 
 
 def _scene_text(scene) -> Optional[str]:
-    """The scene keyword when it is TOML text rather than a path: it holds a newline, or an ``=``
-    and names no file."""
-    if isinstance(scene, str) and ("\n" in scene or ("=" in scene and not os.path.exists(scene))):
-        return scene
-    return None
+    """The scene keyword when it is TOML text rather than a path: it holds a newline (a scene needs
+    at least two tables)."""
+    return scene if isinstance(scene, str) and "\n" in scene else None
 
 
 def _count(value, what: str) -> Optional[int]:
@@ -280,9 +291,13 @@ def _count(value, what: str) -> Optional[int]:
 def _albedos(albedos) -> List[float]:
     """A sweep's albedos: a sequence of numbers, or one comma-separated string as ``--albedos``
     takes it."""
+    if albedos is None:
+        raise InputError("albedos: expected a list of numbers, got None (murk.render renders one)")
     if isinstance(albedos, str):
         albedos = [a for a in albedos.split(",") if a.strip()]
     try:
+        if isinstance(albedos, bytes):
+            raise TypeError
         return [float(a) for a in albedos]
     except (TypeError, ValueError):
         raise InputError(f"albedos: expected a list of numbers, got {albedos!r}") from None

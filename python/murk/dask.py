@@ -208,7 +208,7 @@ def render_albedos(
 ) -> List["murk.Capture"]:
     """:func:`render` for an albedo sweep: the captures ``murk.render_albedos(scene, albedos, ...)``
     gives unsharded, byte for byte, one per albedo; ``out`` names them as it does."""
-    return _render(scene, client, shards, list(albedos), spp=spp, seed=seed, set=set, grid=grid,
+    return _render(scene, client, shards, murk._albedos(albedos), spp=spp, seed=seed, set=set, grid=grid,
                    bins=bins, workdir=workdir, out=out, threads=threads,
                    checkpoint_every=checkpoint_every, retries=retries)
 

@@ -197,9 +197,18 @@ def test_a_render_the_tasks_would_refuse_is_refused_before_any_task():
     for bad in (0, -1, 1.5):
         with pytest.raises(murk.InputError, match="shards must be a whole number"):
             murk.dask.render(Z, shards=bad, grid=16, spp=8)
+
+
+def test_threads_and_albedos_are_checked_before_a_cluster_starts(monkeypatch):
+    def no_cluster(**_):
+        raise AssertionError("a cluster was started")
+
+    monkeypatch.setattr(murk.dask, "local_cluster", no_cluster)
     # A thread count the tasks could not start failed inside each of them, retried.
     with pytest.raises(murk.InputError, match="threads must be ≥ 0, got -1"):
         murk.dask.render(Z, shards=2, grid=16, spp=8, threads=-1)
+    with pytest.raises(murk.InputError, match="albedos: expected a list of numbers, got None"):
+        murk.dask.render_albedos(Z, None, shards=2, grid=16, spp=8)
 
 
 def test_parts_and_workdir_given_wrongly_are_named(tmp_path):

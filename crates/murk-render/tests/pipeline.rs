@@ -477,6 +477,35 @@ fn overrides_are_named_recorded_and_guard_resume() {
         e.ends_with("--set capture.grid=[4, 4]: capture.grid is also set by --grid 8"),
         "{e}"
     );
+    // The override named is the one that set the value validated (the last to set it), also where
+    // it set a whole table or list, or one of several keys checked together.
+    for (ov, want) in [
+        (
+            Overrides {
+                grid: Some(8),
+                ..set(&["capture={kind=\"confocal\", grid=[0, 0], extent=[1.0, 1.0], bins=64, bin_width=0.05}"])
+            },
+            "capture.grid (from --set capture={",
+        ),
+        (
+            set(&["medium.albedo=0.5", "medium={mu_t=1.0, albedo=1.5, min=[-1, -1, 0.1], max=[1, 1, 2]}"]),
+            "medium.albedo (from --set medium={mu_t=1.0, albedo=1.5",
+        ),
+        (
+            set(&["object=[{shape=\"box\", min=[0, 0, 1], max=[0.1, 0.1, 1.1], albedo=1.5}]"]),
+            "object[0].albedo (from --set object=[{",
+        ),
+        (
+            Overrides {
+                bins: Some(1 << 40),
+                ..Overrides::default()
+            },
+            "(from --bins 1099511627776)",
+        ),
+    ] {
+        let e = load(&ov).unwrap_err().to_string();
+        assert!(e.contains(want), "{ov:?}: {e}");
+    }
     // A bad --grid is named as the flag, not only as the file's key it replaced.
     let e = load(&Overrides {
         grid: Some(0),

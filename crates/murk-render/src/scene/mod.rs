@@ -106,20 +106,10 @@ impl Scene {
         } else {
             toml::to_string(&table).map_err(|e| Error::format(path, e.to_string()))?
         };
-        let bad = |field: &str, msg: String| {
+        let bad = |field: &str, msg: String| match set_by(field, &assignments) {
             // A value an override set is named with how it was set, not only by the file it changed.
-            let by = assignments.iter().find(|(key, ..)| {
-                field == key
-                    || field
-                        .strip_prefix(key.as_str())
-                        .is_some_and(|r| r.starts_with('.'))
-            });
-            match by {
-                Some((_, _, written)) => {
-                    Error::format(path, format!("{field} (from {written}): {msg}"))
-                }
-                None => Error::format(path, format!("{field}: {msg}")),
-            }
+            Some(written) => Error::format(path, format!("{field} (from {written}): {msg}")),
+            None => Error::format(path, format!("{field}: {msg}")),
         };
         let dir = path.parent().unwrap_or(Path::new("."));
 
@@ -229,6 +219,32 @@ impl Scene {
 
 /// Makes the one-line error that names a scene field.
 type Bad<'a> = &'a dyn Fn(&str, String) -> Error;
+
+/// The override that set `field` as validation names it (`capture.grid`, `object[0].albedo`, or
+/// keys checked together: `capture.bins/bin_width/start`, `capture.grid (center ± extent/2)`), the
+/// last one where several did, since the last one applied is the value validated.
+fn set_by<'a>(field: &str, assignments: &'a [(String, toml::Value, String)]) -> Option<&'a str> {
+    let field = field.split(" (").next().unwrap_or(field);
+    let mut names = field.split('/');
+    let first = names.next().unwrap_or(field);
+    let table = first.rsplit_once('.').map_or("", |(t, _)| t);
+    let keys: Vec<String> = std::iter::once(first.to_string())
+        .chain(names.map(|n| match n.contains('.') || table.is_empty() {
+            true => n.to_string(),
+            false => format!("{table}.{n}"),
+        }))
+        .collect();
+    let covers = |key: &str, k: &String| {
+        k == key
+            || k.strip_prefix(key)
+                .is_some_and(|r| r.starts_with(['.', '[']))
+    };
+    assignments
+        .iter()
+        .rev()
+        .find(|(key, ..)| keys.iter().any(|k| covers(key, k)))
+        .map(|(_, _, written)| written.as_str())
+}
 
 fn one_line(msg: &str) -> String {
     msg.trim().replace('\n', " ")
