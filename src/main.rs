@@ -57,6 +57,11 @@ fn main() {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => e.exit(), // --help and --version
+        Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            // clap's text here is the help, whose first line is no error.
+            eprintln!("murk: error: no command given (see murk --help)");
+            std::process::exit(2);
+        }
         Err(e) => {
             eprintln!(
                 "murk: error: {} (see murk --help)",
@@ -81,7 +86,8 @@ fn main() {
         Command::Merge(a) => cmd::render::run_merge(a, cli.quiet),
     };
     if let Err(e) = result {
-        eprintln!("murk: error: {}", error_line(&e));
+        // A path may hold a newline; the message stays one line.
+        eprintln!("murk: error: {}", error_line(&e).replace('\n', "\\n"));
         std::process::exit(1);
     }
 }

@@ -801,6 +801,61 @@ fn outputs_never_replace_inputs() {
         &["v.h5", "is the output"],
     );
     std::fs::remove_dir_all(&pics).unwrap();
+    // A pictures' folder that cannot be made is refused before the volume is written (it was
+    // written, then the pictures failed).
+    let under_note = d.join("note.txt/pics");
+    for (png, why) in [
+        (under_note.to_str().unwrap(), "note.txt is not a folder"),
+        ("/proc/murk-pics", "cannot be made in /proc"),
+    ] {
+        fails(
+            &["reconstruct", g, "--out", v.to_str().unwrap(), "--png", png],
+            &[why],
+        );
+    }
+    fails(
+        &[
+            "synth",
+            "--target",
+            "z:1",
+            "--out",
+            d.join("note.txt/x.h5").to_str().unwrap(),
+        ],
+        &["note.txt is not a folder"],
+    );
+    // A mesh the scene reads is an input too: --out and --truth over it were written with rc 0.
+    let mesh = d.join("mesh.h5");
+    std::fs::write(&mesh, "v 0 0 1\nv 0.3 0 1\nv 0 0.3 1\nf 1 2 3\n").unwrap();
+    let scene = d.join("mesh.toml");
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml"))
+            .unwrap()
+            .replace(
+                "shape = \"z-letter\"\ncenter = [0.0, 0.0, 2.0]",
+                "shape = \"mesh\"\nfile = \"mesh.h5\"",
+            );
+    std::fs::write(&scene, text).unwrap();
+    let m = mesh.to_str().unwrap();
+    for flag in ["--out", "--truth"] {
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--grid",
+            "2",
+            "--spp",
+            "1",
+        ];
+        if flag == "--truth" {
+            args.extend(["--out", c]);
+        }
+        args.extend([flag, m]);
+        fails(&args, &["mesh.h5", "replace the input"]);
+    }
+    assert!(std::fs::read_to_string(&mesh)
+        .unwrap()
+        .starts_with("v 0 0 1"));
+    std::fs::remove_file(&mesh).unwrap();
+    std::fs::remove_file(&scene).unwrap();
     no_leftovers(&d, &["good.h5", "note.txt"]);
     std::fs::remove_dir_all(&d).ok();
 }
@@ -902,6 +957,27 @@ fn render_refuses_bad_outputs_up_front() {
 /// clap's whole message, on one line: which argument is missing, which values are valid.
 #[test]
 fn usage_errors_say_what_is_wrong() {
+    // Without arguments clap's text is the help, whose first line is no error.
+    let (code, _, err) = cli::murk(&[]);
+    assert_eq!(
+        (code, err.trim()),
+        (2, "murk: error: no command given (see murk --help)")
+    );
+    // A newline in a path stays inside the one line.
+    fails(&["info", "/nonexistent/a\nb.h5"], &["a\\nb.h5"]);
+    for flag in ["--grid", "--bins"] {
+        fails(
+            &[
+                "render",
+                concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml"),
+                "--out",
+                "/tmp/x.h5",
+                flag,
+                "18446744073709551615",
+            ],
+            &[&format!("{flag} 18446744073709551615: too large")],
+        );
+    }
     fails(
         &["reconstruct"],
         &[

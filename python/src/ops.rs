@@ -111,12 +111,23 @@ impl RenderArgs {
 }
 
 /// The files a render of `args` writes, refused before any work if one cannot be written, is the
-/// scene file itself, or is the checkpoint (which is removed once the captures are written).
-fn checked_outputs(scene: &Path, args: &RenderArgs) -> murk_core::Result<Vec<PathBuf>> {
+/// scene file itself or a mesh it reads, or is the checkpoint (which is removed once the captures
+/// are written).
+fn checked_outputs(
+    path: &Path,
+    scene: &Scene,
+    args: &RenderArgs,
+) -> murk_core::Result<Vec<PathBuf>> {
     let outs = args.out.as_deref().map_or(Vec::new(), |out| {
         murk_render::render_outputs(out, args.albedos.as_deref())
     });
-    let file: Vec<&Path> = args.text.is_none().then_some(scene).into_iter().collect();
+    let file: Vec<&Path> = args
+        .text
+        .is_none()
+        .then_some(path)
+        .into_iter()
+        .chain(scene.mesh_files.iter().map(PathBuf::as_path))
+        .collect();
     for out in &outs {
         murk_io::check_h5_output(out, &file)?;
         if let Some(c) = args
@@ -146,10 +157,10 @@ pub fn render(
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<Capture>> {
     let caps = compute(py, progress, threads, |t: &Ticker| {
-        let outs = checked_outputs(&scene, &args)?;
-        let scene = args.scene(&scene)?;
-        let caps = args.plan(&scene)?.render_stored(
-            &args.options(&scene)?,
+        let loaded = args.scene(&scene)?;
+        let outs = checked_outputs(&scene, &loaded, &args)?;
+        let caps = args.plan(&loaded)?.render_stored(
+            &args.options(&loaded)?,
             &outs,
             &|path, cap| murk_io::write_capture(path, cap),
             &|done, total| t.count(done as u64, total as u64),
@@ -194,9 +205,9 @@ pub fn check_render(
 ) -> PyResult<()> {
     threads.map(thread_count).transpose()?;
     compute(py, None, None, |_| {
-        checked_outputs(&scene, &args)?;
-        let scene = args.scene(&scene)?;
-        args.plan(&scene)?.check(&args.options(&scene)?)
+        let loaded = args.scene(&scene)?;
+        checked_outputs(&scene, &loaded, &args)?;
+        args.plan(&loaded)?.check(&args.options(&loaded)?)
     })
 }
 

@@ -243,3 +243,15 @@ def test_an_extinction_beyond_radiative_transfer_is_refused(cap):
     with pytest.raises(murk.InputError) as e:
         murk.synth("z:2.0", mu_t=1e7)
     assert past in one_line(e)
+
+
+def test_a_mesh_the_scene_reads_is_never_replaced(tmp_path):
+    mesh = tmp_path / "mesh.h5"
+    mesh.write_text("v 0 0 1\nv 0.3 0 1\nv 0 0.3 1\nf 1 2 3\n")
+    scene = tmp_path / "mesh.toml"
+    scene.write_text((SCENES / "z-letter.toml").read_text().replace(
+        'shape = "z-letter"\ncenter = [0.0, 0.0, 2.0]', 'shape = "mesh"\nfile = "mesh.h5"'))
+    with pytest.raises(murk.InputError) as e:
+        murk.render(scene, grid=2, spp=1, out=mesh)
+    assert "the output would replace the input" in one_line(e) and "mesh.h5" in one_line(e)
+    assert mesh.read_text().startswith("v 0 0 1")

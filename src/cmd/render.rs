@@ -149,12 +149,18 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         a.out.display()
     );
     let scene = Scene::load(&a.scene, &ov)?;
-    // The plan checks a sweep's albedos, so a refused sweep writes nothing, not even the truth.
+    let meshes: Vec<&Path> = scene.mesh_files.iter().map(PathBuf::as_path).collect();
+    for out in outs.iter().chain(&a.truth) {
+        murk_io::check_h5_output(out, &meshes)?;
+    }
+    // The plan checks a sweep's albedos before anything is written.
     let plan = Plan::with_albedos(&scene, a.albedos.as_deref())?;
+    crate::cmd::pool(a.threads)?.install(|| render(&a, &plan, &outs, quiet))?;
+    // After the render, so that a refused or failed one leaves no file but its checkpoint.
     if let Some(t) = &a.truth {
         murk_io::write_truth_h5(t, &scene.ground_truth())?;
     }
-    crate::cmd::pool(a.threads)?.install(|| render(&a, &plan, &outs, quiet))
+    Ok(())
 }
 
 fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow::Result<()> {

@@ -127,8 +127,12 @@ pub fn check_output(out: &Path, inputs: &[&Path]) -> Result<()> {
     }
     let parent = folder_of(out);
     if !parent.is_dir() {
+        let (what, why) = match parent.exists() {
+            true => ("", "is not a folder"),
+            false => ("the folder ", "does not exist"),
+        };
         return Err(Error::param(format!(
-            "{}: the folder {} does not exist",
+            "{}: {what}{} {why}",
             out.display(),
             parent.display()
         )));

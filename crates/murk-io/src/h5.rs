@@ -46,7 +46,7 @@ pub(crate) fn open(path: &Path) -> Result<File> {
         if head[..n].starts_with(b"MATLAB 5.0 MAT-file") {
             return Err(Error::format(
                 path,
-                "this is a MATLAB v5 .mat file, not HDF5; use read_mat_v5_array",
+                "this is a MATLAB v5 .mat file, not an HDF5 capture; `murk import` converts it",
             ));
         }
         return Err(Error::format(

@@ -20,14 +20,20 @@ impl Overrides {
     /// Every override as (dotted key, value, how the user wrote it), `--grid` and `--bins` included.
     pub(crate) fn assignments(&self) -> Result<Vec<(String, Value, String)>, String> {
         let mut out = Vec::new();
+        // TOML integers are i64: a larger count is refused, not wrapped to a negative one.
+        let int = |n: usize, flag: &str| {
+            i64::try_from(n)
+                .map(Value::Integer)
+                .map_err(|_| format!("{flag} {n}: too large"))
+        };
         if let Some(n) = self.grid {
-            let v = Value::Array(vec![Value::Integer(n as i64), Value::Integer(n as i64)]);
+            let v = Value::Array(vec![int(n, "--grid")?, int(n, "--grid")?]);
             out.push(("capture.grid".into(), v, format!("--grid {n}")));
         }
         if let Some(b) = self.bins {
             out.push((
                 "capture.bins".into(),
-                Value::Integer(b as i64),
+                int(b, "--bins")?,
                 format!("--bins {b}"),
             ));
         }

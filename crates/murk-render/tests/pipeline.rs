@@ -313,6 +313,11 @@ fn bad_scenes_name_file_and_field() {
         ("albedo = 0.5", "albedo = 1.5", "medium.albedo"),
         ("albedo = 0.5", "albedo = 0.5\ng = 1.0", "medium.g"),
         (
+            "albedo = 0.5",
+            "albedo = 0.5\ng = 0.99999999",
+            "medium.g: must satisfy |g| ≤ 0.9999, got",
+        ),
+        (
             "grid = [4, 3]",
             "grid = [4, 3]\nextent = [2.0, 1.0]",
             "capture.grid",

@@ -169,6 +169,27 @@ pub fn check_pictures_dir(dir: &Path, inputs: &[&Path], out: &Path) -> Result<()
     if dir.exists() && !dir.is_dir() {
         return refuse("the pictures need a folder, and this is a file".into());
     }
+    if !dir.exists() {
+        // The folder is made only after the reconstruction: probe now that it can be, with one
+        // made and removed at once in the nearest folder that exists.
+        let base = dir
+            .ancestors()
+            .skip(1)
+            .find(|a| a.as_os_str().is_empty() || a.exists())
+            .filter(|a| !a.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        if !base.is_dir() {
+            return refuse(format!(
+                "cannot be made: {} is not a folder",
+                base.display()
+            ));
+        }
+        let probe = base.join(format!(".murk-probe-{}", std::process::id()));
+        if let Err(e) = std::fs::create_dir(&probe) {
+            return refuse(format!("cannot be made in {}: {e}", base.display()));
+        }
+        let _ = std::fs::remove_dir(&probe);
+    }
     if murk_io::same_target(dir, out) {
         return refuse(format!(
             "the pictures' folder is the output {}",

@@ -2,7 +2,7 @@
 //! the scan, so murk only reorders the histograms into its grid order (+x, +y) when the points form
 //! an axis-aligned regular grid on a plane z = const, and keeps them as a list otherwise.
 
-use super::presets::{check_container, scalar};
+use super::presets::{check_container, positive, scalar};
 use super::{info_head, Dim, Flip, ImportOptions, Preset, Scan};
 use crate::mat::ArrayFile;
 use murk_core::{
@@ -265,8 +265,10 @@ fn ahn(path: &Path, file: &ArrayFile, o: &ImportOptions) -> Result<Walls> {
             ));
         }
     }
-    let delta = scalar(path, file, "NLOSDATA.delta")?
-        .or_else(|| times.as_ref().map(|t| (t[1] - t[0]) as f64));
+    let delta = match scalar(path, file, "NLOSDATA.delta")? {
+        Some(d) => Some(positive(path, "NLOSDATA.delta", "the bin width", d, "m")?),
+        None => times.as_ref().map(|t| (t[1] - t[0]) as f64),
+    };
     let mut extra = format!("points_from: '{where_from}'\n");
     for (field, v) in [
         ("is_confocal", confocal),
@@ -413,7 +415,13 @@ fn znlos(path: &Path, file: &ArrayFile) -> Result<Walls> {
         sensor,
         normals,
         start_m: scalar_m("t0")?,
-        bin_width_m: Some(scalar_m("deltaT")?),
+        bin_width_m: Some(positive(
+            path,
+            "deltaT",
+            "the bin width",
+            scalar_m("deltaT")?,
+            "m",
+        )?),
         devices: Some((
             vec3(path, file, "laserPosition")?,
             vec3(path, file, "cameraPosition")?,

@@ -291,6 +291,10 @@ pub(super) fn check_container(path: &Path, p: Preset, file: &ArrayFile) -> Resul
 pub(super) fn scalar(path: &Path, file: &ArrayFile, var: &str) -> Result<Option<f64>> {
     match file.get(path, var)? {
         None => Ok(None),
+        Some((_, v)) if v.len() == 1 && !v[0].is_finite() => Err(Error::format(
+            path,
+            format!("'{var}' is {}", murk_core::non_finite(v[0])),
+        )),
         Some((_, v)) if v.len() == 1 => Ok(Some(v[0] as f64)),
         Some((shape, _)) => Err(Error::format(
             path,
@@ -299,7 +303,22 @@ pub(super) fn scalar(path: &Path, file: &ArrayFile, var: &str) -> Result<Option<
     }
 }
 
-fn scan_side_m(path: &Path, file: &ArrayFile, side: Side) -> Result<f64> {
+/// `v`, read from the file's variable `var` (`what` it holds, in `unit`), if it is positive.
+pub(super) fn positive(path: &Path, var: &str, what: &str, v: f64, unit: &str) -> Result<f64> {
+    if v > 0.0 {
+        return Ok(v);
+    }
+    Err(Error::format(
+        path,
+        format!(
+            "'{var}' ({what}) must be positive, got {} {unit}",
+            murk_core::short(v)
+        ),
+    ))
+}
+
+/// `points`: the data's scan points, which a point list must hold as many of.
+fn scan_side_m(path: &Path, file: &ArrayFile, side: Side, points: usize) -> Result<f64> {
     match side {
         Side::Fixed(s) => Ok(s),
         Side::CdtScene => {
@@ -320,7 +339,7 @@ fn scan_side_m(path: &Path, file: &ArrayFile, side: Side) -> Result<f64> {
                 })
         }
         Side::HalfSideVar(var, fallback) => match (scalar(path, file, var)?, fallback) {
-            (Some(half), _) => Ok(2.0 * half),
+            (Some(half), _) => Ok(2.0 * positive(path, var, "half the scan side", half, "m")?),
             (None, Some(s)) => Ok(s),
             (None, None) => Err(Error::format(
                 path,
@@ -332,14 +351,20 @@ fn scan_side_m(path: &Path, file: &ArrayFile, side: Side) -> Result<f64> {
         },
         Side::PointsExtent(var, fallback) => match file.get(path, var)? {
             None => Ok(fallback),
-            Some((shape, xyz)) if shape.len() == 2 && shape[1] == 3 => {
+            Some((shape, xyz)) if shape.len() == 2 && shape[1] == 3 && shape[0] == points => {
+                if let Some(v) = xyz.iter().find(|v| !v.is_finite()) {
+                    return Err(Error::format(
+                        path,
+                        format!("'{var}' holds a coordinate that is {}", murk_core::non_finite(*v)),
+                    ));
+                }
                 let xs = xyz.chunks_exact(3).map(|p| p[0] as f64);
                 let (lo, hi) = xs.fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
-                Ok(hi - lo)
+                positive(path, var, "the scan's x extent", hi - lo, "m")
             }
             Some((shape, _)) => Err(Error::format(
                 path,
-                format!("'{var}' should be N × 3 scan points, got shape {shape:?}"),
+                format!("'{var}' should be the {points} × 3 scan points, got shape {shape:?}"),
             )),
         },
     }
@@ -388,12 +413,12 @@ pub(super) fn import(path: &Path, p: Preset, o: &ImportOptions) -> Result<Captur
     drop(data);
     let side_m = match o.wall_size_m {
         Some(side) => side,
-        None => scan_side_m(path, &file, s.side)?,
+        None => scan_side_m(path, &file, s.side, scan.nx * scan.ny)?,
     };
     let bin_width = match (o.bin_width, s.bin_var_s) {
         (Some(b), _) => b,
         (None, Some(var)) => match scalar(path, &file, var)? {
-            Some(secs) => BinWidth::Ps(secs * 1e12),
+            Some(secs) => BinWidth::Ps(positive(path, var, "the bin width", secs, "s")? * 1e12),
             None => BinWidth::Ps(s.bin_ps),
         },
         (None, None) => BinWidth::Ps(s.bin_ps),

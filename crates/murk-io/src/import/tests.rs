@@ -193,6 +193,62 @@ fn lct_transient_reshapes_column_major() {
     let xs = cap.sensor.points.iter().map(|p| p.x);
     let extent = xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min);
     assert!((extent - side).abs() < 1e-6, "{extent}");
+    // A point list of another scan (5 points; its extent was taken as the side), or with NaN or
+    // a single x, is named with the variable, as is a width that is not a positive length.
+    let five = col_major(&[5, 3], |i| i[0] as f64 * 0.1);
+    let nan = vec![f64::NAN; n * n * 3];
+    let flat = vec![0.0; n * n * 3];
+    for (var, shape, values, says) in [
+        (
+            "lighting",
+            [5, 3],
+            &five,
+            "'lighting' should be the 64 × 3 scan points, got shape [5, 3]",
+        ),
+        (
+            "lighting",
+            [n * n, 3],
+            &nan,
+            "'lighting' holds a coordinate that is NaN",
+        ),
+        (
+            "lighting",
+            [n * n, 3],
+            &flat,
+            "'lighting' (the scan's x extent) must be positive, got 0 m",
+        ),
+    ] {
+        write_v5(
+            &p,
+            &[
+                counts("transient", &[n * n, nt], &v, false),
+                doubles(var, &shape, values),
+            ],
+        );
+        let e = import(&p, &ImportOptions::preset(Preset::LctTransient)).unwrap_err();
+        assert_eq!(e.to_string(), format!("{}: {says}", p.display()));
+    }
+    let rect = col_major(&[n, n, nt], |_| 0.0);
+    for (width, says) in [
+        (f64::NAN, "'width' is NaN"),
+        (1e300, "'width' is inf"),
+        (
+            -1.0,
+            "'width' (half the scan side) must be positive, got -1 m",
+        ),
+    ] {
+        write_v5(
+            &p,
+            &[
+                doubles("rect_data", &[n, n, nt], &rect),
+                doubles("width", &[1, 1], &[width]),
+            ],
+        );
+        let e = import(&p, &ImportOptions::preset(Preset::Lct))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with(&format!("{}: {says}", p.display())), "{e}");
+    }
     std::fs::remove_dir_all(dir).ok();
 }
 

@@ -5,7 +5,7 @@ use crate::geometry::Geometry;
 use crate::medium::Medium;
 use crate::overrides::{apply, canonical, Overrides};
 use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 mod file;
 mod resolve;
@@ -53,6 +53,8 @@ pub struct Scene {
     pub overrides: Vec<String>,
     /// One label per `[[object]]`, in order (ground truth's object ids index it).
     pub object_names: Vec<String>,
+    /// The mesh files the scene reads: inputs that no output may replace.
+    pub mesh_files: Vec<PathBuf>,
     pub file_name: String,
 }
 
@@ -158,6 +160,14 @@ impl Scene {
             source,
             resolved: canonical(&table),
             overrides: assignments.iter().map(|(_, _, w)| w.clone()).collect(),
+            mesh_files: f
+                .objects
+                .iter()
+                .filter_map(|o| match o {
+                    file::ObjectDef::Mesh { file, .. } => Some(dir.join(file)),
+                    _ => None,
+                })
+                .collect(),
             object_names: f
                 .objects
                 .iter()

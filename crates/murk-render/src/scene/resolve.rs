@@ -272,19 +272,23 @@ impl RenderDef {
     }
 }
 
+/// The most anisotropic Henyey–Greenstein phase function a medium may have.
+const MAX_ABS_G: f64 = 0.9999;
+
 impl MediumDef {
     /// The medium, or `None` where it does not attenuate (μt = 0).
     pub(super) fn resolve(&self, bad: Bad) -> Result<Option<Medium>> {
         let m = self;
         murk_core::Limits::extinction(m.mu_t_per_m).map_err(|e| bad("medium.mu_t", e))?;
         check_albedo(m.albedo, "medium.albedo", bad)?;
-        // Written so that NaN fails too.
+        // Written so that NaN fails too. Real media stay below 0.99; nearer 1 the phase function's
+        // peak, (1 + g) / (4π (1 − g)²), overflows the estimates (g = 0.99999999 rendered NaN).
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
-        let bad_g = !(m.g.abs() < 1.0);
+        let bad_g = !(m.g.abs() <= MAX_ABS_G);
         if bad_g {
             return Err(bad(
                 "medium.g",
-                format!("must satisfy |g| < 1, got {}", short(m.g)),
+                format!("must satisfy |g| ≤ {MAX_ABS_G}, got {}", short(m.g)),
             ));
         }
         // Past 4 (germanium's index; water's is 1.33) every path is stretched beyond any window
