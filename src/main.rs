@@ -2,6 +2,7 @@
 //! turbid water. Run `murk --help` for the commands, `murk <command> --help` for each one.
 
 use clap::{Parser, Subcommand};
+use murk_core::report::{clap_one_line, error_line};
 
 mod cmd;
 
@@ -86,37 +87,9 @@ fn main() {
         Command::Merge(a) => cmd::render::run_merge(a, cli.quiet),
     };
     if let Err(e) = result {
-        // A path may hold a newline; the message stays one line.
-        eprintln!("murk: error: {}", error_line(&e).replace('\n', "\\n"));
+        eprintln!("murk: error: {}", error_line(e.as_ref()));
         std::process::exit(1);
     }
-}
-
-/// The chain of causes joined, outermost first, skipping a cause that its parent's text already
-/// ends with (murk's I/O errors print their source themselves).
-fn error_line(e: &anyhow::Error) -> String {
-    let mut msg = String::new();
-    for cause in e.chain().map(|c| c.to_string()) {
-        if msg.ends_with(&cause) {
-            continue;
-        }
-        if !msg.is_empty() {
-            msg.push_str(": ");
-        }
-        msg.push_str(&cause);
-    }
-    msg
-}
-
-/// clap's message on one line: its lines up to the usage, joined ("the following required arguments
-/// were not provided: --out <OUT>", "invalid value 'x' for '--method <METHOD>' [possible values: …]").
-fn clap_one_line(text: &str) -> String {
-    text.lines()
-        .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
-        .map(|l| l.trim().trim_start_matches("error: "))
-        .filter(|l| !l.is_empty())
-        .collect::<Vec<_>>()
-        .join(" ")
 }
 
 /// Rust ignores SIGPIPE, so writing to a closed pipe (`murk info x.h5 | head -1`) would fail and

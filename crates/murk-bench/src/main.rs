@@ -8,6 +8,7 @@ mod render;
 
 use anyhow::{bail, Context};
 use clap::Parser;
+use murk_core::report::{clap_one_line, error_line};
 use murk_core::{Axis, DVec3, TimeAxis, Volume};
 use murk_recon::{NoProgress, PfForm, PfParams, Wavelength};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
@@ -150,9 +151,19 @@ impl Drop for Scratch {
 }
 
 fn main() {
-    let a = BenchArgs::parse();
+    let a = match BenchArgs::try_parse() {
+        Ok(a) => a,
+        Err(e) if !e.use_stderr() => e.exit(), // --help and --version
+        Err(e) => {
+            eprintln!(
+                "murk-bench: error: {} (see murk-bench --help)",
+                clap_one_line(&e.to_string())
+            );
+            std::process::exit(2);
+        }
+    };
     if let Err(e) = run(&a) {
-        eprintln!("murk-bench: error: {e:#}");
+        eprintln!("murk-bench: error: {}", error_line(e.as_ref()));
         std::process::exit(1);
     }
 }
@@ -170,6 +181,12 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
             a.runs
         ),
     );
+    // Given explicitly, a missing tool is an error; the default venv's absence only skips y-tal.
+    for p in a.tal_python.iter().chain(&a.tal_bench) {
+        if !p.is_file() {
+            bail!("{}: no such file", p.display());
+        }
+    }
     if let Some(dir) = &a.real {
         return crate::real::run(dir, a.runs, quiet);
     }

@@ -90,6 +90,13 @@ pub fn run(
     quiet: bool,
 ) -> anyhow::Result<()> {
     let wanted = |file: &str| only.is_none_or(|o| file.contains(o));
+    if !CASES.iter().any(|c| wanted(c.file)) && !wanted("z-letter.toml") {
+        bail!(
+            "--only {}: matches none of the scenes ({}, z-letter.toml)",
+            only.unwrap_or_default(),
+            CASES.iter().map(|c| c.file).collect::<Vec<_>>().join(", ")
+        );
+    }
     for c in CASES.iter().filter(|c| wanted(c.file)) {
         t_case(scenes, c, runs, mit, quiet)?;
     }

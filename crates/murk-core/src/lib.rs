@@ -18,6 +18,7 @@ mod named;
 mod points;
 mod progress;
 mod reconstruction;
+pub mod report;
 pub mod simd;
 mod truth;
 mod volume;
