@@ -400,6 +400,34 @@ fn nonsense_parameters() {
         &["μt is 1e300 /m", past],
     );
     compensated(&["ballistic", "--mu-t", "2e6"], &["μt is 2e6 /m", past]);
+    // Objects that could return no light, or whose error blamed something else.
+    let shelf = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/shelf.toml");
+    for (set, says) in [
+        (
+            "object[0].scale=1e-320",
+            "object[0].shape: is 8.00386e-321 m across; murk needs at least 1e-7 m",
+        ),
+        (
+            "object[0].omit=[\"-x\", \"+x\", \"-y\", \"+y\", \"-z\", \"+z\"]",
+            "object[0].omit (from --set object[0].omit=",
+        ),
+        (
+            "object[13].translate=[nan, 0, 1]",
+            "object[13].translate (from --set object[13].translate=[nan, 0, 1]): its offset is NaN",
+        ),
+    ] {
+        let file = if set.starts_with("object[0].scale") {
+            scene
+        } else {
+            shelf
+        };
+        fails(
+            &[
+                "render", file, "--out", r, "--grid", "4", "--spp", "1", "--set", set,
+            ],
+            &[says],
+        );
+    }
     sweep(
         &["--set", "medium.mu_t=1e300"],
         &[

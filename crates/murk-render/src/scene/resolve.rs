@@ -441,6 +441,12 @@ impl ObjectDef {
                 ..
             } => {
                 check_scale(*scale, &field("scale"), bad)?;
+                // A NaN offset made every triangle degenerate, reported as an OBJ without any.
+                for v in translate_m {
+                    murk_core::Limits::get()
+                        .length("its offset", *v)
+                        .map_err(|e| bad(&field("translate"), e.to_string()))?;
+                }
                 let full = dir.join(file);
                 let opts = tobj::LoadOptions {
                     triangulate: true,
@@ -507,6 +513,13 @@ impl ObjectDef {
             }
         };
         check_albedo(albedo, &field("albedo"), bad)?;
+        if prims.is_empty() {
+            // Only a box's `omit` can leave none (meshes without triangles are named above).
+            return Err(bad(
+                &field("omit"),
+                "leaves no face to reflect light".into(),
+            ));
+        }
         let obj = Object::new(albedo, prims);
         if obj.bounds.min.z < 0.0 || !obj.bounds.min.is_finite() || !obj.bounds.max.is_finite() {
             return Err(bad(
@@ -536,6 +549,19 @@ impl ObjectDef {
                 &field("shape"),
                 "lies in the relay's plane z = 0, where no light from the hidden side reaches it"
                     .into(),
+            ));
+        }
+        // Smaller than the finest bin murk accepts, it returns no measurable light (a scale of
+        // 1e-320 rendered an all-zero capture).
+        let across = (obj.bounds.max - obj.bounds.min).max_element();
+        if across < limits.min_bin_width_m {
+            return Err(bad(
+                &field("shape"),
+                format!(
+                    "is {} m across; murk needs at least {} m",
+                    short(across),
+                    short(limits.min_bin_width_m)
+                ),
             ));
         }
         Ok(obj)
