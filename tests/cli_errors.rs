@@ -409,7 +409,7 @@ fn nonsense_parameters() {
         ),
         (
             "object[0].omit=[\"-x\", \"+x\", \"-y\", \"+y\", \"-z\", \"+z\"]",
-            "object[0].omit (from --set object[0].omit=",
+            "leaves no face to reflect light",
         ),
         (
             "object[13].translate=[nan, 0, 1]",
@@ -862,9 +862,9 @@ fn outputs_never_replace_inputs() {
                 "shape = \"z-letter\"\ncenter = [0.0, 0.0, 2.0]",
                 "shape = \"mesh\"\nfile = \"mesh.h5\"",
             );
-    std::fs::write(&scene, text).unwrap();
+    std::fs::write(&scene, &text).unwrap();
     let m = mesh.to_str().unwrap();
-    for flag in ["--out", "--truth"] {
+    let tiny = |extra: &[&str], needles: &[&str]| {
         let mut args = vec![
             "render",
             scene.to_str().unwrap(),
@@ -873,12 +873,30 @@ fn outputs_never_replace_inputs() {
             "--spp",
             "1",
         ];
+        args.extend_from_slice(extra);
+        fails(&args, needles);
+    };
+    for flag in ["--out", "--truth"] {
+        let mut args = vec![];
         if flag == "--truth" {
             args.extend(["--out", c]);
         }
         args.extend([flag, m]);
-        fails(&args, &["mesh.h5", "replace the input"]);
+        tiny(&args, &["mesh.h5", "replace the input"]);
     }
+    // Nor may the render's checkpoint (OUT.ckpt, removed before a fresh render) be a mesh.
+    let ck_mesh = d.join("r.h5.ckpt");
+    std::fs::copy(&mesh, &ck_mesh).unwrap();
+    std::fs::write(&scene, text.replace("mesh.h5", "r.h5.ckpt")).unwrap();
+    let r = d.join("r.h5");
+    tiny(
+        &["--out", r.to_str().unwrap()],
+        &["r.h5.ckpt: is the render's checkpoint for --out"],
+    );
+    assert!(std::fs::read_to_string(&ck_mesh)
+        .unwrap()
+        .starts_with("v 0 0 1"));
+    std::fs::remove_file(&ck_mesh).unwrap();
     assert!(std::fs::read_to_string(&mesh)
         .unwrap()
         .starts_with("v 0 0 1"));
@@ -993,13 +1011,14 @@ fn usage_errors_say_what_is_wrong() {
     );
     // A newline in a path stays inside the one line.
     fails(&["info", "/nonexistent/a\nb.h5"], &["a\\nb.h5"]);
+    let never = std::env::temp_dir().join(format!("murk-usage-{}.h5", std::process::id()));
     for flag in ["--grid", "--bins"] {
         fails(
             &[
                 "render",
                 concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml"),
                 "--out",
-                "/tmp/x.h5",
+                never.to_str().unwrap(),
                 flag,
                 "18446744073709551615",
             ],

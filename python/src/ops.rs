@@ -128,6 +128,15 @@ fn checked_outputs(
         .into_iter()
         .chain(scene.mesh_files.iter().map(PathBuf::as_path))
         .collect();
+    if let Some(c) = args.checkpoint.as_deref() {
+        if let Some(input) = file.iter().find(|f| murk_io::same_target(f, c)) {
+            return Err(murk_core::Error::param(format!(
+                "{}: the checkpoint would replace the input {}",
+                c.display(),
+                input.display()
+            )));
+        }
+    }
     for out in &outs {
         murk_io::check_h5_output(out, &file)?;
         if let Some(c) = args

@@ -254,4 +254,8 @@ def test_a_mesh_the_scene_reads_is_never_replaced(tmp_path):
     with pytest.raises(murk.InputError) as e:
         murk.render(scene, grid=2, spp=1, out=mesh)
     assert "the output would replace the input" in one_line(e) and "mesh.h5" in one_line(e)
+    # The checkpoint is replaced as the render goes, and removed once it is done.
+    with pytest.raises(murk.InputError) as e:
+        murk.render(scene, grid=2, spp=1, checkpoint=mesh)
+    assert "the checkpoint would replace the input" in one_line(e)
     assert mesh.read_text().startswith("v 0 0 1")

@@ -153,6 +153,15 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     for out in outs.iter().chain(&a.truth) {
         murk_io::check_h5_output(out, &meshes)?;
     }
+    // The checkpoint is replaced or removed as the render goes.
+    let ckpt = checkpoint_path(&a.out);
+    if let Some(mesh) = meshes.iter().find(|m| murk_io::same_target(m, &ckpt)) {
+        anyhow::bail!(
+            "{}: is the render's checkpoint for --out {}; choose another output",
+            mesh.display(),
+            a.out.display()
+        );
+    }
     // The plan checks a sweep's albedos before anything is written.
     let plan = Plan::with_albedos(&scene, a.albedos.as_deref())?;
     crate::cmd::pool(a.threads)?.install(|| render(&a, &plan, &outs, quiet))?;

@@ -181,12 +181,6 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
             a.runs
         ),
     );
-    // Given explicitly, a missing tool is an error; the default venv's absence only skips y-tal.
-    for p in a.tal_python.iter().chain(&a.tal_bench) {
-        if !p.is_file() {
-            bail!("{}: no such file", p.display());
-        }
-    }
     if let Some(dir) = &a.real {
         return crate::real::run(dir, a.runs, quiet);
     }
@@ -204,6 +198,13 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
             (None, _) => None,
         };
         return crate::render::run(&a.scenes, a.runs, a.only.as_deref(), mit.as_ref(), quiet);
+    }
+    // Given explicitly, a missing file is an error (the default venv's absence only skips y-tal);
+    // a bare command name is looked up on PATH when it runs.
+    for p in a.tal_python.iter().chain(&a.tal_bench) {
+        if p.components().count() > 1 && !p.is_file() {
+            bail!("{}: no such file", p.display());
+        }
     }
     let python = a
         .tal_python

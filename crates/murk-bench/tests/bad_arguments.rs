@@ -39,7 +39,7 @@ fn bad_arguments_are_one_line() {
         "--only nomatch: matches none of the scenes",
     );
     fails(
-        &["--tal-python", "/nonexistent", "--paper-only", "z"],
+        &["--tal-python", "/nonexistent", "--confocal-vs-tal"],
         "/nonexistent: no such file",
     );
 }

@@ -2,8 +2,8 @@
 //! names the file and the problem.
 
 /// `e` and its causes joined with ": ", outermost first, skipping a cause that the text before it
-/// already ends with (murk's I/O errors print their source themselves); a newline (a path may hold
-/// one) is written as `\n`.
+/// already ends with (murk's I/O errors print their source themselves); a line break (a path may
+/// hold one) is written as `\n` or `\r`.
 pub fn error_line(e: &(dyn std::error::Error + 'static)) -> String {
     let mut msg = String::new();
     let mut cause = Some(e);
@@ -17,7 +17,7 @@ pub fn error_line(e: &(dyn std::error::Error + 'static)) -> String {
         }
         cause = c.source();
     }
-    msg.replace('\n', "\\n")
+    msg.replace('\n', "\\n").replace('\r', "\\r")
 }
 
 /// clap's message on one line: its lines up to the usage, joined ("the following required arguments

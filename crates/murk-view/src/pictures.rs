@@ -184,7 +184,10 @@ pub fn check_pictures_dir(dir: &Path, inputs: &[&Path], out: &Path) -> Result<()
                 base.display()
             ));
         }
-        let probe = base.join(format!(".murk-probe-{}", std::process::id()));
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos());
+        let probe = base.join(format!(".murk-probe-{}-{nanos}", std::process::id()));
         if let Err(e) = std::fs::create_dir(&probe) {
             return refuse(format!("cannot be made in {}: {e}", base.display()));
         }

@@ -291,10 +291,6 @@ pub(super) fn check_container(path: &Path, p: Preset, file: &ArrayFile) -> Resul
 pub(super) fn scalar(path: &Path, file: &ArrayFile, var: &str) -> Result<Option<f64>> {
     match file.get(path, var)? {
         None => Ok(None),
-        Some((_, v)) if v.len() == 1 && !v[0].is_finite() => Err(Error::format(
-            path,
-            format!("'{var}' is {}", murk_core::non_finite(v[0])),
-        )),
         Some((_, v)) if v.len() == 1 => Ok(Some(v[0] as f64)),
         Some((shape, _)) => Err(Error::format(
             path,
@@ -303,15 +299,16 @@ pub(super) fn scalar(path: &Path, file: &ArrayFile, var: &str) -> Result<Option<
     }
 }
 
-/// `v`, read from the file's variable `var` (`what` it holds, in `unit`), if it is positive.
+/// `v`, read from the file's variable `var` (`what` it holds, in `unit`), if it is positive and
+/// finite (as the f32 the file is read as: 1e300 is inf).
 pub(super) fn positive(path: &Path, var: &str, what: &str, v: f64, unit: &str) -> Result<f64> {
-    if v > 0.0 {
+    if v > 0.0 && v.is_finite() {
         return Ok(v);
     }
     Err(Error::format(
         path,
         format!(
-            "'{var}' ({what}) must be positive, got {} {unit}",
+            "'{var}' ({what}) must be positive and finite, got {} {unit}",
             murk_core::short(v)
         ),
     ))

@@ -215,7 +215,7 @@ fn lct_transient_reshapes_column_major() {
             "lighting",
             [n * n, 3],
             &flat,
-            "'lighting' (the scan's x extent) must be positive, got 0 m",
+            "'lighting' (the scan's x extent) must be positive and finite, got 0 m",
         ),
     ] {
         write_v5(
@@ -230,11 +230,17 @@ fn lct_transient_reshapes_column_major() {
     }
     let rect = col_major(&[n, n, nt], |_| 0.0);
     for (width, says) in [
-        (f64::NAN, "'width' is NaN"),
-        (1e300, "'width' is inf"),
+        (
+            f64::NAN,
+            "'width' (half the scan side) must be positive and finite, got NaN m",
+        ),
+        (
+            1e300,
+            "'width' (half the scan side) must be positive and finite, got inf m",
+        ),
         (
             -1.0,
-            "'width' (half the scan side) must be positive, got -1 m",
+            "'width' (half the scan side) must be positive and finite, got -1 m",
         ),
     ] {
         write_v5(

@@ -194,7 +194,7 @@ pub struct MediumDef {
     pub mu_t_per_m: f64,
     /// Single-scattering albedo α = μs/μt.
     pub albedo: f64,
-    /// Henyey–Greenstein anisotropy.
+    /// Henyey–Greenstein anisotropy, |g| ≤ 0.9999.
     #[serde(default)]
     pub g: f64,
     /// Refractive index: optical path = ior × geometric path inside the medium (no refraction at its boundary).

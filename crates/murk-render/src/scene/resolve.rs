@@ -282,7 +282,7 @@ impl MediumDef {
         murk_core::Limits::extinction(m.mu_t_per_m).map_err(|e| bad("medium.mu_t", e))?;
         check_albedo(m.albedo, "medium.albedo", bad)?;
         // Written so that NaN fails too. Real media stay below 0.99; nearer 1 the phase function's
-        // peak, (1 + g) / (4π (1 − g)²), overflows the estimates (g = 0.99999999 rendered NaN).
+        // denominator 1 + g² − 2g·cos cancels to zero or below (g = 0.99999999 rendered NaN).
         #[allow(clippy::neg_cmp_op_on_partial_ord)]
         let bad_g = !(m.g.abs() <= MAX_ABS_G);
         if bad_g {
