@@ -412,6 +412,10 @@ fn nonsense_parameters() {
             "leaves no face to reflect light",
         ),
         (
+            "object[13].scale=1e-300",
+            "object[13].scale (from --set object[13].scale=1e-300): 1e-300: every one of the OBJ's 312 triangles has zero area once scaled",
+        ),
+        (
             "object[13].translate=[nan, 0, 1]",
             "object[13].translate (from --set object[13].translate=[nan, 0, 1]): its offset is NaN",
         ),

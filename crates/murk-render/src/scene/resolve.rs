@@ -466,6 +466,7 @@ impl ObjectDef {
                         )
                     })?;
                 let mut prims = Vec::new();
+                let mut faces = 0;
                 let limits = murk_core::Limits::get();
                 for m in &models {
                     let pos = &m.mesh.positions;
@@ -492,6 +493,7 @@ impl ObjectDef {
                         DVec3::new(pos[k] as f64, pos[k + 1] as f64, pos[k + 2] as f64) * *scale
                             + v3(*translate_m)
                     };
+                    faces += m.mesh.indices.len() / 3;
                     for t in m.mesh.indices.chunks_exact(3) {
                         let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
                         if (b - a).cross(c - a).length_squared() > 0.0 {
@@ -502,6 +504,16 @@ impl ObjectDef {
                             });
                         }
                     }
+                }
+                if prims.is_empty() && faces > 0 {
+                    // Faces that the scale shrank to nothing: the file is not at fault.
+                    return Err(bad(
+                        &field("scale"),
+                        format!(
+                            "{}: every one of the OBJ's {faces} triangles has zero area once scaled",
+                            short(*scale)
+                        ),
+                    ));
                 }
                 if prims.is_empty() {
                     return Err(Error::format(
