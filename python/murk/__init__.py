@@ -275,10 +275,8 @@ def _scene_text(scene) -> Optional[str]:
     return scene if isinstance(scene, str) and "\n" in scene else None
 
 
-def _count(value, what: str) -> Optional[int]:
-    """An optional whole-number keyword of at least 1 (``grid``, ``bins``)."""
-    if value is None:
-        return None
+def _count(value, what: str) -> int:
+    """A whole-number keyword of at least 1 (``grid``, ``bins``, ``shards``)."""
     try:
         n = None if isinstance(value, bool) else operator.index(value)
     except TypeError:
@@ -296,11 +294,11 @@ def _albedos(albedos) -> List[float]:
     if isinstance(albedos, str):
         albedos = [a for a in albedos.split(",") if a.strip()]
     try:
-        if isinstance(albedos, bytes):
-            raise TypeError
-        return [float(a) for a in albedos]
+        if not isinstance(albedos, bytes):
+            return [float(a) for a in albedos]
     except (TypeError, ValueError):
-        raise InputError(f"albedos: expected a list of numbers, got {albedos!r}") from None
+        pass
+    raise InputError(f"albedos: expected a list of numbers, got {albedos!r}")
 
 
 def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, checkpoint_every=60.0,
@@ -310,7 +308,8 @@ def _render_args(scene, *, spp, seed, shard, set, grid, bins, checkpoint=None, c
     text = _scene_text(scene)
     path = _path(scene, "scene") if text is None else os.path.join(os.getcwd(), "scene.toml")
     return path, dict(text=text, spp=spp, seed=seed, shard=None if shard is None else tuple(shard),
-                      set=_overrides(set), grid=_count(grid, "grid"), bins=_count(bins, "bins"),
+                      set=_overrides(set), grid=None if grid is None else _count(grid, "grid"),
+                      bins=None if bins is None else _count(bins, "bins"),
                       checkpoint=None if checkpoint is None else _path(checkpoint, "checkpoint"),
                       checkpoint_every=checkpoint_every,
                       out=None if out is None else _path(out, "out"),

@@ -13,7 +13,6 @@ reused.
 On a cluster the workers must see ``workdir`` (a shared file system) and the scene file.
 """
 
-import operator
 import os
 import shutil
 import tempfile
@@ -221,12 +220,7 @@ def _render(scene, client, shards, albedos, *, spp, seed, set, grid, bins, workd
         scene = os.path.abspath(murk._path(scene, "scene"))
     # Here once, before a cluster starts: in the tasks each refusal would be logged and retried,
     # and an output that cannot be written would be found only after every shard had rendered.
-    try:
-        ok = operator.index(shards) >= 1
-    except TypeError:
-        ok = False
-    if not ok:
-        raise murk.InputError(f"shards must be a whole number ≥ 1, got {shards!r}")
+    murk._count(shards, "shards")
     path, args = murk._render_args(scene, spp=spp, seed=seed, shard=(0, shards), set=set,
                                    grid=grid, bins=bins, albedos=albedos, out=out)
     murk._murk.check_render(path, args, threads)

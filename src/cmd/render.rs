@@ -125,40 +125,35 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         bins: a.bins,
         set: a.set.clone(),
     };
+    let scene = Scene::load(&a.scene, &ov)?;
+    // The scene file and the meshes it reads are inputs that no output may replace.
+    let inputs: Vec<&Path> = std::iter::once(a.scene.as_path())
+        .chain(scene.mesh_files.iter().map(PathBuf::as_path))
+        .collect();
     let outs = render_outputs(&a.out, a.albedos.as_deref());
     for out in &outs {
-        murk_io::check_h5_output(out, &[&a.scene])?;
+        murk_io::check_h5_output(out, &inputs)?;
     }
     if let Some(t) = &a.truth {
-        let inputs: Vec<&Path> = std::iter::once(a.scene.as_path())
+        let taken: Vec<&Path> = inputs
+            .iter()
+            .copied()
             .chain(outs.iter().map(PathBuf::as_path))
             .collect();
-        murk_io::check_h5_output(t, &inputs)?;
+        murk_io::check_h5_output(t, &taken)?;
         anyhow::ensure!(
             !outs.iter().any(|o| murk_io::same_target(o, t)),
             "{}: --truth and the capture name the same file",
             t.display()
         );
     }
-    // The checkpoint is replaced or removed as the render goes, so it must not be the scene (the
+    // The checkpoint is replaced or removed as the render goes, so it must not be an input (the
     // truth cannot be: it is named .h5).
-    anyhow::ensure!(
-        !murk_io::same_target(&a.scene, &checkpoint_path(&a.out)),
-        "{}: is the render's checkpoint for --out {}; choose another output",
-        a.scene.display(),
-        a.out.display()
-    );
-    let scene = Scene::load(&a.scene, &ov)?;
-    let meshes: Vec<&Path> = scene.mesh_files.iter().map(PathBuf::as_path).collect();
-    for out in outs.iter().chain(&a.truth) {
-        murk_io::check_h5_output(out, &meshes)?;
-    }
-    // The checkpoint is replaced or removed as the render goes.
     let ckpt = checkpoint_path(&a.out);
-    if let Some(mesh) = meshes.iter().find(|m| murk_io::same_target(m, &ckpt)) {
+    if let Some(input) = inputs.iter().find(|i| murk_io::same_target(i, &ckpt)) {
         anyhow::bail!(
             "{}: is the render's checkpoint for --out {}; choose another output",
-            mesh.display(),
+            input.display(),
             a.out.display()
         );
     }

@@ -349,7 +349,9 @@ impl Capture {
         Ok(())
     }
 
-    fn validate_data(&self) -> Result<()> {
+    /// The checks of [`Capture::validate`] on H: for a reader that checked the geometry before
+    /// reading H.
+    pub fn validate_data(&self) -> Result<()> {
         let t = &self.time;
         let want = self.n_hist().saturating_mul(t.bins);
         if self.h.len() != want {

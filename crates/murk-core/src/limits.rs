@@ -110,6 +110,16 @@ impl Limits {
         Ok(())
     }
 
+    /// The values of a capture's H of `hists` histograms × `bins` bins, if H and the transposed copy
+    /// that writing it to a file makes fit the budget.
+    pub fn capture_h(&self, hists: usize, bins: usize) -> Result<usize> {
+        self.elements(
+            "H (and the copy a file write makes)",
+            &[hists, bins],
+            2 * std::mem::size_of::<f32>(),
+        )
+    }
+
     /// The element count of `dims` if a buffer of that many `elem_bytes`-sized values fits the
     /// budget (overflow-safe); `what` names the buffer in the error.
     pub fn elements(&self, what: &str, dims: &[usize], elem_bytes: usize) -> Result<usize> {

@@ -277,7 +277,7 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
     transpose::transpose(&tal_h, &mut h, n_hist, bins);
     drop(tal_h);
     cap.h = h;
-    cap.validate().map_err(|e| bad(e.to_string()))?;
+    cap.validate_data().map_err(|e| bad(e.to_string()))?;
     Ok(cap)
 }
 

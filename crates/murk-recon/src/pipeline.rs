@@ -477,7 +477,9 @@ impl Plan {
             }));
         }
         end.trim(&cap, &out.volume, &mut out.intensity);
-        if let (true, Some(from_m)) = (out.intensity.iter().all(|&v| v == 0.0), end.trim_from_m) {
+        // The volume is scanned only where the window end was trimmed, the cause explained here.
+        let cleared = |_: &f64| out.intensity.iter().all(|&v| v == 0.0);
+        if let Some(from_m) = end.trim_from_m.filter(cleared) {
             // The trim cleared what only the cut end of the window reaches: here, every voxel.
             let short = murk_core::short;
             let why = if from_m <= cap.time.start_m {

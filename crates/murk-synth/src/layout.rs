@@ -109,23 +109,14 @@ impl CaptureLayout {
             h: Vec::new(),
             scene_info: String::new(),
         };
-        // H, and the transposed copy that writing it to a file makes.
-        murk_core::Limits::get().elements(
-            "H (and the copy a file write makes)",
-            &[cap.n_hist(), self.time.bins],
-            8,
-        )?;
-        let n = cap
-            .n_hist()
-            .checked_mul(self.time.bins)
-            .filter(|&n| n <= 1 << 31)
-            .ok_or_else(|| {
-                Error::Limits(format!(
-                    "{} histograms × {} bins is over 2^31 samples",
-                    cap.n_hist(),
-                    self.time.bins
-                ))
-            })?;
+        let n = murk_core::Limits::get().capture_h(cap.n_hist(), self.time.bins)?;
+        if n > 1 << 31 {
+            return Err(Error::Limits(format!(
+                "{} histograms × {} bins is over 2^31 samples",
+                cap.n_hist(),
+                self.time.bins
+            )));
+        }
         cap.h = vec![0.0; n];
         cap.validate()?;
         Ok(cap)

@@ -78,11 +78,7 @@ impl CaptureDef {
             _ => points,
         };
         limits
-            .elements(
-                "H (and the copy a file write makes)",
-                &[hists, c.bins],
-                2 * std::mem::size_of::<f32>(),
-            )
+            .capture_h(hists, c.bins)
             .map_err(|e| bad("capture.grid/capture.bins", e.to_string()))?;
         let extent = c.extent_m.unwrap_or(size);
         if !extent.iter().all(|e| e.is_finite() && *e > 0.0) {
