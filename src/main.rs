@@ -66,7 +66,7 @@ fn main() {
         Err(e) => {
             eprintln!(
                 "murk: error: {} (see murk --help)",
-                clap_one_line(&e.to_string())
+                clap_one_line(&e.to_string(), std::env::args_os())
             );
             std::process::exit(2);
         }

@@ -1015,6 +1015,11 @@ fn usage_errors_say_what_is_wrong() {
     );
     // A newline in a path stays inside the one line.
     fails(&["info", "/nonexistent/a\nb.h5"], &["a\\nb.h5"]);
+    // So does one in a value that clap itself refuses.
+    fails(
+        &["reconstruct", "x.h5", "--method", "a\nb"],
+        &["invalid value 'a\\nb' for '--method"],
+    );
     let never = std::env::temp_dir().join(format!("murk-usage-{}.h5", std::process::id()));
     for flag in ["--grid", "--bins"] {
         fails(

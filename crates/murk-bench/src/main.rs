@@ -157,7 +157,7 @@ fn main() {
         Err(e) => {
             eprintln!(
                 "murk-bench: error: {} (see murk-bench --help)",
-                clap_one_line(&e.to_string())
+                clap_one_line(&e.to_string(), std::env::args_os())
             );
             std::process::exit(2);
         }

@@ -22,7 +22,16 @@ pub fn error_line(e: &(dyn std::error::Error + 'static)) -> String {
 
 /// clap's message on one line: its lines up to the usage, joined ("the following required arguments
 /// were not provided: --out <OUT>", "invalid value 'x' for '--method <METHOD>' [possible values: …]").
-pub fn clap_one_line(text: &str) -> String {
+/// An argument of `args` holding a line break is quoted by clap as it is, so its breaks are written as
+/// `\n` or `\r` first, as [`error_line`] writes them, rather than split into lines.
+pub fn clap_one_line(text: &str, args: impl IntoIterator<Item = std::ffi::OsString>) -> String {
+    let mut text = text.to_string();
+    for arg in args {
+        let arg = arg.to_string_lossy().into_owned();
+        if arg.contains(['\n', '\r']) {
+            text = text.replace(&arg, &arg.replace('\n', "\\n").replace('\r', "\\r"));
+        }
+    }
     text.lines()
         .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
         .map(|l| l.trim().trim_start_matches("error: "))
@@ -58,8 +67,18 @@ mod tests {
             "reading the capture: a\\nb.mat: No such file (os error 2)"
         );
         assert_eq!(
-            clap_one_line("error: invalid value '-1' for '--runs <RUNS>'\n\nFor more information, try '--help'.\n"),
+            clap_one_line(
+                "error: invalid value '-1' for '--runs <RUNS>'\n\nFor more information, try '--help'.\n",
+                ["murk-bench".into(), "--runs".into(), "-1".into()]
+            ),
             "invalid value '-1' for '--runs <RUNS>'"
+        );
+        assert_eq!(
+            clap_one_line(
+                "error: invalid value 'a\nb' for '--method <METHOD>'\n\nUsage: murk\n",
+                ["murk".into(), "--method".into(), "a\nb".into()]
+            ),
+            "invalid value 'a\\nb' for '--method <METHOD>'"
         );
     }
 }
