@@ -355,6 +355,8 @@ pub struct Plan {
     offset_m: f64,
     edge_m: f64,
     open_m: Option<f64>,
+    /// Whether `open_m` was set by hand (`Gate::At`), which makes a gate that fades nothing worth saying.
+    gate_given: bool,
     window_end: WindowEnd,
     /// The geometry the plan was made for, with the time offset applied.
     geometry: Capture,
@@ -430,6 +432,7 @@ impl Plan {
             offset_m,
             edge_m,
             open_m,
+            gate_given: matches!(req.gate, Gate::At(_)),
             window_end: req.window_end,
             geometry,
             engine,
@@ -501,6 +504,13 @@ impl Plan {
             )));
         }
         out.warnings.extend(self.ignored_volume.clone());
+        if self.gate_given && gated.open_m.is_none() {
+            out.warnings.push(format!(
+                "the gate at {:.3} m opens before the capture's window starts ({:.3} m of path, after the time offset): it fades nothing",
+                self.open_m.unwrap_or_default(),
+                cap.time.start_m
+            ));
+        }
         out.warnings.extend(end.warning());
         out.warnings.extend(near_face_warning(&out, &gated));
         out.rows.extend(closing_rows(self.offset_m, &gated, &end));

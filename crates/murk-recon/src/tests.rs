@@ -919,7 +919,7 @@ fn clamped_compensation_is_reported() {
 }
 
 /// A volume out of the window's reach is refused when planning, naming the volume; a gate set by
-/// hand after the window is refused naming the gate.
+/// hand after the window is refused naming the gate, and one before it is said to fade nothing.
 #[test]
 fn a_volume_or_gate_beyond_the_window_is_refused() {
     use crate::pipeline::{Gate, Method, Options, Plan, Request, VolumeSpec};
@@ -952,5 +952,26 @@ fn a_volume_or_gate_beyond_the_window_is_refused() {
             .unwrap_err()
             .to_string();
         assert!(e.contains("the gate at 6.000 m opens after"), "{name}: {e}");
+        // One before the window (it starts at 0) is no error, but is said: it fades nothing.
+        let early_gate = Request {
+            gate: Gate::At(0.0),
+            ..Request::new(method)
+        };
+        let out = crate::pipeline::run(cap.clone(), &early_gate, &NoProgress).unwrap();
+        assert!(
+            out.warnings.iter().any(|w| w
+                .contains("the gate at 0.000 m opens before the capture's window starts (0.000 m")),
+            "{name}: {:?}",
+            out.warnings
+        );
+        let on_time = Request {
+            gate: Gate::At(1.0),
+            ..Request::new(method)
+        };
+        let out = crate::pipeline::run(cap.clone(), &on_time, &NoProgress).unwrap();
+        assert!(
+            !out.warnings.iter().any(|w| w.contains("fades nothing")),
+            "{name}"
+        );
     }
 }
