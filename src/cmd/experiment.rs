@@ -43,7 +43,7 @@ pub struct ExperimentArgs {
     /// Only these figures (comma-separated: fig3a, fig3b, fig3c, fig4, fig5).
     #[arg(long, value_delimiter = ',')]
     pub only: Vec<String>,
-    /// Only cells whose label contains this text (repeatable), e.g. "fig3c g = 0.7 α = 0.83".
+    /// Only cells whose label holds these whole words (repeatable), e.g. "fig3c g = 0.7 α = 0.83" or "α = 0.5".
     #[arg(long = "cell", value_name = "TEXT")]
     pub cells: Vec<String>,
     /// Independent renders per cell (metrics get mean ± spread).

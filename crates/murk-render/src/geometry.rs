@@ -204,6 +204,19 @@ impl Object {
             prims,
         }
     }
+
+    /// A fingerprint of the surfaces as rendered (each primitive's corner and edges, bit for bit): for
+    /// a mesh, what the scene's text cannot tell, so that an edited OBJ changes a render's key.
+    pub fn surface_fingerprint(&self) -> u64 {
+        let bits = self.prims.iter().flat_map(|p| {
+            let (Shape::Rect { p0, e1, e2, .. } | Shape::Triangle { p0, e1, e2 }) = p;
+            [p0, e1, e2]
+                .into_iter()
+                .flat_map(|v| v.to_array())
+                .flat_map(|c| c.to_bits().to_le_bytes())
+        });
+        crate::render::fingerprint_bytes(bits)
+    }
 }
 
 /// A surface hit.

@@ -891,7 +891,12 @@ pub const ESTIMATOR_REVISION: u32 = 2;
 
 /// FNV-1a, 64 bits: a short name for a render key.
 pub fn fingerprint(key: &str) -> u64 {
-    key.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+    fingerprint_bytes(key.bytes())
+}
+
+/// FNV-1a, 64 bits, of any bytes.
+pub(crate) fn fingerprint_bytes(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
         (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
     })
 }

@@ -592,6 +592,48 @@ fn overrides_are_named_recorded_and_guard_resume() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A mesh's triangles are part of the render's key: an edited OBJ is refused on resume, naming the
+/// mesh, while an edit that changes no triangle (a comment) resumes.
+#[test]
+fn an_edited_mesh_changes_the_render_key() {
+    let dir = std::env::temp_dir().join(format!("murk-render-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("tri.obj");
+    let text = SCENE.replace(
+        "shape = \"z-letter\"\ncenter = [0.0, 0.0, 1.0]",
+        "shape = \"mesh\"\nfile = \"tri.obj\"",
+    );
+    let load = || Scene::from_str(&text, &dir.join("s.toml"), &Overrides::default()).unwrap();
+    std::fs::write(&obj, "v -0.3 -0.3 1\nv 0.3 -0.3 1\nv 0 0.3 1\nf 1 2 3\n").unwrap();
+    let ck = dir.join("c.ckpt");
+    let first = Plan::new(&load())
+        .render(&opts(None, Some(ck.clone())), &|_, _| {})
+        .unwrap();
+    // A comment changes the file but not one triangle: the checkpoint is taken up again.
+    std::fs::write(
+        &obj,
+        "# a comment\nv -0.3 -0.3 1\nv 0.3 -0.3 1\nv 0 0.3 1\nf 1 2 3\n",
+    )
+    .unwrap();
+    let again = Plan::new(&load())
+        .render(&opts(None, Some(ck.clone())), &|_, _| {})
+        .unwrap();
+    assert_eq!(again.h, first.h);
+    // The triangle moved 1 cm: another render.
+    std::fs::write(&obj, "v -0.3 -0.3 1.01\nv 0.3 -0.3 1\nv 0 0.3 1\nf 1 2 3\n").unwrap();
+    let moved = load();
+    let e = Plan::new(&moved)
+        .render(&opts(None, Some(ck.clone())), &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("different render (object[0].surfaces_fnv1a is "),
+        "{e}"
+    );
+    assert!(moved.resolved.contains("object[0].file = \"tri.obj\""));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `capture.device_radiometry`: the same paths (same seed), each histogram scaled by the laser's
 /// cos/d² at its laser point times the SPAD's cos/d² at its sensor point; refused without devices.
 #[test]

@@ -252,13 +252,28 @@ pub struct Cell {
 impl Cell {
     /// The figure, row and column, e.g. `fig3b μt = 1 α = 0.5` (empty parts left out).
     pub fn label(&self) -> String {
-        [self.figure.name(), &self.row, &self.col]
-            .iter()
-            .filter(|p| !p.is_empty())
-            .copied()
-            .collect::<Vec<_>>()
-            .join(" ")
+        cell_label(self.figure, &self.row, &self.col)
     }
+}
+
+/// Whether `words` occur in `label` as a run of whole words: `μt = 1` picks `fig5 μt = 1` but not
+/// `fig5 μt = 1.5`, which a plain substring test would also pick.
+fn holds_words(label: &str, words: &str) -> bool {
+    let (label, words): (Vec<&str>, Vec<&str>) = (
+        label.split_whitespace().collect(),
+        words.split_whitespace().collect(),
+    );
+    !words.is_empty() && label.windows(words.len()).any(|w| w == words)
+}
+
+/// A cell's label as progress and `--cell` show it: the figure, its row and column, each once.
+fn cell_label(figure: Figure, row: &str, col: &str) -> String {
+    [figure.name(), row, col]
+        .iter()
+        .filter(|p| !p.is_empty())
+        .copied()
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// The whole study: cells over capture jobs.
@@ -277,7 +292,7 @@ pub struct Plan {
 pub struct StudyOptions {
     pub scale: Scale,
     pub only: Vec<Figure>,
-    /// Only cells whose label (`fig3b μt = 1 α = 0.5`) contains one of these; empty: all.
+    /// Only cells whose label (`fig3b μt = 1 α = 0.5`) holds one of these as whole words; empty: all.
     pub cells: Vec<String>,
     pub seeds: u64,
     pub shards: usize,
@@ -392,13 +407,12 @@ impl Plan {
                 cells.push((Figure::Fig5, String::new(), c, SceneKind::Shelf, m, 1.0));
             }
         }
-        let label = |f: Figure, r: &str, c: &str| format!("{} {r} {c}", f.name());
         cells.retain(|(f, r, c, ..)| {
             opt.cells.is_empty()
                 || opt
                     .cells
                     .iter()
-                    .any(|k| label(*f, r, c).contains(k.as_str()))
+                    .any(|k| holds_words(&cell_label(*f, r, c), k))
         });
         if cells.is_empty() {
             return Err(Error::param(format!(
@@ -773,6 +787,17 @@ mod tests {
         assert!(one.captures.iter().all(|j| j.albedos.is_empty()));
         assert!(!one.task_commands(Path::new("out"))[0].contains("--albedos"));
         assert_eq!(one.cells[0].captures, [one.captures[0].id.clone()]);
+        // Every label that progress prints selects its cell, Fig. 4's and 5's (no row) too.
+        let all = Plan::new(&options(&Figure::ALL, 1, 1)).unwrap();
+        for label in all.cells.iter().map(Cell::label) {
+            let picked = Plan::new(&StudyOptions {
+                cells: vec![label.clone()],
+                ..options(&Figure::ALL, 1, 1)
+            })
+            .unwrap();
+            assert_eq!(picked.cells.len(), 1, "{label}");
+            assert_eq!(picked.cells[0].label(), label);
+        }
         assert!(Plan::new(&options(&[], 0, 1)).is_err());
         assert!(Figure::parse("fig9")
             .unwrap_err()

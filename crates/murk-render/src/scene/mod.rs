@@ -46,8 +46,8 @@ pub struct Scene {
     pub settings: RenderDef,
     /// The scene file's text, or the resolved TOML where overrides apply; recorded in `scene_info`.
     pub source: String,
-    /// The resolved scene as sorted `key = value` lines ([`canonical`]): what a checkpoint and a study's
-    /// task key compare.
+    /// The resolved scene as sorted `key = value` lines ([`canonical`]), then a fingerprint of each
+    /// mesh's triangles: what a checkpoint and a study's task key compare.
     pub resolved: String,
     /// The overrides as the user wrote them (`--set medium.g=0.7`, `--grid 32`).
     pub overrides: Vec<String>,
@@ -142,6 +142,16 @@ impl Scene {
             .enumerate()
             .map(|(i, o)| o.resolve(i, dir, path, &bad))
             .collect::<Result<Vec<_>>>()?;
+        // A mesh's triangles come from a file the scene's text only names: its key carries them.
+        let mut resolved = canonical(&table);
+        for (i, (o, def)) in objects.iter().zip(&f.objects).enumerate() {
+            if matches!(def, file::ObjectDef::Mesh { .. }) {
+                resolved.push_str(&format!(
+                    "\nobject[{i}].surfaces_fnv1a = {:016x}",
+                    o.surface_fingerprint()
+                ));
+            }
+        }
         let geometry = Geometry::new(objects);
         if geometry.is_empty() && !medium.as_ref().is_some_and(Medium::scatters) {
             return Err(bad(
@@ -158,7 +168,7 @@ impl Scene {
             capture,
             settings: f.render.clone(),
             source,
-            resolved: canonical(&table),
+            resolved,
             overrides: assignments.iter().map(|(_, _, w)| w.clone()).collect(),
             mesh_files: f
                 .objects
