@@ -13,6 +13,9 @@
 //! | `scene_info` | UTF-8 variable-length string scalar holding YAML |
 //! | `volume_format` | deprecated; left out on write, ignored on read |
 //!
+//! murk also writes one root attribute, `murk_h_crc32`: the CRC-32 of H's values, which a read checks
+//! where it is present (y-tal ignores attributes, and writes none).
+//!
 //! Mapping to [`Capture`]: tal's histogram index over the non-time axes in C order equals murk's
 //! (laser grids `[ix, iy]` are murk's x-major `Grid`, product index = l·n_sensor + s), so H is a
 //! (T, n_hist) ↔ (n_hist, T) transpose. Which layout murk writes:
@@ -277,8 +280,36 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
     transpose::transpose(&tal_h, &mut h, n_hist, bins);
     drop(tal_h);
     cap.h = h;
+    // Files murk wrote carry H's checksum: a damaged one would otherwise read as a valid capture.
+    if let Some(want) = file.root().attrs().ok().and_then(|a| match a.get(H_CRC32) {
+        Some(hdf5_pure::AttrValue::U32(c)) => Some(*c),
+        _ => None,
+    }) {
+        let got = h_crc32(&cap.h);
+        if got != want {
+            return Err(bad(format!(
+                "H does not match the checksum murk wrote with it ({H_CRC32} {want:08x}, H's is {got:08x}): the file is damaged, or H was changed in place by another tool (delete the attribute to keep such a change)"
+            )));
+        }
+    }
     cap.validate_data().map_err(|e| bad(e.to_string()))?;
     Ok(cap)
+}
+
+/// The root attribute holding the CRC-32 of H's values as murk wrote them.
+const H_CRC32: &str = "murk_h_crc32";
+
+/// CRC-32 of `h` as little-endian f32 bytes, histogram by histogram (murk's order, whatever the
+/// file's layout).
+fn h_crc32(h: &[f32]) -> u32 {
+    let mut crc = crc32fast::Hasher::new();
+    let mut bytes = Vec::with_capacity(4 * 4096);
+    for block in h.chunks(4096) {
+        bytes.clear();
+        bytes.extend(block.iter().flat_map(|v| v.to_le_bytes()));
+        crc.update(&bytes);
+    }
+    crc.finalize()
 }
 
 /// Reads `<side>_grid_xyz` and `<side>_grid_normals`; a missing or empty normals dataset means +z.
@@ -394,6 +425,7 @@ pub fn write_capture_compressed(path: &Path, cap: &Capture, level: u32) -> Resul
     };
 
     let mut fb = FileBuilder::new();
+    fb.set_attr(H_CRC32, hdf5_pure::AttrValue::U32(h_crc32(&cap.h)));
     let h = fb.create_dataset("H");
     h.with_shape(&h_shape).with_f32_data(&tal_h);
     if level > 0 {
@@ -638,6 +670,26 @@ pub(crate) mod tests {
                 assert_same(&back, &want, name);
             }
         }
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// One bit flipped in H's data is refused, naming the file and the checksum.
+    #[test]
+    fn a_damaged_h_is_refused() {
+        let dir = tmpdir("crc");
+        let p = dir.join("c.hdf5");
+        let cap = all_kinds()[0].1.clone();
+        write_capture(&p, &cap).unwrap();
+        let mut bytes = std::fs::read(&p).unwrap();
+        let value = cap.h[5].to_le_bytes();
+        let at = bytes.windows(4).position(|w| w == value).unwrap();
+        bytes[at] ^= 1;
+        std::fs::write(&p, &bytes).unwrap();
+        let e = err_of(&p);
+        assert!(
+            e.contains("c.hdf5") && e.contains("H does not match the checksum murk wrote with it"),
+            "{e}"
+        );
         std::fs::remove_dir_all(dir).ok();
     }
 
