@@ -47,12 +47,18 @@ enum Command {
     Merge(cmd::render::MergeArgs),
 }
 
+/// What Ctrl-C says before the process ends, where the interrupted command can be resumed.
+static ON_INTERRUPT: std::sync::OnceLock<&str> = std::sync::OnceLock::new();
+
 fn main() {
     restore_default_sigpipe();
     // Ctrl-C and SIGTERM: remove the temporaries of writes in progress (finished outputs and render
     // checkpoints stay), then end as a shell expects of an interrupted command.
     let _ = ctrlc::set_handler(|| {
         let _held = murk_io::remove_temporaries();
+        if let Some(note) = ON_INTERRUPT.get() {
+            eprintln!("murk: {note}");
+        }
         std::process::exit(130);
     });
     let cli = match Cli::try_parse() {
@@ -74,6 +80,14 @@ fn main() {
     if let Err(e) = murk_core::Limits::check_env() {
         eprintln!("murk: error: {e}");
         std::process::exit(2);
+    }
+    let resumable = match &cli.command {
+        Command::Render(_) => Some("interrupted: the checkpoint keeps the finished work units; the same command resumes from them"),
+        Command::Experiment(_) => Some("interrupted: finished renders and checkpoints stay in the folder; the same command goes on from them"),
+        _ => None,
+    };
+    if let Some(note) = resumable.filter(|_| !cli.quiet) {
+        let _ = ON_INTERRUPT.set(note);
     }
     let result: anyhow::Result<()> = match cli.command {
         Command::Demo(a) => cmd::demo::run(a, cli.quiet),

@@ -1150,7 +1150,7 @@ fn terminated_render_leaves_no_temporaries_and_resumes() {
             "--checkpoint-every",
             "0.01",
         ]))
-        .arg("--quiet")
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     let ckpt = d.join("r.h5.ckpt");
@@ -1162,12 +1162,21 @@ fn terminated_render_leaves_no_temporaries_and_resumes() {
     unsafe {
         libc::kill(child.id() as i32, libc::SIGTERM);
     }
-    let status = child.wait().unwrap();
+    let ended = child.wait_with_output().unwrap();
     for e in std::fs::read_dir(&d).unwrap() {
         let name = e.unwrap().file_name().to_string_lossy().into_owned();
         assert!(!name.ends_with(".tmp"), "left behind: {name}");
     }
-    assert_eq!(status.code(), Some(130), "the render ended before SIGTERM");
+    assert_eq!(
+        ended.status.code(),
+        Some(130),
+        "the render ended before SIGTERM"
+    );
+    let err = String::from_utf8_lossy(&ended.stderr);
+    assert!(
+        err.ends_with("murk: interrupted: the checkpoint keeps the finished work units; the same command resumes from them\n"),
+        "{err}"
+    );
     {
         assert!(ckpt.exists());
         let (code, _, err) = murk(

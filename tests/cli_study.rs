@@ -4,10 +4,6 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
 #[path = "common/cli.rs"]
 mod cli;
 use cli::murk;
@@ -49,14 +45,50 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
         let st = Command::new("sh")
             .arg("-c")
             .arg(&line)
-            .current_dir(repo())
+            .current_dir(std::env::temp_dir())
             .status()
             .unwrap();
         assert!(st.success(), "{line}");
     }
+    // A temporary left by a killed process goes; the finished parts are merged.
+    let stale = d.join("renders/.x.h5.4294967295-0.tmp");
+    std::fs::write(&stale, "x").unwrap();
     let (code, _, err) = small_study(&d, &["--shards", "2"]);
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("task 1/"), "rendered again:\n{err}");
+    assert!(
+        err.contains("2 of the plan's 2 renders are already in"),
+        "{err}"
+    );
+    assert!(!stale.exists());
+    // Nothing is left to list; a listed command run again anyway leaves no part behind.
+    let (code, stdout, err) = small_study(&d, &["--list-tasks", "--shards", "2"]);
+    assert_eq!((code, stdout.as_str()), (0, ""), "{err}");
+    assert!(err.contains("every render of this plan is done"), "{err}");
+    let line = cmds[0].replacen("murk ", &format!("{} ", env!("CARGO_BIN_EXE_murk")), 1);
+    assert!(Command::new("sh")
+        .arg("-c")
+        .arg(&line)
+        .status()
+        .unwrap()
+        .success());
+    let (code, _, err) = small_study(&d, &["--shards", "2"]);
+    assert_eq!(code, 0, "{err}");
+    let names: Vec<String> = std::fs::read_dir(d.join("renders"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.contains(".part")), "{names:?}");
+    // One run at a time per folder.
+    let held = std::fs::File::create(d.join(".lock")).unwrap();
+    held.try_lock().unwrap();
+    let (code, _, err) = small_study(&d, &["--shards", "2"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("another murk study is running in this folder"),
+        "{err}"
+    );
+    drop(held);
     for f in [
         "index.html",
         "metrics.csv",

@@ -318,10 +318,10 @@ pub fn study_plan<'py>(
     args: StudyArgs,
 ) -> PyResult<Bound<'py, PyList>> {
     let opt = study_options(args)?;
-    let plan = py
+    let (plan, _lock) = py
         .detach(|| murk_study::prepare(&out, &opt))
         .map_err(to_py)?;
-    let commands = plan.task_commands(&out);
+    let commands = plan.task_commands(&out, |_, _| true);
     let tasks = PyList::empty(py);
     let mut k = 0;
     for c in &plan.captures {

@@ -95,7 +95,10 @@ impl Observer for Bars {
             Event::Step(s) => {
                 self.bar.set_message(s.to_string());
                 self.bar.set_length(0);
+                self.bar.set_position(0);
             }
+            Event::Note(s) if !self.quiet => self.bar.suspend(|| eprintln!("murk: {s}")),
+            Event::Note(_) => {}
         }
     }
 }
@@ -119,9 +122,16 @@ pub fn run(a: ExperimentArgs, quiet: bool) -> anyhow::Result<()> {
         scenes_dir: a.scenes.clone(),
     };
     if a.list_tasks {
-        let plan = murk_study::prepare(&a.out, &opt)?;
-        for c in plan.task_commands(&a.out) {
+        let (plan, _lock) = murk_study::prepare(&a.out, &opt)?;
+        let commands =
+            plan.task_commands(&a.out, |job, t| murk_study::run::pending(&a.out, job, t));
+        for c in &commands {
             println!("{c}");
+        }
+        if commands.is_empty() && !quiet {
+            eprintln!(
+                "murk: every render of this plan is done; run without --list-tasks for the report"
+            );
         }
         return Ok(());
     }

@@ -64,6 +64,34 @@ pub fn remove_temporaries() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     live
 }
 
+/// Removes from `dir` the temporaries of writes whose process is gone (killed before it could clean
+/// up, as by SIGKILL), and returns how many. A process is looked up in `/proc`; where there is none
+/// (not Linux), nothing is removed.
+pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
+    if !Path::new("/proc/self").exists() {
+        return Ok(0);
+    }
+    let mut removed = 0;
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        // `.{target}.{pid}-{n}.tmp`, as temp_sibling names them.
+        let pid = name
+            .strip_prefix('.')
+            .and_then(|n| n.strip_suffix(".tmp"))
+            .and_then(|n| n.rsplit_once('.'))
+            .and_then(|(_, tail)| tail.split_once('-'))
+            .and_then(|(pid, n)| n.parse::<u64>().ok().and(pid.parse::<u32>().ok()));
+        if let Some(pid) = pid {
+            if !Path::new(&format!("/proc/{pid}")).exists() {
+                std::fs::remove_file(entry.path()).map_err(|e| Error::io(&entry.path(), e))?;
+                removed += 1;
+            }
+        }
+    }
+    Ok(removed)
+}
+
 /// A unique name in the target's directory (same file system, so the rename is atomic).
 fn temp_sibling(path: &Path) -> Result<PathBuf> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -222,5 +250,28 @@ mod tests {
         );
         let fine = std::env::temp_dir().join(format!("{}.h5", "x".repeat(252)));
         assert!(check_output(&fine, &[]).is_ok());
+    }
+
+    /// A dead process's temporary is removed; a live one's (this process's), other hidden files
+    /// and finished outputs stay.
+    #[test]
+    fn stale_temporaries_of_dead_processes_are_removed() {
+        let dir = std::env::temp_dir().join(format!("murk-stale-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // Linux's pid_max is at most 2^22: this pid cannot be running.
+        let dead = dir.join(".c.h5.4294967295-0.tmp");
+        let live = temp_sibling(&dir.join("c.h5")).unwrap();
+        let keep = [
+            dir.join("c.h5"),
+            dir.join(".hidden"),
+            dir.join(".c.h5.x-0.tmp"),
+        ];
+        for p in keep.iter().chain([&dead, &live]) {
+            std::fs::write(p, "x").unwrap();
+        }
+        assert_eq!(remove_stale_temporaries(&dir).unwrap(), 1);
+        assert!(!dead.exists() && live.exists());
+        assert!(keep.iter().all(|p| p.exists()));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -22,8 +22,8 @@ mod truth;
 mod volume;
 
 pub use atomic::{
-    check_h5_name, check_h5_output, check_output, create_output_dir, remove_temporaries,
-    same_target, write_atomic,
+    check_h5_name, check_h5_output, check_output, create_output_dir, remove_stale_temporaries,
+    remove_temporaries, same_target, write_atomic,
 };
 pub use describe::describe;
 pub use mat::{read_mat_v5_array, read_mat_v73_array, ArrayFile};

@@ -280,7 +280,9 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
     transpose::transpose(&tal_h, &mut h, n_hist, bins);
     drop(tal_h);
     cap.h = h;
-    // Files murk wrote carry H's checksum: a damaged one would otherwise read as a valid capture.
+    cap.validate_data().map_err(|e| bad(e.to_string()))?;
+    // Files murk wrote carry H's checksum: a damaged one would otherwise read as a valid capture
+    // (checked after the values, whose own faults, such as NaN written in place, say more).
     if let Some(want) = file.root().attrs().ok().and_then(|a| match a.get(H_CRC32) {
         Some(hdf5_pure::AttrValue::U32(c)) => Some(*c),
         _ => None,
@@ -292,7 +294,6 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
             )));
         }
     }
-    cap.validate_data().map_err(|e| bad(e.to_string()))?;
     Ok(cap)
 }
 

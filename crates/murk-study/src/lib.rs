@@ -30,8 +30,36 @@ use plan::{Plan, StudyOptions};
 use run::{Event, Observer};
 use std::path::{Path, PathBuf};
 
-/// Plans the study, writes `DIR/plan.json` and makes `DIR/renders/` for the tasks' outputs.
-pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
+/// A study folder held by one `murk experiment` (or Python) run: two at once would render the same
+/// tasks twice and count their CPU twice. The operating system lets it go when the process ends,
+/// however it ends.
+pub struct FolderLock {
+    _file: std::fs::File,
+}
+
+impl FolderLock {
+    fn take(dir: &Path) -> Result<FolderLock> {
+        let path = dir.join(".lock");
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(|e| Error::io(&path, e))?;
+        match file.try_lock() {
+            Ok(()) => Ok(FolderLock { _file: file }),
+            Err(std::fs::TryLockError::WouldBlock) => Err(Error::param(format!(
+                "{}: another murk study is running in this folder; wait for it to end or choose another --out",
+                dir.display()
+            ))),
+            Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
+        }
+    }
+}
+
+/// Plans the study, makes `DIR/renders/` for the tasks' outputs, takes the folder and writes
+/// `DIR/plan.json`; the folder stays taken while the lock lives.
+pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<(Plan, FolderLock)> {
     let plan = Plan::new(opt)?;
     if dir.exists() && !dir.is_dir() {
         return Err(Error::param(format!(
@@ -41,6 +69,7 @@ pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
     }
     let renders = dir.join("renders");
     murk_io::create_output_dir(&renders)?;
+    let lock = FolderLock::take(dir)?;
     let path = dir.join("plan.json");
     let json = serde_json::to_string_pretty(&plan)
         .map_err(|e| Error::param(format!("cannot serialise the plan: {e}")))?;
@@ -48,13 +77,13 @@ pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
         w.write_all(json.as_bytes())
             .map_err(|e| Error::io(&path, e))
     })?;
-    Ok(plan)
+    Ok((plan, lock))
 }
 
 /// Plans, renders what is missing, reconstructs and scores every cell, and writes the report; returns
 /// the path of `index.html`.
 pub fn run_study(dir: &Path, opt: &StudyOptions, obs: &dyn Observer) -> Result<PathBuf> {
-    let plan = prepare(dir, opt)?;
+    let (plan, _lock) = prepare(dir, opt)?;
     run::render_missing(&plan, dir, obs)?;
     let results = run::evaluate(&plan, dir, obs)?;
     obs.event(Event::Step("writing the report"));

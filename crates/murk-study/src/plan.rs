@@ -583,15 +583,22 @@ impl Plan {
         self.captures.iter().map(|c| c.tasks.len()).sum()
     }
 
-    /// One `murk render` command per task, for any executor; a later `murk experiment` picks their
-    /// outputs up.
-    pub fn task_commands(&self, dir: &Path) -> Vec<String> {
+    /// One `murk render` command per task that `keep` (given the job and the task's index) keeps,
+    /// for any executor; a later `murk experiment` picks their outputs up. Paths are absolute, so the
+    /// commands run from any folder.
+    pub fn task_commands(
+        &self,
+        dir: &Path,
+        keep: impl Fn(&CaptureJob, usize) -> bool,
+    ) -> Vec<String> {
+        let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        let (scenes, dir) = (absolute(&self.scenes_dir), absolute(dir));
         let mut out = Vec::new();
         for c in &self.captures {
-            for t in &c.tasks {
+            for (_, t) in c.tasks.iter().enumerate().filter(|(k, _)| keep(c, *k)) {
                 let mut cmd = format!(
                     "murk render {} --out {} --spp {} --seed {}",
-                    shell(&self.scenes_dir.join(c.scene.file())),
+                    shell(&scenes.join(c.scene.file())),
                     shell(&dir.join(&t.out)),
                     c.spp,
                     c.seed
@@ -749,8 +756,17 @@ mod tests {
         ids.sort();
         ids.dedup();
         assert_eq!(ids.len(), 6);
-        let cmds = plan.task_commands(Path::new("out"));
+        let cmds = plan.task_commands(Path::new("out"), |_, _| true);
         assert_eq!(cmds.len(), 6);
+        // Absolute paths: the commands run from any folder.
+        let cwd = std::env::current_dir().unwrap();
+        assert!(
+            cmds[0].contains(&format!("--out {}/out/renders/", cwd.display()))
+                && cmds[0].contains(&format!("murk render {}/", cwd.display())),
+            "{}",
+            cmds[0]
+        );
+        assert_eq!(plan.task_commands(Path::new("out"), |_, t| t == 1).len(), 2);
         assert!(
             cmds[4].contains("--seed 1") && cmds[4].contains("--shard 1/3"),
             "{}",
@@ -761,7 +777,7 @@ mod tests {
                 && cmds[0].contains("--set 'capture.grid=[64, 64]'")
         );
         assert!(cmds[0].contains(&format!(
-            "--out out/renders/{}.part0of3.h5",
+            "/out/renders/{}.part0of3.h5 ",
             plan.captures[0].id
         )));
         plan.retain_cells(|_| false);
@@ -774,18 +790,18 @@ mod tests {
         .unwrap();
         // The sweep and the reference without a medium.
         assert_eq!(row.n_tasks(), 2);
-        let cmd = &row.task_commands(Path::new("out"))[0];
+        let cmd = &row.task_commands(Path::new("out"), |_, _| true)[0];
         assert!(cmd.contains("--albedos 0.15,0.33,0.5,0.67,0.83"), "{cmd}");
         let id = &row.captures[0].id;
         assert_eq!(row.cells[2].captures, [format!("{id}-albedo0.5")]);
-        assert!(cmd.contains(&format!("--out out/renders/{id}.h5")), "{cmd}");
+        assert!(cmd.contains(&format!("/out/renders/{id}.h5 ")), "{cmd}");
         let one = Plan::new(&StudyOptions {
             cells: vec!["μt = 2 α = 0.5".into()],
             ..options(&[Figure::Fig3b], 1, 1)
         })
         .unwrap();
         assert!(one.captures.iter().all(|j| j.albedos.is_empty()));
-        assert!(!one.task_commands(Path::new("out"))[0].contains("--albedos"));
+        assert!(!one.task_commands(Path::new("out"), |_, _| true)[0].contains("--albedos"));
         assert_eq!(one.cells[0].captures, [one.captures[0].id.clone()]);
         // Every label that progress prints selects its cell, Fig. 4's and 5's (no row) too.
         let all = Plan::new(&options(&Figure::ALL, 1, 1)).unwrap();

@@ -26,6 +26,8 @@ pub enum Event<'a> {
     Units { done: usize, total: usize },
     /// A step after rendering (reconstructing a cell, writing the report).
     Step(&'a str),
+    /// A line to say once, bar or not (which finished renders are reused).
+    Note(&'a str),
 }
 
 /// Receives [`Event`]s (a progress bar, a log, nothing).
@@ -62,14 +64,69 @@ fn task_done(dir: &Path, job: &CaptureJob, t: usize) -> bool {
         .all(|p| p.exists())
 }
 
-fn cpu_path(dir: &Path, job: &CaptureJob) -> PathBuf {
-    dir.join(format!("renders/{}.cpu_s", job.id))
+/// Whether task `t` of `job` still has to run: neither its capture nor its own output is in `dir`.
+pub fn pending(dir: &Path, job: &CaptureJob, t: usize) -> bool {
+    !captured(dir, job) && !task_done(dir, job, t)
+}
+
+/// The CPU seconds that task `t` of `job` has cost, over its interruptions.
+fn cpu_path(dir: &Path, job: &CaptureJob, t: usize) -> PathBuf {
+    dir.join(&job.tasks[t].out).with_extension("cpu_s")
+}
+
+/// A task's CPU tally, written as it renders (at most every 10 s) and when it ends, so that a run
+/// that is stopped or killed still counts what it spent.
+struct Tally {
+    path: PathBuf,
+    before_s: f64,
+    cpu0_s: Option<f64>,
+    written: std::sync::Mutex<Instant>,
+}
+
+impl Tally {
+    /// A task resumed from its checkpoint adds to its tally; one that starts afresh (its capture
+    /// rendered again) starts a new one.
+    fn start(path: PathBuf, checkpoint: &Path) -> Tally {
+        let before_s = if checkpoint.exists() {
+            std::fs::read_to_string(&path)
+                .ok()
+                .and_then(|s| s.trim().parse().ok())
+                .unwrap_or(0.0)
+        } else {
+            0.0
+        };
+        Tally {
+            path,
+            before_s,
+            cpu0_s: murk_render::bench::cpu_seconds(),
+            written: std::sync::Mutex::new(Instant::now()),
+        }
+    }
+
+    fn write(&self) -> Result<()> {
+        let (Some(a), Some(b)) = (self.cpu0_s, murk_render::bench::cpu_seconds()) else {
+            return Ok(());
+        };
+        murk_io::write_atomic(&self.path, |w| {
+            writeln!(w, "{:.3}", self.before_s + b - a).map_err(|e| Error::io(&self.path, e))
+        })
+    }
+
+    fn tick(&self) {
+        let mut last = self.written.lock().unwrap_or_else(|e| e.into_inner());
+        if last.elapsed() >= Duration::from_secs(10) {
+            *last = Instant::now();
+            // A failed write now is retried at the next tick and at the end, which reports it.
+            let _ = self.write();
+        }
+    }
 }
 
 /// Renders every capture job whose file is missing, with all cores; returns how many tasks ran.
 pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
     let renders = dir.join("renders");
     murk_io::create_output_dir(&renders)?;
+    murk_io::remove_stale_temporaries(&renders)?;
     let missing: Vec<&CaptureJob> = plan.captures.iter().filter(|j| !captured(dir, j)).collect();
     let all_parts =
         |j: &CaptureJob| j.tasks.len() > 1 && (0..j.tasks.len()).all(|t| task_done(dir, j, t));
@@ -78,6 +135,26 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
         if all_parts(job) {
             merge_parts(dir, job)?;
         }
+    }
+    // Parts of a capture that is already merged (a listed command run again) are not needed.
+    for job in plan
+        .captures
+        .iter()
+        .filter(|j| j.tasks.len() > 1 && captured(dir, j))
+    {
+        for t in &job.tasks {
+            for p in job.outputs(&dir.join(&t.out)) {
+                let _ = std::fs::remove_file(p);
+            }
+        }
+    }
+    let reused = plan.captures.iter().filter(|j| captured(dir, j)).count();
+    if reused > 0 {
+        obs.event(Event::Note(&format!(
+            "{reused} of the plan's {} renders are already in {}: reused",
+            plan.captures.len(),
+            renders.display()
+        )));
     }
     let todo: Vec<(&CaptureJob, usize)> = missing
         .iter()
@@ -110,11 +187,11 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
             label: &label,
             eta_s,
         });
-        let cpu0 = murk_render::bench::cpu_seconds();
-        run_task(plan, dir, job, *t, obs)?;
-        if let (Some(a), Some(b)) = (cpu0, murk_render::bench::cpu_seconds()) {
-            add_cpu(&cpu_path(dir, job), b - a)?;
-        }
+        let out = dir.join(&job.tasks[*t].out);
+        let tally = Tally::start(cpu_path(dir, job, *t), &murk_render::checkpoint_path(&out));
+        let rendered = run_task(plan, dir, job, *t, obs, &tally);
+        tally.write()?;
+        rendered?;
         if all_parts(job) {
             merge_parts(dir, job)?;
         }
@@ -122,18 +199,14 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
     Ok(todo.len())
 }
 
-/// Adds CPU seconds to a job's tally (a job's shards may run in different calls).
-fn add_cpu(path: &Path, secs: f64) -> Result<()> {
-    let before: f64 = std::fs::read_to_string(path)
-        .ok()
-        .and_then(|s| s.trim().parse().ok())
-        .unwrap_or(0.0);
-    murk_io::write_atomic(path, |w| {
-        writeln!(w, "{:.3}", before + secs).map_err(|e| Error::io(path, e))
-    })
-}
-
-fn run_task(plan: &Plan, dir: &Path, job: &CaptureJob, t: usize, obs: &dyn Observer) -> Result<()> {
+fn run_task(
+    plan: &Plan,
+    dir: &Path,
+    job: &CaptureJob,
+    t: usize,
+    obs: &dyn Observer,
+    tally: &Tally,
+) -> Result<()> {
     let task = &job.tasks[t];
     let scene = crate::plan::load_scene(&plan.scenes_dir, job.scene, &job.set)?;
     let out = dir.join(&task.out);
@@ -149,7 +222,10 @@ fn run_task(plan: &Plan, dir: &Path, job: &CaptureJob, t: usize, obs: &dyn Obser
         &opt,
         &job.outputs(&out),
         &|path, cap| murk_io::write_capture(path, cap),
-        &|done, total| obs.event(Event::Units { done, total }),
+        &|done, total| {
+            tally.tick();
+            obs.event(Event::Units { done, total })
+        },
         obs.stop().unwrap_or(&never),
     )?;
     Ok(())
@@ -315,15 +391,19 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
                 }
             }
         }
-        // A sweep's CPU is shared equally by the captures it writes.
+        // A job's CPU is its tasks' (shards'); a sweep's is shared equally by the captures it writes.
         let cpu_s = cell
             .captures
             .iter()
             .map(|id| {
                 let job = plan.job(id);
-                std::fs::read_to_string(cpu_path(dir, job))
-                    .ok()
-                    .and_then(|s| s.trim().parse::<f64>().ok())
+                (0..job.tasks.len())
+                    .map(|t| {
+                        std::fs::read_to_string(cpu_path(dir, job, t))
+                            .ok()
+                            .and_then(|s| s.trim().parse::<f64>().ok())
+                    })
+                    .sum::<Option<f64>>()
                     .map(|s| s / job.capture_ids().len() as f64)
             })
             .sum::<Option<f64>>();
@@ -419,5 +499,31 @@ fn score(
         cnr: metrics::cnr(&front.values, &mask),
         hf_share: metrics::high_frequency_share(&front.values, w, h),
         objects,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A task resumed from its checkpoint adds to its CPU tally; one rendered afresh starts anew.
+    #[test]
+    fn a_tally_adds_only_to_a_resumed_task() {
+        let dir = std::env::temp_dir().join(format!("murk-tally-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (path, ckpt) = (dir.join("a.cpu_s"), dir.join("a.h5.ckpt"));
+        std::fs::write(&path, "5.000\n").unwrap();
+        assert_eq!(Tally::start(path.clone(), &ckpt).before_s, 0.0);
+        std::fs::write(&ckpt, "").unwrap();
+        let resumed = Tally::start(path.clone(), &ckpt);
+        assert_eq!(resumed.before_s, 5.0);
+        resumed.write().unwrap();
+        let now: f64 = std::fs::read_to_string(&path)
+            .unwrap()
+            .trim()
+            .parse()
+            .unwrap();
+        assert!((5.0..6.0).contains(&now), "{now}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
