@@ -51,7 +51,7 @@ murk reconstruct capture.h5 --out volume.npy --png pictures/\n  \
 murk reconstruct capture.h5 --out volume.h5 --wavefactor 8 --cycles 4 --volume -1:1:73,-1:1:59,1.5:2.5:73\n  \
 murk reconstruct fog.h5 --out v.npy --compensate paper --mu-t 1.0 --albedo 0.5\n  \
 murk reconstruct letter_s.h5 --method cdt --out cdt.h5 --png cdt/\n  \
-murk reconstruct letter_s.h5 --method pf --wavefactor 4 --cycles 8 --t-offset slab --out pf.h5\n\n\
+murk reconstruct letter_s.h5 --method pf --wavefactor 8 --cycles 8 --t-offset slab --out pf.h5\n\n\
 Methods pf, pf-exact, bp and fbp reconstruct on --volume. lct, fk and cdt need a confocal capture on a regular\n\
 grid and reconstruct on their own grid (the scan points × depth k·Δs′/2; cdt and its defaults: 128 depths over\n\
 1 m); they ignore --volume and write their true x, y, z axes.\n\n\

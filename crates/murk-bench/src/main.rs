@@ -216,6 +216,10 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
     if let Some(case) = &a.paper_only {
         return paper_formats(case, a.runs, quiet);
     }
+    if a.skip_z && python.is_none() {
+        // --skip-z leaves only the side-by-side cases, which need y-tal.
+        bail!("--skip-z leaves only the side-by-side cases with y-tal, and there is no --tal-python and no .venv/bin/python");
+    }
     if !a.skip_z {
         paper_formats("all", a.runs, quiet)?;
     }

@@ -42,4 +42,10 @@ fn bad_arguments_are_one_line() {
         &["--tal-python", "/nonexistent", "--confocal-vs-tal"],
         "/nonexistent: no such file",
     );
+    // Run from the crate's folder, which has no .venv: --skip-z would leave nothing to measure.
+    assert!(!std::path::Path::new(".venv/bin/python").exists());
+    fails(
+        &["--skip-z"],
+        "--skip-z leaves only the side-by-side cases with y-tal",
+    );
 }

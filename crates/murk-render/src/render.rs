@@ -868,7 +868,11 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
         }
     }
     if let Some(missing) = seen.iter().position(|s| !s) {
-        return Err(Error::param(format!("shard {missing}/{n} is missing")));
+        let given: Vec<String> = parts.iter().map(|(p, _)| p.display().to_string()).collect();
+        return Err(Error::param(format!(
+            "shard {missing}/{n} is missing: the parts given are {}",
+            given.join(", ")
+        )));
     }
     Ok(out)
 }

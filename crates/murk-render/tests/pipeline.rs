@@ -78,11 +78,11 @@ fn seeded_render_is_bitwise_reproducible() {
     assert_eq!(merge(&stored).unwrap().h, one.h);
     stored[1].1.time.bin_width_m *= 1.0 + 1e-6;
     assert!(merge(&stored).unwrap_err().to_string().contains("part1"));
-    // A missing part is refused.
+    // A missing part is refused, naming the parts given.
     assert!(merge(&parts[..3])
         .unwrap_err()
         .to_string()
-        .contains("missing"));
+        .contains("shard 3/4 is missing: the parts given are part0, part1, part2"));
     // A part whose scene_info claims an impossible shard is refused, naming it (not an index panic).
     for bad in ["4/4", "5/4", "0/0", "0/99999999999999999999", "0/1000000"] {
         let mut forged = parts.clone();
@@ -315,7 +315,7 @@ fn bad_scenes_name_file_and_field() {
         (
             "albedo = 0.5",
             "albedo = 0.5\ng = 0.99999999",
-            "medium.g: must satisfy |g| ≤ 0.9999, got",
+            "medium.g: must satisfy |g| ≤ 0.9999, got 0.99999999",
         ),
         (
             "grid = [4, 3]",

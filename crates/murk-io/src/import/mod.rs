@@ -74,9 +74,19 @@ impl BinWidth {
     /// The `scene_info` line recording it, in the unit it was given in.
     fn info_line(self) -> String {
         match self {
-            BinWidth::Ps(ps) => format!("bin_width_ps: {ps}"),
-            BinWidth::M(m) => format!("bin_width_m: {m}"),
+            BinWidth::Ps(ps) => format!("bin_width_ps: {}", info_num(ps)),
+            BinWidth::M(m) => format!("bin_width_m: {}", info_num(m)),
         }
+    }
+}
+
+/// A number for `scene_info` as short as it reads back: a value that a file held in single precision
+/// (0.85 as f32 is 0.8500000238418579 as f64) is written with f32's shortest digits.
+fn info_num(v: f64) -> String {
+    if v as f32 as f64 == v {
+        format!("{}", v as f32)
+    } else {
+        format!("{v}")
     }
 }
 
@@ -393,8 +403,9 @@ impl Scan {
             format!("t0_bin: {}\n", f.t0_bin)
         };
         let scene_info = format!(
-            "{}scan_side_m: {side}\n{}\nspeed_of_light_m_per_s: {REFERENCE_C_M_PER_S}\ngated_bins: {}\norientation: 'grid (ix, iy) = scan (column {nx} - 1 - ix, row {ny} - 1 - iy)'\n{t0}{}",
+            "{}scan_side_m: {}\n{}\nspeed_of_light_m_per_s: {REFERENCE_C_M_PER_S}\ngated_bins: {}\norientation: 'grid (ix, iy) = scan (column {nx} - 1 - ix, row {ny} - 1 - iy)'\n{t0}{}",
             info_head(path, f.format, f.var),
+            info_num(side),
             f.bin_width.info_line(),
             f.gate_bins,
             f.extra,

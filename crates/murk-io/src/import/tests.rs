@@ -701,3 +701,11 @@ fn bad_inputs_fail_with_one_line() {
     assert!(e.contains("flat.npy: the array should be T × N × N"), "{e}");
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// scene_info keeps a single-precision value's short form, and a double's every digit.
+#[test]
+fn info_numbers_drop_only_what_f32_added() {
+    assert_eq!(super::info_num(0.85f32 as f64), "0.85");
+    assert_eq!(super::info_num(0.85), "0.85");
+    assert_eq!(super::info_num(1.0 / 3.0), "0.3333333333333333");
+}

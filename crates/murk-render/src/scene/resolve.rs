@@ -284,7 +284,7 @@ impl MediumDef {
         if bad_g {
             return Err(bad(
                 "medium.g",
-                format!("must satisfy |g| ≤ {MAX_ABS_G}, got {}", short(m.g)),
+                format!("must satisfy |g| ≤ {MAX_ABS_G}, got {}", m.g),
             ));
         }
         // Past 4 (germanium's index; water's is 1.33) every path is stretched beyond any window
