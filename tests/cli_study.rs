@@ -111,6 +111,26 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
         let t: f64 = fields[at].parse().unwrap();
         assert!(t > 0.0 && t < 1.0, "{row}");
     }
+    // A later run of fewer figures leaves only its own pictures and plots.
+    let (code, _, err) = murk(&[
+        "experiment",
+        "paper",
+        "--out",
+        d.to_str().unwrap(),
+        "--only",
+        "fig3a",
+        "--spp",
+        "4",
+        "--shards",
+        "2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(d.join("fig3a-paper.png").exists() && !d.join("fig4-paper.png").exists());
+    let plots: Vec<String> = std::fs::read_dir(d.join("plots"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(plots.iter().all(|p| !p.starts_with("fig4")), "{plots:?}");
     // A finished capture replaced by another render's is refused, not scored as this cell's.
     let renders: Vec<PathBuf> = std::fs::read_dir(d.join("renders"))
         .unwrap()
@@ -215,7 +235,7 @@ window.addEventListener('load', () => {
     // 2 figures × 3 compensations, and 7 metrics plotted against λ.
     assert_eq!(images, 6 + 7, "{probe}");
     assert!(probe.contains("broken=[]"), "{probe}");
-    // parameters: 6 rows + 2 scenes; metrics: header + 4 cells.
-    assert!(probe.contains("tables=parameters:8,metrics:5"), "{probe}");
+    // parameters: 6 rows + the Z's scene (the shelf's is not rendered); metrics: header + 4 cells.
+    assert!(probe.contains("tables=parameters:7,metrics:5"), "{probe}");
     std::fs::remove_dir_all(&d).unwrap();
 }

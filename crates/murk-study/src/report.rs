@@ -79,7 +79,44 @@ pub fn write(plan: &Plan, results: &[CellResult], dir: &Path) -> Result<PathBuf>
     write_objects_csv(results, &dir.join("objects.csv"))?;
     let figures = write_figures(results, dir)?;
     let plots = write_plots(results, dir)?;
+    remove_earlier_outputs(dir, &figures, &plots)?;
     write_html(plan, results, &figures, &plots, dir)
+}
+
+/// Removes the figures and plots that an earlier run in `dir` wrote and this report does not show (a
+/// run with other `--only` figures), so that the folder holds one study. Only the study's own names
+/// (`fig*-<compensation>.png`, `plots/fig*.svg`) are touched.
+fn remove_earlier_outputs(
+    dir: &Path,
+    figures: &[(String, PathBuf)],
+    plots: &[(String, PathBuf)],
+) -> Result<()> {
+    let kept: Vec<&PathBuf> = figures.iter().chain(plots).map(|(_, p)| p).collect();
+    let mut earlier: Vec<PathBuf> = Figure::ALL
+        .iter()
+        .flat_map(|f| {
+            murk_recon::Compensation::NAMES
+                .iter()
+                .map(move |c| PathBuf::from(format!("{}-{c}.png", f.name())))
+        })
+        .collect();
+    let plots_dir = dir.join("plots");
+    for entry in std::fs::read_dir(&plots_dir).map_err(io(&plots_dir))? {
+        let name = entry.map_err(io(&plots_dir))?.file_name();
+        let name = name.to_string_lossy();
+        if name.starts_with("fig") && name.ends_with(".svg") {
+            earlier.push(Path::new("plots").join(&*name));
+        }
+    }
+    for p in earlier.iter().filter(|p| !kept.contains(p)) {
+        match std::fs::remove_file(dir.join(p)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(Error::io(&dir.join(p), e))
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
@@ -94,17 +131,21 @@ fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
     for r in results {
         let c = &r.cell;
         let tail = metrics::mean_std(&r.tail_share).0;
+        // Without a medium, its albedo and g mean nothing: left empty.
+        let (albedo, g) = if c.medium.mu_t_per_m > 0.0 {
+            (c.medium.albedo.to_string(), c.medium.g.to_string())
+        } else {
+            (String::new(), String::new())
+        };
         for (comp, scores, _) in &r.by_compensation {
             let _ = write!(
                 s,
-                "{},{},{},{:?},{},{},{},{},{comp},{},{},{},{}",
+                "{},{},{},{},{},{albedo},{g},{},{comp},{},{},{},{}",
                 c.figure.name(),
                 c.row,
                 c.col,
-                c.scene,
+                c.scene.file().trim_end_matches(".toml"),
                 c.medium.mu_t_per_m,
-                c.medium.albedo,
-                c.medium.g,
                 c.lambda_factor,
                 scores.len(),
                 num(tail),
@@ -322,7 +363,11 @@ fn write_html(
         plan.captures.len(),
         plan.n_tasks()
     );
-    for scene in [SceneKind::ZLetter, SceneKind::Shelf] {
+    // The scenes this study rendered.
+    for scene in [SceneKind::ZLetter, SceneKind::Shelf]
+        .into_iter()
+        .filter(|s| plan.captures.iter().any(|c| c.scene == *s))
+    {
         let f = Format::of(scene, plan.scale);
         let spp = plan
             .captures
