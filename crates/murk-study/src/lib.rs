@@ -47,12 +47,13 @@ impl FolderLock {
             .open(&path)
             .map_err(|e| Error::io(&path, e))?;
         match file.try_lock() {
-            Ok(()) => Ok(FolderLock { _file: file }),
             Err(std::fs::TryLockError::WouldBlock) => Err(Error::param(format!(
-                "{}: another murk study is running in this folder; wait for it to end or choose another --out",
+                "{}: another murk study is running in this folder; wait for it to end or choose another folder",
                 dir.display()
             ))),
-            Err(std::fs::TryLockError::Error(e)) => Err(Error::io(&path, e)),
+            // A file system without locks (some network and FUSE mounts) still holds a study: the
+            // lock is a guard against a mistake, not a condition for running.
+            Ok(()) | Err(std::fs::TryLockError::Error(_)) => Ok(FolderLock { _file: file }),
         }
     }
 }

@@ -190,8 +190,10 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
         let out = dir.join(&job.tasks[*t].out);
         let tally = Tally::start(cpu_path(dir, job, *t), &murk_render::checkpoint_path(&out));
         let rendered = run_task(plan, dir, job, *t, obs, &tally);
-        tally.write()?;
+        // Counted whether the task ended or was stopped; a render's own failure is the one to report.
+        let tallied = tally.write();
         rendered?;
+        tallied?;
         if all_parts(job) {
             merge_parts(dir, job)?;
         }
