@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use murk_core::report::{clap_one_line, error_line};
+use std::sync::atomic::Ordering;
 
 mod cmd;
 
@@ -47,16 +48,23 @@ enum Command {
     Merge(cmd::render::MergeArgs),
 }
 
-/// What Ctrl-C says before the process ends, where the interrupted command can be resumed.
-static ON_INTERRUPT: std::sync::OnceLock<&str> = std::sync::OnceLock::new();
-
 fn main() {
     restore_default_sigpipe();
-    // Ctrl-C and SIGTERM: remove the temporaries of writes in progress (finished outputs and render
-    // checkpoints stay), then end as a shell expects of an interrupted command.
+    // Ctrl-C and SIGTERM: during a render, the first one stops it after the units in progress, whose
+    // checkpoint then keeps every finished unit (main ends the process once the render returns).
+    // Otherwise, or the second time, remove the temporaries of writes in progress (finished outputs
+    // and render checkpoints stay), then end as a shell expects of an interrupted command.
     let _ = ctrlc::set_handler(|| {
+        if cmd::RENDERING.load(Ordering::SeqCst) && !cmd::STOP.swap(true, Ordering::SeqCst) {
+            if cmd::ON_INTERRUPT.get().is_some() {
+                eprintln!(
+                    "murk: stopping after the work units in progress (Ctrl-C again ends at once)"
+                );
+            }
+            return;
+        }
         let _held = murk_io::remove_temporaries();
-        if let Some(note) = ON_INTERRUPT.get() {
+        if let Some(note) = cmd::ON_INTERRUPT.get() {
             eprintln!("murk: {note}");
         }
         std::process::exit(130);
@@ -81,14 +89,6 @@ fn main() {
         eprintln!("murk: error: {e}");
         std::process::exit(2);
     }
-    let resumable = match &cli.command {
-        Command::Render(_) => Some("interrupted: the checkpoint keeps the finished work units; the same command resumes from them"),
-        Command::Experiment(_) => Some("interrupted: finished renders and checkpoints stay in the folder; the same command goes on from them"),
-        _ => None,
-    };
-    if let Some(note) = resumable.filter(|_| !cli.quiet) {
-        let _ = ON_INTERRUPT.set(note);
-    }
     let result: anyhow::Result<()> = match cli.command {
         Command::Demo(a) => cmd::demo::run(a, cli.quiet),
         Command::Info(a) => cmd::info::run(a),
@@ -101,6 +101,13 @@ fn main() {
         Command::Merge(a) => cmd::render::run_merge(a, cli.quiet),
     };
     if let Err(e) = result {
+        if cmd::STOP.load(Ordering::SeqCst) {
+            // A render stopped by Ctrl-C: its checkpoint is whole.
+            if let Some(note) = cmd::ON_INTERRUPT.get() {
+                eprintln!("murk: {note}");
+            }
+            std::process::exit(130);
+        }
         eprintln!("murk: error: {}", error_line(e.as_ref()));
         std::process::exit(1);
     }

@@ -6,6 +6,7 @@ use murk_study::plan::{Figure, Scale, StudyOptions};
 use murk_study::run::{Event, Observer};
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum StudyArg {
@@ -81,6 +82,8 @@ impl Observer for Bars {
                 label,
                 eta_s,
             } => {
+                // Renders run from here until the first step after them.
+                crate::cmd::RENDERING.store(true, Ordering::SeqCst);
                 let eta = eta_s.map_or("…".to_string(), |s| format!("{:.0} s", s));
                 let msg = format!("task {index}/{total} {label}, ETA {eta}");
                 if self.bar.is_hidden() && !self.quiet {
@@ -93,6 +96,7 @@ impl Observer for Bars {
                 self.bar.set_position(done as u64);
             }
             Event::Step(s) => {
+                crate::cmd::RENDERING.store(false, Ordering::SeqCst);
                 self.bar.set_message(s.to_string());
                 self.bar.set_length(0);
                 self.bar.set_position(0);
@@ -100,6 +104,9 @@ impl Observer for Bars {
             Event::Note(s) if !self.quiet => self.bar.suspend(|| eprintln!("murk: {s}")),
             Event::Note(_) => {}
         }
+    }
+    fn stop(&self) -> Option<&AtomicBool> {
+        Some(&crate::cmd::STOP)
     }
 }
 
@@ -143,6 +150,12 @@ pub fn run(a: ExperimentArgs, quiet: bool) -> anyhow::Result<()> {
         ProgressStyle::with_template("{msg}\n{bar:40} {pos}/{len} units, {elapsed} elapsed")
             .expect("static template"),
     );
+    if !quiet {
+        let _ = crate::cmd::ON_INTERRUPT.set(
+            "interrupted: finished renders and checkpoints stay in the folder; the same command goes on from them"
+                .to_string(),
+        );
+    }
     let pool = crate::cmd::pool(a.threads)?;
     let obs = Bars { bar, quiet };
     let index = pool.install(|| murk_study::run_study(&a.out, &opt, &obs))?;

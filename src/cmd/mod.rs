@@ -8,6 +8,18 @@ pub mod reconstruct;
 pub mod render;
 pub mod synth;
 
+use std::sync::atomic::AtomicBool;
+
+/// Set by the first Ctrl-C while a render runs: no work unit starts after it, and the render's
+/// checkpoint keeps every finished one, so the same command resumes without redoing them.
+pub static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Whether a render that watches [`STOP`] runs now; otherwise Ctrl-C ends the process at once.
+pub static RENDERING: AtomicBool = AtomicBool::new(false);
+
+/// What Ctrl-C says as the process ends, set by a command that can be resumed (not with --quiet).
+pub static ON_INTERRUPT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+
 /// The worker pool of `--threads` (default: one thread per core).
 pub fn pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
     use anyhow::Context;

@@ -8,6 +8,7 @@ use murk_render::{
 };
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 #[derive(Args)]
@@ -181,6 +182,12 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         );
     }
     let ckpt = output_checkpoint(&a.out, a.resume, a.checkpoint_every)?;
+    if let Some((path, _)) = ckpt.as_ref().filter(|_| !quiet) {
+        let _ = crate::cmd::ON_INTERRUPT.set(format!(
+            "interrupted: {} keeps the finished work units; the same command with --resume goes on from them",
+            path.display()
+        ));
+    }
     let opt = RenderOptions {
         spp,
         seed: a.seed,
@@ -197,14 +204,16 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
             .expect("static template"),
     );
     let t0 = Instant::now();
-    let never = std::sync::atomic::AtomicBool::new(false);
-    plan.render_stored(
+    crate::cmd::RENDERING.store(true, Ordering::SeqCst);
+    let rendered = plan.render_stored(
         &opt,
         outs,
         &|out, cap| murk_io::write_capture(out, cap),
         &|done, _| bar.set_position(done as u64),
-        &never,
-    )?;
+        &crate::cmd::STOP,
+    );
+    crate::cmd::RENDERING.store(false, Ordering::SeqCst);
+    rendered?;
     bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     if !quiet {
