@@ -51,8 +51,11 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
         assert!(st.success(), "{line}");
     }
     // A temporary left by a killed process goes; the finished parts are merged.
-    let stale = d.join("renders/.x.h5.4294967295-0.tmp");
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    let stale = d.join(format!("renders/.x.h5.4294967295-0@{}.tmp", host.trim()));
     std::fs::write(&stale, "x").unwrap();
+    let stale_csv = d.join(format!(".metrics.csv.4294967295-0@{}.tmp", host.trim()));
+    std::fs::write(&stale_csv, "x").unwrap();
     let (code, _, err) = small_study(&d, &["--shards", "2"]);
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("task 1/"), "rendered again:\n{err}");
@@ -60,7 +63,7 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
         err.contains("2 of the plan's 2 renders are already in"),
         "{err}"
     );
-    assert!(!stale.exists());
+    assert!(!stale.exists() && !stale_csv.exists());
     // Nothing is left to list; a listed command run again anyway leaves no part behind.
     let (code, stdout, err) = small_study(&d, &["--list-tasks", "--shards", "2"]);
     assert_eq!((code, stdout.as_str()), (0, ""), "{err}");

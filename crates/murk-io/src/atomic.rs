@@ -64,22 +64,38 @@ pub fn remove_temporaries() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     live
 }
 
-/// Removes from `dir` the temporaries of writes whose process is gone (killed before it could clean
-/// up, as by SIGKILL), and returns how many. A process is looked up in `/proc`; where there is none
-/// (not Linux), nothing is removed.
+/// This machine's name, which temporaries carry: a folder shared between machines (a cluster's
+/// file system) holds other machines' temporaries, whose processes this one cannot see. Linux's;
+/// elsewhere `None`, and no temporary is taken for stale.
+fn host() -> Option<&'static str> {
+    static HOST: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
+        std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .ok()
+            .map(|h| h.trim().to_string())
+            .filter(|h| !h.is_empty() && !h.contains(['/', '@']))
+    })
+    .as_deref()
+}
+
+/// Removes from `dir` the temporaries that this machine's writes left when their process was killed
+/// (SIGKILL gives it no time to clean up), and returns how many. Processes are looked up in `/proc`,
+/// so only temporaries named with this machine's name are considered; on other systems, none.
 pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
-    if !Path::new("/proc/self").exists() {
+    let Some(host) = host() else {
         return Ok(0);
-    }
+    };
     let mut removed = 0;
     for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let entry = entry.map_err(|e| Error::io(dir, e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        // `.{target}.{pid}-{n}.tmp`, as temp_sibling names them.
+        // `.{target}.{pid}-{n}@{host}.tmp`, as temp_sibling names them.
         let pid = name
             .strip_prefix('.')
             .and_then(|n| n.strip_suffix(".tmp"))
-            .and_then(|n| n.rsplit_once('.'))
+            .and_then(|n| n.rsplit_once('@'))
+            .filter(|(_, h)| *h == host)
+            .and_then(|(n, _)| n.rsplit_once('.'))
             .and_then(|(_, tail)| tail.split_once('-'))
             .and_then(|(pid, n)| n.parse::<u64>().ok().and(pid.parse::<u32>().ok()));
         if let Some(pid) = pid {
@@ -102,7 +118,12 @@ fn temp_sibling(path: &Path) -> Result<PathBuf> {
         )
     })?;
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let tmp_name = format!(".{}.{}-{n}.tmp", name.to_string_lossy(), std::process::id());
+    let host = host().map_or(String::new(), |h| format!("@{h}"));
+    let tmp_name = format!(
+        ".{}.{}-{n}{host}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    );
     Ok(path.with_file_name(tmp_name))
 }
 
@@ -252,19 +273,22 @@ mod tests {
         assert!(check_output(&fine, &[]).is_ok());
     }
 
-    /// A dead process's temporary is removed; a live one's (this process's), other hidden files
-    /// and finished outputs stay.
+    /// A dead process's temporary is removed; a live one's (this process's), another machine's,
+    /// other hidden files and finished outputs stay.
     #[test]
     fn stale_temporaries_of_dead_processes_are_removed() {
         let dir = std::env::temp_dir().join(format!("murk-stale-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         // Linux's pid_max is at most 2^22: this pid cannot be running.
-        let dead = dir.join(".c.h5.4294967295-0.tmp");
+        let host = host().unwrap();
+        let dead = dir.join(format!(".c.h5.4294967295-0@{host}.tmp"));
         let live = temp_sibling(&dir.join("c.h5")).unwrap();
         let keep = [
             dir.join("c.h5"),
             dir.join(".hidden"),
             dir.join(".c.h5.x-0.tmp"),
+            // Another machine's, whose processes /proc does not show.
+            dir.join(".c.h5.4294967295-0@elsewhere.tmp"),
         ];
         for p in keep.iter().chain([&dead, &live]) {
             std::fs::write(p, "x").unwrap();

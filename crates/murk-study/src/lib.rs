@@ -71,6 +71,13 @@ pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<(Plan, FolderLock)> {
     let renders = dir.join("renders");
     murk_io::create_output_dir(&renders)?;
     let lock = FolderLock::take(dir)?;
+    // What killed runs left: temporaries of captures, of the report's files and of its plots.
+    for sub in ["", "renders", "plots"] {
+        let d = dir.join(sub);
+        if d.is_dir() {
+            murk_io::remove_stale_temporaries(&d)?;
+        }
+    }
     let path = dir.join("plan.json");
     let json = serde_json::to_string_pretty(&plan)
         .map_err(|e| Error::param(format!("cannot serialise the plan: {e}")))?;

@@ -126,7 +126,6 @@ impl Tally {
 pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
     let renders = dir.join("renders");
     murk_io::create_output_dir(&renders)?;
-    murk_io::remove_stale_temporaries(&renders)?;
     let missing: Vec<&CaptureJob> = plan.captures.iter().filter(|j| !captured(dir, j)).collect();
     let all_parts =
         |j: &CaptureJob| j.tasks.len() > 1 && (0..j.tasks.len()).all(|t| task_done(dir, j, t));
