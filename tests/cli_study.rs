@@ -148,6 +148,20 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
         err.contains(renders[1].to_str().unwrap()) && err.contains("another render"),
         "{err}"
     );
+    // One flipped bit in a cached capture (its middle lies in H) is refused before it is read as
+    // anyone's render.
+    let mut bytes = std::fs::read(&renders[1]).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 1;
+    std::fs::write(&renders[1], &bytes).unwrap();
+    let (code, _, err) = small_study(&d, &["--shards", "2"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(renders[1].to_str().unwrap())
+            && err.contains("do not match the checksum")
+            && err.ends_with("delete it to render it again\n"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 

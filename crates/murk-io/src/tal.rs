@@ -13,8 +13,9 @@
 //! | `scene_info` | UTF-8 variable-length string scalar holding YAML |
 //! | `volume_format` | deprecated; left out on write, ignored on read |
 //!
-//! murk also writes one root attribute, `murk_h_crc32`: the CRC-32 of H's values, which a read checks
-//! where it is present (y-tal ignores attributes, and writes none).
+//! murk also writes one root attribute, `murk_crc32`: the CRC-32 of H, the points, normals, devices,
+//! time axis and `scene_info` as stored, which a read checks where it is present (y-tal ignores
+//! attributes, and writes none).
 //!
 //! Mapping to [`Capture`]: tal's histogram index over the non-time axes in C order equals murk's
 //! (laser grids `[ix, iy]` are murk's x-major `Grid`, product index = l·n_sensor + s), so H is a
@@ -281,35 +282,61 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
     drop(tal_h);
     cap.h = h;
     cap.validate_data().map_err(|e| bad(e.to_string()))?;
-    // Files murk wrote carry H's checksum: a damaged one would otherwise read as a valid capture
+    // Files murk wrote carry a checksum: a damaged one would otherwise read as a valid capture
     // (checked after the values, whose own faults, such as NaN written in place, say more).
-    if let Some(want) = file.root().attrs().ok().and_then(|a| match a.get(H_CRC32) {
+    if let Some(want) = file.root().attrs().ok().and_then(|a| match a.get(CRC32) {
         Some(hdf5_pure::AttrValue::U32(c)) => Some(*c),
         _ => None,
     }) {
-        let got = h_crc32(&cap.h);
+        let got = capture_crc32(&cap);
         if got != want {
             return Err(bad(format!(
-                "H does not match the checksum murk wrote with it ({H_CRC32} {want:08x}, H's is {got:08x}): the file is damaged, or H was changed in place by another tool (delete the attribute to keep such a change)"
+                "its data do not match the checksum murk wrote with them ({CRC32} {want:08x}, now {got:08x}): the file is damaged, or was changed in place by another tool, whose change murk reads once the attribute is deleted"
             )));
         }
     }
     Ok(cap)
 }
 
-/// The root attribute holding the CRC-32 of H's values as murk wrote them.
-const H_CRC32: &str = "murk_h_crc32";
+/// The root attribute holding [`capture_crc32`] as murk wrote it.
+const CRC32: &str = "murk_crc32";
 
-/// CRC-32 of `h` as little-endian f32 bytes, histogram by histogram (murk's order, whatever the
-/// file's layout).
-fn h_crc32(h: &[f32]) -> u32 {
+/// CRC-32 of what a capture file stores, as stored: H histogram by histogram (murk's order, whatever
+/// the file's layout), then the points, normals and devices, the time axis as f32, the flag and
+/// `scene_info`, all little-endian.
+fn capture_crc32(cap: &Capture) -> u32 {
     let mut crc = crc32fast::Hasher::new();
     let mut bytes = Vec::with_capacity(4 * 4096);
-    for block in h.chunks(4096) {
+    for block in cap.h.chunks(4096) {
         bytes.clear();
         bytes.extend(block.iter().flat_map(|v| v.to_le_bytes()));
         crc.update(&bytes);
     }
+    let f32s = |crc: &mut crc32fast::Hasher, vs: &mut dyn Iterator<Item = f64>| {
+        for v in vs {
+            crc.update(&(v as f32).to_le_bytes());
+        }
+    };
+    for set in [&cap.illum, &cap.sensor] {
+        f32s(
+            &mut crc,
+            &mut set
+                .points
+                .iter()
+                .chain(&set.normals)
+                .flat_map(|p| p.to_array()),
+        );
+    }
+    for device in [cap.laser_xyz, cap.sensor_xyz] {
+        crc.update(&[device.is_some() as u8]);
+        f32s(&mut crc, &mut device.into_iter().flat_map(|p| p.to_array()));
+    }
+    f32s(
+        &mut crc,
+        &mut [cap.time.start_m, cap.time.bin_width_m].into_iter(),
+    );
+    crc.update(&[cap.t_accounts_first_and_last_bounces as u8]);
+    crc.update(cap.scene_info.as_bytes());
     crc.finalize()
 }
 
@@ -426,7 +453,7 @@ pub fn write_capture_compressed(path: &Path, cap: &Capture, level: u32) -> Resul
     };
 
     let mut fb = FileBuilder::new();
-    fb.set_attr(H_CRC32, hdf5_pure::AttrValue::U32(h_crc32(&cap.h)));
+    fb.set_attr(CRC32, hdf5_pure::AttrValue::U32(capture_crc32(cap)));
     let h = fb.create_dataset("H");
     h.with_shape(&h_shape).with_f32_data(&tal_h);
     if level > 0 {
@@ -674,23 +701,32 @@ pub(crate) mod tests {
         std::fs::remove_dir_all(dir).ok();
     }
 
-    /// One bit flipped in H's data is refused, naming the file and the checksum.
+    /// One bit flipped in H, in a point's coordinate or in the time axis is refused, naming the file
+    /// and the checksum; the unchanged file reads.
     #[test]
-    fn a_damaged_h_is_refused() {
+    fn a_damaged_capture_is_refused() {
         let dir = tmpdir("crc");
         let p = dir.join("c.hdf5");
         let cap = all_kinds()[0].1.clone();
-        write_capture(&p, &cap).unwrap();
-        let mut bytes = std::fs::read(&p).unwrap();
-        let value = cap.h[5].to_le_bytes();
-        let at = bytes.windows(4).position(|w| w == value).unwrap();
-        bytes[at] ^= 1;
-        std::fs::write(&p, &bytes).unwrap();
-        let e = err_of(&p);
-        assert!(
-            e.contains("c.hdf5") && e.contains("H does not match the checksum murk wrote with it"),
-            "{e}"
-        );
+        let laser_x = cap.laser_xyz.unwrap().x as f32;
+        for (what, value) in [
+            ("H", cap.h[5].to_le_bytes()),
+            ("laser_xyz", laser_x.to_le_bytes()),
+            ("delta_t", (cap.time.bin_width_m as f32).to_le_bytes()),
+        ] {
+            write_capture(&p, &cap).unwrap();
+            assert!(read_capture(&p).is_ok());
+            let mut bytes = std::fs::read(&p).unwrap();
+            let at = bytes.windows(4).position(|w| w == value).unwrap();
+            bytes[at] ^= 1;
+            std::fs::write(&p, &bytes).unwrap();
+            let e = err_of(&p);
+            assert!(
+                e.contains("c.hdf5")
+                    && e.contains("its data do not match the checksum murk wrote with them"),
+                "{what}: {e}"
+            );
+        }
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -291,7 +291,14 @@ pub struct CellResult {
 /// left there by hand would otherwise be scored as this cell's.
 fn load_capture(plan: &Plan, dir: &Path, id: &str) -> Result<Capture> {
     let path = dir.join(capture_path(id));
-    let cap = murk_io::read_capture(&path)?;
+    // A damaged cache file is the study's own: rendering it again is the remedy.
+    let cap = murk_io::read_capture(&path).map_err(|e| match e {
+        Error::Format { path, msg } => Error::Format {
+            path,
+            msg: format!("{msg}; delete it to render it again"),
+        },
+        e => e,
+    })?;
     let (job, k) = plan
         .captures
         .iter()
