@@ -171,7 +171,7 @@ fn bad_options_fail_on_one_line() {
     let out = d.to_str().unwrap();
     for (args, want) in [
         (vec!["--only", "fig9"], "unknown figure 'fig9'"),
-        (vec!["--seeds", "0"], "--seeds must be in 1..=64"),
+        (vec!["--seeds", "0"], "seeds must be in 1..=64, got 0"),
         (
             vec!["--scenes", "/nonexistent"],
             "/nonexistent: no such scenes folder",

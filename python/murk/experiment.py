@@ -12,12 +12,25 @@ From a shell, with a scheduler already running (e.g. dask_jobqueue, see docs/pyt
 """
 
 import argparse
+import contextlib
 import os
 import sys
 from typing import List, Optional, Sequence
 
 import murk
 from . import _murk
+from .errors import InputError
+
+
+def _strings(value, what: str) -> List[str]:
+    """A list of names (``only``, ``cells``): any iterable of str."""
+    try:
+        items = list(value)
+    except TypeError:
+        items = None
+    if items is None or not all(isinstance(v, str) for v in items):
+        raise InputError(f"{what}: expected a string or a list of strings, got {value!r}")
+    return items
 
 
 def _study(scale, only, cells, seeds, shards, spp, scenes) -> dict:
@@ -28,8 +41,30 @@ def _study(scale, only, cells, seeds, shards, spp, scenes) -> dict:
         only = [f for f in only.split(",") if f]
     if isinstance(cells, str):
         cells = [cells]
-    return dict(scale=scale, only=list(only), cells=list(cells), seeds=seeds, shards=shards,
-                spp=spp, scenes=murk._path(scenes, "scenes"))
+    return dict(scale=scale, only=_strings(only, "only"), cells=_strings(cells, "cells"),
+                seeds=murk._count(seeds, "seeds"), shards=murk._count(shards, "shards"),
+                spp=None if spp is None else murk._count(spp, "spp"),
+                scenes=murk._path(scenes, "scenes"))
+
+
+@contextlib.contextmanager
+def _folder_held(out: str):
+    """Holds the study folder as ``murk experiment`` does (the same lock file), for the renders a
+    Dask cluster runs between planning and the report. A file system without locks is not held."""
+    try:
+        import fcntl
+    except ImportError:  # not a POSIX system
+        yield
+        return
+    with open(os.path.join(out, ".lock"), "a") as f:
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise InputError(f"{out}: another murk study is running in this folder; wait for it to "
+                             "end or choose another folder") from None
+        except OSError:
+            pass
+        yield
 
 
 def plan(
@@ -101,23 +136,28 @@ def run_dask(out, client=None, *, scale="quick", only=(), cells=(), seeds=1, sha
     opts = dict(scale=scale, only=only, cells=cells, seeds=seeds, shards=shards, spp=spp,
                 scenes=os.path.abspath(murk._path(scenes, "scenes")))
     out = os.path.abspath(murk._path(out, "out"))
+    # Checked before a cluster starts: every task would fail on them, three times each.
+    _murk.check_threads(threads)
+    if client is not None and not callable(getattr(client, "submit", None)):
+        raise InputError(f"client: expected a dask.distributed.Client or None, got {client!r}")
     todo = pending(plan(out, **opts))
-    own = client is None
-    if own:
-        cluster = local_cluster()
-        client = Client(cluster)
-    stop = _stop_file(out)
-    try:
-        futures = [
-            client.submit(render_task, t, threads=threads, stop=stop, retries=3, pure=False,
-                          key=f"murk-render-{t['id']}")
-            for t in todo
-        ]
-        done = _gather(client, futures, stop)
-    finally:
+    with _folder_held(out):
+        own = client is None
         if own:
-            client.close()
-            cluster.close()
+            cluster = local_cluster()
+            client = Client(cluster)
+        stop = _stop_file(out)
+        try:
+            futures = [
+                client.submit(render_task, t, threads=threads, stop=stop, retries=3, pure=False,
+                              key=f"murk-render-{t['id']}")
+                for t in todo
+            ]
+            done = _gather(client, futures, stop)
+        finally:
+            if own:
+                client.close()
+                cluster.close()
     if not finish:
         return done
     return run(out, threads=threads, **opts)

@@ -202,6 +202,7 @@ fn _murk(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ops::merge, m)?)?;
     m.add_function(wrap_pyfunction!(ops::render_part, m)?)?;
     m.add_function(wrap_pyfunction!(ops::check_render, m)?)?;
+    m.add_function(wrap_pyfunction!(ops::check_threads, m)?)?;
     m.add_function(wrap_pyfunction!(ops::assemble, m)?)?;
     m.add_function(wrap_pyfunction!(ops::render_outputs, m)?)?;
     m.add_function(wrap_pyfunction!(ops::study_plan, m)?)?;

@@ -220,6 +220,13 @@ pub fn check_render(
     })
 }
 
+/// Refuses a `threads` value before any work: a Dask executor checks it before its cluster starts.
+#[pyfunction]
+#[pyo3(signature = (threads))]
+pub fn check_threads(threads: Option<i64>) -> PyResult<()> {
+    threads.map(thread_count).transpose().map(|_| ())
+}
+
 /// The captures an unsharded render gives (one, or one per albedo of a sweep), bit for bit, from
 /// the parts `render_part` completed (`parts[i]` holds shard i of `len(parts)`), for the same scene,
 /// overrides, spp, seed and albedos.
@@ -318,9 +325,12 @@ pub fn study_plan<'py>(
     args: StudyArgs,
 ) -> PyResult<Bound<'py, PyList>> {
     let opt = study_options(args)?;
+    // Absolute, as the commands are: a task runs from any folder.
+    let out = std::path::absolute(&out).unwrap_or(out);
     let (plan, _lock) = py
         .detach(|| murk_study::prepare(&out, &opt))
         .map_err(to_py)?;
+    let scenes = std::path::absolute(&plan.scenes_dir).unwrap_or_else(|_| plan.scenes_dir.clone());
     let commands = plan.task_commands(&out, |_, _| true);
     let tasks = PyList::empty(py);
     let mut k = 0;
@@ -333,7 +343,7 @@ pub fn study_plan<'py>(
                 .map(|id| out.join(murk_study::run::capture_path(id)))
                 .collect();
             d.set_item("captures", captures)?;
-            d.set_item("scene", plan.scenes_dir.join(c.scene.file()))?;
+            d.set_item("scene", scenes.join(c.scene.file()))?;
             d.set_item("out", out.join(&t.out))?;
             d.set_item("outs", c.outputs(&out.join(&t.out)))?;
             d.set_item("capture_outs", capture_outs)?;

@@ -108,11 +108,40 @@ def test_bad_study_arguments(tmp_path):
         murk.experiment.plan(tmp_path, only=["fig9"], scenes=SCENES)
     with pytest.raises(murk.InputError):
         murk.experiment.plan(tmp_path, scale="huge", scenes=SCENES)
-    with pytest.raises(murk.InputError, match=r"--spp must be in 1\.\."):
+    with pytest.raises(murk.InputError, match="spp must be a whole number ≥ 1, got 0"):
         murk.experiment.plan(tmp_path, spp=0, scenes=SCENES)
+    with pytest.raises(murk.InputError, match="seeds must be in 1..=64, got 65"):
+        murk.experiment.plan(tmp_path, seeds=65, scenes=SCENES)
+    # Each keyword is named, not a bare TypeError; True is no count.
+    for kw, name in [(dict(only=None), "only"), (dict(only=5), "only"), (dict(cells=None), "cells"),
+                     (dict(cells=[1]), "cells"), (dict(spp=True), "spp"),
+                     (dict(shards="2"), "shards")]:
+        with pytest.raises(murk.InputError, match=f"^{name}"):
+            murk.experiment.plan(tmp_path, scenes=SCENES, **kw)
     # One comma-separated string, as the CLI's --only takes it; one cell label, not its letters.
     tasks = murk.experiment.plan(tmp_path, only="fig3a", cells="fig3a", spp=4, scenes=SCENES)
     assert tasks == murk.experiment.plan(tmp_path, only=["fig3a"], spp=4, scenes=SCENES)
+    # Absolute paths, as in the commands: a task runs from any folder.
+    assert all(os.path.isabs(p) for t in tasks for p in [t["scene"], t["out"], *t["outs"]])
+
+
+def test_run_dask_checks_its_arguments_before_a_cluster_starts(tmp_path, monkeypatch):
+    def no_cluster(*a, **k):
+        raise AssertionError("a cluster started")
+    monkeypatch.setattr(murk.dask, "local_cluster", no_cluster)
+    with pytest.raises(murk.InputError, match="^threads"):
+        murk.experiment.run_dask(tmp_path, only=["fig3a"], spp=4, scenes=SCENES, threads="2")
+    with pytest.raises(murk.InputError, match="^client: expected a dask.distributed.Client"):
+        murk.experiment.run_dask(tmp_path, "x", only=["fig3a"], spp=4, scenes=SCENES)
+
+
+def test_the_dask_phase_holds_the_folder_as_the_cli_does(tmp_path):
+    # The lock run_dask holds while its cluster renders is the one murk experiment takes.
+    murk.experiment.plan(tmp_path, only=["fig3a"], spp=4, scenes=SCENES)
+    with murk.experiment._folder_held(os.fspath(tmp_path)):
+        with pytest.raises(murk.InputError, match="another murk study is running in this folder"):
+            murk.experiment.plan(tmp_path, only=["fig3a"], spp=4, scenes=SCENES)
+    murk.experiment.plan(tmp_path, only=["fig3a"], spp=4, scenes=SCENES)
 
 
 def test_an_interrupted_study_keeps_its_finished_units(tmp_path):

@@ -317,7 +317,7 @@ impl Plan {
     pub fn new(opt: &StudyOptions) -> Result<Plan> {
         if opt.seeds == 0 || opt.seeds > 64 {
             return Err(Error::param(format!(
-                "--seeds must be in 1..=64, got {}",
+                "seeds must be in 1..=64, got {}",
                 opt.seeds
             )));
         }
@@ -326,13 +326,13 @@ impl Plan {
             .filter(|s| !(1..=murk_core::Limits::MAX_SPP).contains(s))
         {
             return Err(Error::param(format!(
-                "--spp must be in 1..={}, got {spp}",
+                "spp must be in 1..={}, got {spp}",
                 murk_core::Limits::MAX_SPP
             )));
         }
         if opt.shards == 0 || opt.shards > 1024 {
             return Err(Error::param(format!(
-                "--shards must be in 1..=1024, got {}",
+                "shards must be in 1..=1024, got {}",
                 opt.shards
             )));
         }

@@ -446,7 +446,9 @@ fn write_html(
         }
         h.push_str("</table>\n");
     }
-    h.push_str("<h2>Plots</h2>\n");
+    if !plots.is_empty() {
+        h.push_str("<h2>Plots</h2>\n");
+    }
     for (title, path) in plots {
         let _ = writeln!(
             h,

@@ -176,10 +176,13 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
     for (k, (job, t)) in todo.iter().enumerate() {
         let eta_s =
             (k > 0).then(|| started.elapsed().as_secs_f64() / k as f64 * (todo.len() - k) as f64);
-        let label = labels
+        let mut label = labels
             .get(job.id.as_str())
             .cloned()
             .unwrap_or_else(|| format!("reference {}", job.scene.file()));
+        if let Some((i, n)) = job.tasks[*t].shard {
+            label.push_str(&format!(" (shard {i}/{n})"));
+        }
         obs.event(Event::Task {
             index: k + 1,
             total: todo.len(),
