@@ -1143,7 +1143,7 @@ fn terminated_render_leaves_no_temporaries_and_resumes() {
         v.extend(extra.iter().map(|s| s.to_string()));
         v
     };
-    let mut child = Command::new(env!("CARGO_BIN_EXE_murk"))
+    let child = Command::new(env!("CARGO_BIN_EXE_murk"))
         .args(args(&[
             "--out",
             out.to_str().unwrap(),

@@ -100,7 +100,7 @@ pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
             .and_then(|(pid, n)| n.parse::<u64>().ok().and(pid.parse::<u32>().ok()));
         if let Some(pid) = pid {
             if !Path::new(&format!("/proc/{pid}")).exists() {
-                std::fs::remove_file(entry.path()).map_err(|e| Error::io(&entry.path(), e))?;
+                std::fs::remove_file(entry.path()).map_err(|e| Error::io(entry.path(), e))?;
                 removed += 1;
             }
         }

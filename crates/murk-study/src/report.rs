@@ -111,7 +111,7 @@ fn remove_earlier_outputs(
     for p in earlier.iter().filter(|p| !kept.contains(p)) {
         match std::fs::remove_file(dir.join(p)) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(Error::io(&dir.join(p), e))
+                return Err(Error::io(dir.join(p), e))
             }
             _ => {}
         }
