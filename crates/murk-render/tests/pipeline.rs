@@ -589,6 +589,33 @@ fn overrides_are_named_recorded_and_guard_resume() {
         e.contains("capture.grid is [4, 3] there, [2, 2] now"),
         "{e}"
     );
+    // Another --bins or --spp: refused on one line, naming it.
+    let e = Plan::new(
+        &load(&Overrides {
+            bins: Some(128),
+            ..Overrides::default()
+        })
+        .unwrap(),
+    )
+    .render(&opts(None, Some(ck.clone())), &|_, _| {})
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("capture.bins is 64 there, 128 now") && !e.contains('\n'),
+        "{e}"
+    );
+    let fewer = RenderOptions {
+        spp: 32,
+        ..opts(None, Some(ck.clone()))
+    };
+    let e = Plan::new(&base)
+        .render(&fewer, &|_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("render.spp_used is 64 there, 32 now") && !e.contains('\n'),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
