@@ -354,3 +354,38 @@ fn shelf_objects_and_seed_spreads_are_reported() {
     std::fs::remove_dir_all(&d).unwrap();
     std::fs::remove_dir_all(&d2).unwrap();
 }
+
+/// `murk render --truth` writes a ground truth that `murk info` describes: the lattice, the Z seen at
+/// its depth, its object and its bounds.
+#[test]
+fn a_rendered_ground_truth_is_described_by_info() {
+    let d = dir("truth");
+    std::fs::create_dir_all(&d).unwrap();
+    let (out, truth) = (d.join("z.h5"), d.join("z-truth.h5"));
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml");
+    let (code, _, err) = murk(&[
+        "render",
+        scene,
+        "--grid",
+        "16",
+        "--spp",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--truth",
+        truth.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let (code, info, err) = murk(&["info", truth.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    for want in [
+        "ground truth: 16 × 16 lattice points, x -0.9375 to 0.9375 m",
+        "depth 2.0000 to 2.0000 m",
+        "object 0 (object[0] (z-letter)): first surface at ",
+        "bounds: [-0.4, -0.4, 2.0] to [0.4, 0.4, 2.0] m",
+    ] {
+        assert!(info.contains(want), "{want} not in:\n{info}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}

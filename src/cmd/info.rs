@@ -6,14 +6,21 @@ use std::path::PathBuf;
 #[derive(Args)]
 #[command(after_help = "Examples:\n  \
 murk info capture.h5\n  \
-murk info capture.h5 | grep 'window end'   # how much signal the window's last bins still carry")]
+murk info capture.h5 | grep 'window end'   # how much signal the window's last bins still carry\n  \
+murk info truth.h5                           # a ground truth: lattice, depths, objects, bounds")]
 pub struct InfoArgs {
-    /// A y-tal HDF5 capture (.h5 / .hdf5).
+    /// A y-tal HDF5 capture (.h5 / .hdf5), or a ground truth that `murk render --truth` wrote.
     pub file: PathBuf,
 }
 
 pub fn run(a: InfoArgs) -> anyhow::Result<()> {
-    let cap = murk_io::read_capture(&a.file)?;
-    println!("{}", murk_io::describe(&cap).join("\n"));
+    let lines = match murk_io::read_capture(&a.file) {
+        Ok(cap) => murk_io::describe(&cap),
+        // Not a capture: a ground truth is described; anything else keeps the capture's error.
+        Err(e) => murk_io::read_truth_h5(&a.file)
+            .map(|t| murk_io::describe_truth(&t))
+            .map_err(|_| e)?,
+    };
+    println!("{}", lines.join("\n"));
     Ok(())
 }

@@ -41,10 +41,35 @@ pub fn write_truth_h5(path: &Path, truth: &GroundTruth) -> Result<()> {
     })
 }
 
-/// Reads the depth map, object ids and axes of a file written by [`write_truth_h5`] (names and bounds are
-/// left empty: they are for people).
+/// Reads a file written by [`write_truth_h5`]: depth map, object ids, axes, bounds and object names
+/// (bounds NaN and names empty where a file has none).
 pub fn read_truth_h5(path: &Path) -> Result<GroundTruth> {
     let file = h5::open(path)?;
+    let attrs = file.root().attrs().unwrap_or_default();
+    let xyz = |name: &str| -> Result<[f64; 3]> {
+        let bad = || {
+            Error::format(
+                path,
+                format!("attribute {name} is not three numbers \"x y z\""),
+            )
+        };
+        match attrs.get(name) {
+            None => Ok([f64::NAN; 3]),
+            Some(AttrValue::String(s)) => {
+                let v: Vec<f64> = s
+                    .split_whitespace()
+                    .map(str::parse)
+                    .collect::<std::result::Result<_, _>>()
+                    .map_err(|_| bad())?;
+                <[f64; 3]>::try_from(v).map_err(|_| bad())
+            }
+            Some(_) => Err(bad()),
+        }
+    };
+    let object_names = match attrs.get("object_names") {
+        Some(AttrValue::String(s)) if !s.is_empty() => s.lines().map(String::from).collect(),
+        _ => Vec::new(),
+    };
     let limit = 1 << 30;
     let real = |name: &str| -> Result<(Vec<usize>, Vec<f64>)> {
         let ds = h5::dataset(path, &file, name)?;
@@ -66,10 +91,51 @@ pub fn read_truth_h5(path: &Path) -> Result<GroundTruth> {
         y_m,
         depth_m: dd.iter().map(|&v| v as f32).collect(),
         object: oo.iter().map(|&v| v as i32).collect(),
-        object_names: Vec::new(),
-        bounds_min_m: [f64::NAN; 3],
-        bounds_max_m: [f64::NAN; 3],
+        object_names,
+        bounds_min_m: xyz("bounds_min")?,
+        bounds_max_m: xyz("bounds_max")?,
     })
+}
+
+/// What a ground truth holds, as `murk info` prints it: the lattice, the points that see a surface
+/// and their depths, each object's share, and the bounds.
+pub fn describe_truth(t: &GroundTruth) -> Vec<String> {
+    let [nx, ny] = t.shape();
+    let span = |v: &[f64]| match (v.first(), v.last()) {
+        (Some(a), Some(b)) => format!("{a:.4} to {b:.4} m"),
+        _ => "empty".into(),
+    };
+    let seen: Vec<f32> = t.depth_m.iter().copied().filter(|d| !d.is_nan()).collect();
+    let (near, far) = seen
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &d| {
+            (a.min(d), b.max(d))
+        });
+    let mut lines = vec![
+        format!(
+            "ground truth: {nx} × {ny} lattice points, x {}, y {}",
+            span(&t.x_m),
+            span(&t.y_m)
+        ),
+        if seen.is_empty() {
+            "hidden surface: seen from no lattice point".into()
+        } else {
+            format!(
+                "hidden surface: seen from {} of {} points, depth {near:.4} to {far:.4} m",
+                seen.len(),
+                t.depth_m.len()
+            )
+        },
+    ];
+    for (id, name) in t.object_names.iter().enumerate() {
+        let n = t.object.iter().filter(|&&o| o == id as i32).count();
+        lines.push(format!("object {id} ({name}): first surface at {n} points"));
+    }
+    lines.push(format!(
+        "bounds: {:?} to {:?} m",
+        t.bounds_min_m, t.bounds_max_m
+    ));
+    lines
 }
 
 #[cfg(test)]
@@ -92,6 +158,11 @@ mod tests {
         let r = read_truth_h5(&p).unwrap();
         std::fs::remove_file(&p).unwrap();
         assert_eq!((r.x_m, r.y_m, r.object), (t.x_m, t.y_m, t.object));
+        assert_eq!(r.object_names, t.object_names);
+        assert_eq!(
+            (r.bounds_min_m, r.bounds_max_m),
+            (t.bounds_min_m, t.bounds_max_m)
+        );
         let same = |a: f32, b: f32| a == b || (a.is_nan() && b.is_nan());
         assert!(r.depth_m.iter().zip(&t.depth_m).all(|(a, b)| same(*a, *b)));
     }

@@ -56,6 +56,11 @@ fn z_letter_truth_is_exact_at_pixel_centres() {
         (hits as f64 * pixel / area.abs() - 1.0).abs() < 0.06,
         "{hits} vs {area}"
     );
+    // The bounds are the outline's, in the plane z = 2 m (murk-io's test round-trips them).
+    let lo = |k: usize| z.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+    let hi = |k: usize| z.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(t.bounds_min_m, [lo(0), lo(1), 2.0]);
+    assert_eq!(t.bounds_max_m, [hi(0), hi(1), 2.0]);
     // Overrides move the truth with the scene.
     let moved = Scene::load(
         &scene_path("z-letter.toml"),

@@ -249,7 +249,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
         fn(&CellResult) -> f64,
         fn(&CellResult) -> String,
     );
-    let axes: [Axis; 5] = [
+    let axes: [Axis; 6] = [
         (
             Figure::Fig3b,
             "vs-albedo-by-mu_t",
@@ -270,6 +270,13 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             "albedo α",
             |r| r.cell.medium.albedo,
             |r| r.cell.row.clone(),
+        ),
+        (
+            Figure::Fig3c,
+            "vs-g-by-albedo",
+            "anisotropy g",
+            |r| r.cell.medium.g,
+            |r| r.cell.col.clone(),
         ),
         (
             Figure::Fig4,
