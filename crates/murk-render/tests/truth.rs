@@ -88,7 +88,64 @@ fn shelf_truth_matches_its_boxes_letter_and_vase() {
         let a = v.as_array().unwrap();
         [0, 1, 2].map(|i| a[i].as_float().unwrap())
     };
+    // The vase's triangles as the renderer reads them (f32 vertices, then offset), and the nearest
+    // one a ray along +z from (x, y, 0) crosses (Möller–Trumbore).
+    let vase = objects
+        .iter()
+        .find(|o| o["name"].as_str() == Some("vase"))
+        .unwrap();
+    let offset = v3(&vase["translate"]);
+    let text = std::fs::read_to_string(scene_path(vase["file"].as_str().unwrap())).unwrap();
+    let mut verts: Vec<[f64; 3]> = Vec::new();
+    let mut tris: Vec<[usize; 3]> = Vec::new();
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("v") => {
+                let c: Vec<f64> = w.map(|s| s.parse::<f32>().unwrap() as f64).collect();
+                verts.push([0, 1, 2].map(|i| c[i] + offset[i]));
+            }
+            Some("f") => {
+                let f: Vec<usize> = w.map(|s| s.parse::<usize>().unwrap() - 1).collect();
+                tris.extend((1..f.len() - 1).map(|i| [f[0], f[i], f[i + 1]]));
+            }
+            _ => {}
+        }
+    }
+    let mesh_depth = |x: f64, y: f64| -> Option<f64> {
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let (o, d) = ([x, y, 0.0], [0.0, 0.0, 1.0]);
+        tris.iter()
+            .filter_map(|t| {
+                let (p0, e1, e2) = (
+                    verts[t[0]],
+                    sub(verts[t[1]], verts[t[0]]),
+                    sub(verts[t[2]], verts[t[0]]),
+                );
+                let p = cross(d, e2);
+                let det = dot(e1, p);
+                if det.abs() < 1e-15 {
+                    return None;
+                }
+                let s = sub(o, p0);
+                let u = dot(s, p) / det;
+                let q = cross(s, e1);
+                let v = dot(d, q) / det;
+                (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then(|| dot(e2, q) / det)
+            })
+            .filter(|t| *t > 0.0)
+            .reduce(f64::min)
+    };
     let mut seen = std::collections::BTreeSet::new();
+    let mut vase_pixels = 0;
     for (ix, &x) in t.x_m.iter().enumerate() {
         for (iy, &y) in t.y_m.iter().enumerate() {
             // Nearest front face over the boxes (the room's back wall is its +z face) and the letter.
@@ -109,6 +166,7 @@ fn shelf_truth_matches_its_boxes_letter_and_vase() {
                             .collect();
                         inside(&poly, x, y).then_some(c[2])
                     }
+                    "mesh" => mesh_depth(x, y),
                     _ => None,
                 };
                 if let Some(z) = z.filter(|z| *z < best.0) {
@@ -117,14 +175,16 @@ fn shelf_truth_matches_its_boxes_letter_and_vase() {
             }
             let k = ix * t.y_m.len() + iy;
             seen.insert(t.object[k]);
-            if scene.object_names[t.object[k] as usize] == "vase" {
-                // The vase (a mesh, 0.24 m wide, 0.30 m tall) stands at (0.35, 0.23, 2.0) in front of
-                // whatever the boxes give.
+            if t.object[k] >= 0 && scene.object_names[t.object[k] as usize] == "vase" {
+                // A triangle's depth to rounding (the renderer's own intersection arithmetic).
+                vase_pixels += 1;
+                assert_eq!(t.object[k], best.1, "({x}, {y})");
                 assert!(
-                    (x - 0.35).abs() < 0.121 && (0.23..0.531).contains(&y),
-                    "({x}, {y})"
+                    (t.depth_m[k] as f64 - best.0).abs() < 1e-6,
+                    "({x}, {y}): {} against {}",
+                    t.depth_m[k],
+                    best.0
                 );
-                assert!((1.879..2.0).contains(&t.depth_m[k]) && (t.depth_m[k] as f64) < best.0);
                 continue;
             }
             assert_eq!(
@@ -134,6 +194,7 @@ fn shelf_truth_matches_its_boxes_letter_and_vase() {
             );
         }
     }
-    // Every object is seen from the relay somewhere.
+    // Every object is seen from the relay somewhere; the vase (0.24 m × 0.30 m) from many points.
     assert_eq!(seen.len(), objects.len(), "{seen:?}");
+    assert!(vase_pixels > 100, "{vase_pixels}");
 }
