@@ -55,7 +55,8 @@ fn main() {
     // Otherwise, or the second time, remove the temporaries of writes in progress (finished outputs
     // and render checkpoints stay), then end as a shell expects of an interrupted command.
     let _ = ctrlc::set_handler(|| {
-        if cmd::RENDERING.load(Ordering::SeqCst) && !cmd::STOP.swap(true, Ordering::SeqCst) {
+        let again = cmd::STOP.swap(true, Ordering::SeqCst);
+        if cmd::RENDERING.load(Ordering::SeqCst) && !again {
             if cmd::ON_INTERRUPT.get().is_some() {
                 eprintln!(
                     "murk: stopping after the work units in progress (Ctrl-C again ends at once)"
@@ -65,7 +66,10 @@ fn main() {
         }
         let _held = murk_io::remove_temporaries();
         if let Some(note) = cmd::ON_INTERRUPT.get() {
-            eprintln!("murk: {note}");
+            eprintln!(
+                "murk: {}",
+                if again { &note.at_once } else { &note.stopped }
+            );
         }
         std::process::exit(130);
     });
@@ -104,7 +108,7 @@ fn main() {
         if cmd::STOP.load(Ordering::SeqCst) {
             // A render stopped by Ctrl-C: its checkpoint is whole.
             if let Some(note) = cmd::ON_INTERRUPT.get() {
-                eprintln!("murk: {note}");
+                eprintln!("murk: {}", note.stopped);
             }
             std::process::exit(130);
         }

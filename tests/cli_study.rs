@@ -387,5 +387,20 @@ fn a_rendered_ground_truth_is_described_by_info() {
     ] {
         assert!(info.contains(want), "{want} not in:\n{info}");
     }
+    // One bit of a depth changed (the last 2.0 in the file lies in the depth map): named as a
+    // damaged ground truth, not as a file that is no capture.
+    let mut bytes = std::fs::read(&truth).unwrap();
+    let at = bytes
+        .windows(4)
+        .rposition(|w| w == 2.0f32.to_le_bytes())
+        .unwrap();
+    bytes[at] ^= 1;
+    std::fs::write(&truth, &bytes).unwrap();
+    let (code, _, err) = murk(&["info", truth.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(
+        err.lines().count() == 1 && err.contains("do not match the checksum"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }

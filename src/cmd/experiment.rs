@@ -151,10 +151,10 @@ pub fn run(a: ExperimentArgs, quiet: bool) -> anyhow::Result<()> {
             .expect("static template"),
     );
     if !quiet {
-        let _ = crate::cmd::ON_INTERRUPT.set(
-            "interrupted: finished renders and checkpoints stay in the folder; the same command goes on from them"
-                .to_string(),
-        );
+        let _ = crate::cmd::ON_INTERRUPT.set(crate::cmd::Interrupted {
+            stopped: "interrupted: finished renders and checkpoints stay in the folder; the same command goes on from them".into(),
+            at_once: "interrupted at once: the running render's units since its checkpoint's last save are lost; finished renders stay, and the same command goes on from them".into(),
+        });
     }
     let pool = crate::cmd::pool(a.threads)?;
     let obs = Bars { bar, quiet };

@@ -16,10 +16,12 @@ pub struct InfoArgs {
 pub fn run(a: InfoArgs) -> anyhow::Result<()> {
     let lines = match murk_io::read_capture(&a.file) {
         Ok(cap) => murk_io::describe(&cap),
-        // Not a capture: a ground truth is described; anything else keeps the capture's error.
-        Err(e) => murk_io::read_truth_h5(&a.file)
-            .map(|t| murk_io::describe_truth(&t))
-            .map_err(|_| e)?,
+        // Not a capture: a ground truth is described, or its own fault named; anything else keeps
+        // the capture's error.
+        Err(_) if murk_io::looks_like_truth(&a.file) => {
+            murk_io::describe_truth(&murk_io::read_truth_h5(&a.file)?)
+        }
+        Err(e) => return Err(e.into()),
     };
     println!("{}", lines.join("\n"));
     Ok(())

@@ -18,7 +18,15 @@ pub static STOP: AtomicBool = AtomicBool::new(false);
 pub static RENDERING: AtomicBool = AtomicBool::new(false);
 
 /// What Ctrl-C says as the process ends, set by a command that can be resumed (not with --quiet).
-pub static ON_INTERRUPT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+pub static ON_INTERRUPT: std::sync::OnceLock<Interrupted> = std::sync::OnceLock::new();
+
+/// The notes of an interrupted command.
+pub struct Interrupted {
+    /// After a stop that let the render save its finished units (or with no render running).
+    pub stopped: String,
+    /// After a second signal, which ends the process before the render saves them.
+    pub at_once: String,
+}
 
 /// The worker pool of `--threads` (default: one thread per core).
 pub fn pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {

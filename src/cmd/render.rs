@@ -182,11 +182,27 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         );
     }
     let ckpt = output_checkpoint(&a.out, a.resume, a.checkpoint_every)?;
-    if let Some((path, _)) = ckpt.as_ref().filter(|_| !quiet) {
-        let _ = crate::cmd::ON_INTERRUPT.set(format!(
-            "interrupted: {} keeps the finished work units; the same command with --resume goes on from them",
-            path.display()
-        ));
+    if !quiet {
+        let note = match &ckpt {
+            Some((path, _)) => crate::cmd::Interrupted {
+                stopped: format!(
+                    "interrupted: {} keeps the finished work units; the same command with --resume goes on from them",
+                    path.display()
+                ),
+                at_once: format!(
+                    "interrupted at once: {} keeps only the units saved before (every --checkpoint-every seconds); the same command with --resume goes on from them",
+                    path.display()
+                ),
+            },
+            None => {
+                let none = "interrupted: no checkpoint is kept (--checkpoint-every 0), so the render starts over";
+                crate::cmd::Interrupted {
+                    stopped: none.into(),
+                    at_once: none.into(),
+                }
+            }
+        };
+        let _ = crate::cmd::ON_INTERRUPT.set(note);
     }
     let opt = RenderOptions {
         spp,

@@ -33,7 +33,7 @@ pub use tal::{
     read_capture, read_capture_with_limit, write_capture, write_capture_compressed,
     DEFAULT_READ_LIMIT_BYTES, TAL_FIELDS,
 };
-pub use truth::{describe_truth, read_truth_h5, write_truth_h5};
+pub use truth::{describe_truth, looks_like_truth, read_truth_h5, write_truth_h5};
 pub use volume::{
     check_volume_path, read_volume_h5, write_volume, write_volume_h5, AttrValue, VolumeData,
 };

@@ -1,6 +1,6 @@
 //! Ground truth as HDF5: `depth` [nx, ny] f32 (m, NaN where nothing), `object` [nx, ny] i32 (−1 where
-//! nothing), lattice axes `x`, `y` (m), and root attributes `bounds_min`, `bounds_max` ("x y z", m) and
-//! `object_names` (one per line, indexed by `object`).
+//! nothing), lattice axes `x`, `y` (m), and root attributes `bounds_min`, `bounds_max` ("x y z", m),
+//! `object_names` (one per line, indexed by `object`) and `murk_crc32` (of all of them, checked on read).
 
 use crate::atomic::write_atomic;
 use crate::h5;
@@ -11,6 +11,7 @@ use std::path::Path;
 /// Writes `truth` atomically.
 pub fn write_truth_h5(path: &Path, truth: &GroundTruth) -> Result<()> {
     crate::check_h5_name(path)?;
+    check_truth(truth).map_err(|m| Error::param(format!("ground truth: {m}")))?;
     let [nx, ny] = truth.shape();
     let mut fb = FileBuilder::new();
     fb.create_dataset("depth")
@@ -28,6 +29,7 @@ pub fn write_truth_h5(path: &Path, truth: &GroundTruth) -> Result<()> {
         "object_names",
         AttrValue::String(truth.object_names.join("\n")),
     );
+    fb.set_attr(CRC32, AttrValue::U32(truth_crc32(truth)));
     fb.set_attr(
         "convention",
         AttrValue::String(
@@ -86,7 +88,7 @@ pub fn read_truth_h5(path: &Path) -> Result<GroundTruth> {
             format!("depth {ds:?} and object {os:?} must both have shape {want:?}"),
         ));
     }
-    Ok(GroundTruth {
+    let truth = GroundTruth {
         x_m,
         y_m,
         depth_m: dd.iter().map(|&v| v as f32).collect(),
@@ -94,7 +96,72 @@ pub fn read_truth_h5(path: &Path) -> Result<GroundTruth> {
         object_names,
         bounds_min_m: xyz("bounds_min")?,
         bounds_max_m: xyz("bounds_max")?,
-    })
+    };
+    check_truth(&truth).map_err(|m| Error::format(path, m))?;
+    if let Some(AttrValue::U32(want)) = attrs.get(CRC32) {
+        let got = truth_crc32(&truth);
+        if got != *want {
+            return Err(Error::format(
+                path,
+                format!("its data do not match the checksum murk wrote with them ({CRC32} {want:08x}, now {got:08x}): the file is damaged, or was changed in place by another tool"),
+            ));
+        }
+    }
+    Ok(truth)
+}
+
+/// Whether `path` holds a ground truth's datasets (`depth` and `object`, and no `H`), so that a
+/// reader can report what is wrong with it as a ground truth rather than as a capture.
+pub fn looks_like_truth(path: &Path) -> bool {
+    h5::open(path)
+        .and_then(|f| h5::root_datasets(path, &f))
+        .is_ok_and(|names| {
+            let has = |k: &str| names.iter().any(|n| n == k);
+            has("depth") && has("object") && !has("H")
+        })
+}
+
+/// The root attribute holding [`truth_crc32`] as murk wrote it.
+const CRC32: &str = "murk_crc32";
+
+/// CRC-32 of what a ground truth file stores, little-endian: depths, object ids, axes, bounds and
+/// names.
+fn truth_crc32(t: &GroundTruth) -> u32 {
+    let mut crc = crc32fast::Hasher::new();
+    t.depth_m.iter().for_each(|v| crc.update(&v.to_le_bytes()));
+    t.object.iter().for_each(|v| crc.update(&v.to_le_bytes()));
+    let f64s = t
+        .x_m
+        .iter()
+        .chain(&t.y_m)
+        .chain(&t.bounds_min_m)
+        .chain(&t.bounds_max_m);
+    f64s.for_each(|v| crc.update(&v.to_le_bytes()));
+    crc.update(t.object_names.join("\n").as_bytes());
+    crc.finalize()
+}
+
+/// What a ground truth must be: axes that increase, depths in front of the relay where an object is
+/// seen and NaN where none is, and ids of the named objects.
+fn check_truth(t: &GroundTruth) -> std::result::Result<(), String> {
+    for (name, axis) in [("x", &t.x_m), ("y", &t.y_m)] {
+        if axis.iter().any(|v| !v.is_finite()) || axis.windows(2).any(|w| w[1] <= w[0]) {
+            return Err(format!("axis {name} must be finite and increasing"));
+        }
+    }
+    let names = t.object_names.len() as i32;
+    for (k, (&d, &o)) in t.depth_m.iter().zip(&t.object).enumerate() {
+        let ok = match o {
+            -1 => d.is_nan(),
+            o => o >= 0 && (names == 0 || o < names) && d.is_finite() && d >= 0.0,
+        };
+        if !ok {
+            return Err(format!(
+                "point {k} holds object {o} at depth {d}: an object id of the {names} named, at a finite depth ≥ 0, or −1 with NaN"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// What a ground truth holds, as `murk info` prints it: the lattice, the points that see a surface
@@ -165,5 +232,71 @@ mod tests {
         );
         let same = |a: f32, b: f32| a == b || (a.is_nan() && b.is_nan());
         assert!(r.depth_m.iter().zip(&t.depth_m).all(|(a, b)| same(*a, *b)));
+    }
+
+    /// A ground truth that contradicts itself is not written; a written one whose depth is changed
+    /// by one bit is refused naming the file and the checksum.
+    #[test]
+    fn a_bad_or_damaged_truth_is_refused() {
+        let t = GroundTruth {
+            x_m: vec![-0.5, 0.5],
+            y_m: vec![0.0],
+            depth_m: vec![2.5, f32::NAN],
+            object: vec![0, -1],
+            object_names: vec!["a".into()],
+            bounds_min_m: [0.0; 3],
+            bounds_max_m: [1.0; 3],
+        };
+        let dir = std::env::temp_dir().join(format!("murk-truth-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("t.h5");
+        for (what, bad) in [
+            (
+                "an unnamed id",
+                GroundTruth {
+                    object: vec![3, -1],
+                    ..t.clone()
+                },
+            ),
+            (
+                "no object seen at a depth",
+                GroundTruth {
+                    object: vec![-1, -1],
+                    ..t.clone()
+                },
+            ),
+            (
+                "a depth behind the relay",
+                GroundTruth {
+                    depth_m: vec![-1.0, f32::NAN],
+                    ..t.clone()
+                },
+            ),
+            (
+                "a decreasing axis",
+                GroundTruth {
+                    x_m: vec![0.5, -0.5],
+                    ..t.clone()
+                },
+            ),
+        ] {
+            let e = write_truth_h5(&p, &bad).unwrap_err().to_string();
+            assert!(e.starts_with("ground truth: "), "{what}: {e}");
+            assert!(!p.exists(), "{what}");
+        }
+        write_truth_h5(&p, &t).unwrap();
+        let mut bytes = std::fs::read(&p).unwrap();
+        let at = bytes
+            .windows(4)
+            .position(|w| w == 2.5f32.to_le_bytes())
+            .unwrap();
+        bytes[at] ^= 1;
+        std::fs::write(&p, &bytes).unwrap();
+        let e = read_truth_h5(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("t.h5") && e.contains("do not match the checksum"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

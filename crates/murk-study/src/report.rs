@@ -357,10 +357,11 @@ pub fn findings(results: &[CellResult]) -> Vec<String> {
     let list = |rs: &[&CellResult],
                 value: &dyn Fn(&CellResult) -> f64,
                 key: &dyn Fn(&CellResult) -> String| {
-        // Three decimals, or three digits for the high-frequency shares (1e-5 to 0.1).
+        // Three significant digits, so that close values (high-frequency shares of 1e-5 to 0.1)
+        // show which is larger.
         rs.iter()
             .map(|r| match value(r) {
-                v if v.abs() < 0.01 => format!("{v:.2e} ({})", key(r)),
+                v if v.abs() < 0.1 => format!("{v:.2e} ({})", key(r)),
                 v => format!("{v:.3} ({})", key(r)),
             })
             .collect::<Vec<_>>()
@@ -371,8 +372,8 @@ pub fn findings(results: &[CellResult]) -> Vec<String> {
     if let Some(r) = cells(Figure::Fig3a).first() {
         let (i, d) = (iou(r), mean(r, |s| s.depth_err_m));
         out.push(format!(
-            "Fig. 3a, no medium: the Z is {} (IoU {i:.3}, depth error {d:+.3} m against a voxel of {:.3} m).",
-            if i >= 0.7 && d.abs() <= r.voxel_dz_m { "found at its depth" } else { "not found well" },
+            "Fig. 3a, no medium: the paper reconstructs the Z; it is found at its depth (IoU ≥ 0.7, depth within a voxel): {}. IoU {i:.3}, depth error {d:+.3} m against a voxel of {:.3} m.",
+            verdict(i >= 0.7 && d.abs() <= r.voxel_dz_m),
             r.voxel_dz_m
         ));
     }
@@ -584,7 +585,11 @@ fn write_html(
         );
     }
     h.push_str("</table>\n<h2>Findings</h2>\n<p>Each claim of the paper that this run's cells can test, with the numbers it rests on (paper's K, mean over this run's seeds at its spp) and the verdict they give. Few samples make verdicts noisy; docs/study.md in murk's repository says which hold at converged settings.</p>\n<ul id=\"findings\">\n");
-    for f in findings(results) {
+    let found = findings(results);
+    if found.is_empty() {
+        h.push_str("<li>No claim of the paper can be tested with this run's cells alone: each needs a figure's no-medium cell, a row or column of cells, or a pair of them.</li>\n");
+    }
+    for f in found {
         let _ = writeln!(h, "<li>{}</li>", esc(&f));
     }
     h.push_str("</ul>\n<h2>Choices</h2>\n<ul>\n");

@@ -174,12 +174,19 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
         .collect();
     let started = Instant::now();
     for (k, (job, t)) in todo.iter().enumerate() {
+        // A stop that came as the last task was writing its captures starts no other.
+        if obs
+            .stop()
+            .is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed))
+        {
+            return Err(Error::param("render stopped"));
+        }
         let eta_s =
             (k > 0).then(|| started.elapsed().as_secs_f64() / k as f64 * (todo.len() - k) as f64);
         let mut label = labels
             .get(job.id.as_str())
             .cloned()
-            .unwrap_or_else(|| format!("reference {}", job.scene.file()));
+            .unwrap_or_else(|| format!("the no-medium reference render of {}", job.scene.file()));
         if let Some((i, n)) = job.tasks[*t].shard {
             label.push_str(&format!(" (shard {i}/{n})"));
         }
