@@ -566,56 +566,42 @@ fn overrides_are_named_recorded_and_guard_resume() {
     Plan::new(&base)
         .render(&opts(None, Some(ck.clone())), &|_, _| {})
         .unwrap();
-    let other = load(&set(&["medium.g=0.7"])).unwrap();
-    let e = Plan::new(&other)
-        .render(&opts(None, Some(ck.clone())), &|_, _| {})
-        .unwrap_err()
-        .to_string();
+    // A resume of another render is refused on one line, naming what differs.
+    let refused = |scene: Scene, o: RenderOptions| {
+        let e = Plan::new(&scene)
+            .render(&o, &|_, _| {})
+            .unwrap_err()
+            .to_string();
+        assert!(!e.contains('\n'), "{e}");
+        e
+    };
+    let resume = || opts(None, Some(ck.clone()));
+    let e = refused(load(&set(&["medium.g=0.7"])).unwrap(), resume());
     assert!(
         e.contains("different render (medium.g is unset there, 0.7 now)"),
         "{e}"
     );
-    let e = Plan::new(
-        &load(&Overrides {
-            grid: Some(2),
-            ..Overrides::default()
-        })
-        .unwrap(),
-    )
-    .render(&opts(None, Some(ck.clone())), &|_, _| {})
-    .unwrap_err()
-    .to_string();
+    let grid = Overrides {
+        grid: Some(2),
+        ..Overrides::default()
+    };
+    let e = refused(load(&grid).unwrap(), resume());
     assert!(
         e.contains("capture.grid is [4, 3] there, [2, 2] now"),
         "{e}"
     );
-    // Another --bins or --spp: refused on one line, naming it.
-    let e = Plan::new(
-        &load(&Overrides {
-            bins: Some(128),
-            ..Overrides::default()
-        })
-        .unwrap(),
-    )
-    .render(&opts(None, Some(ck.clone())), &|_, _| {})
-    .unwrap_err()
-    .to_string();
-    assert!(
-        e.contains("capture.bins is 64 there, 128 now") && !e.contains('\n'),
-        "{e}"
-    );
+    let bins = Overrides {
+        bins: Some(128),
+        ..Overrides::default()
+    };
+    let e = refused(load(&bins).unwrap(), resume());
+    assert!(e.contains("capture.bins is 64 there, 128 now"), "{e}");
     let fewer = RenderOptions {
         spp: 32,
-        ..opts(None, Some(ck.clone()))
+        ..resume()
     };
-    let e = Plan::new(&base)
-        .render(&fewer, &|_, _| {})
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("render.spp_used is 64 there, 32 now") && !e.contains('\n'),
-        "{e}"
-    );
+    let e = refused(load(&Overrides::default()).unwrap(), fewer);
+    assert!(e.contains("render.spp_used is 64 there, 32 now"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
