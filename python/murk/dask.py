@@ -44,11 +44,18 @@ def local_cluster(monitors=QUIET_MONITORS, **kwargs):
     Dask's nannies set ``MALLOC_TRIM_THRESHOLD_`` in their workers to hand freed Python memory back
     to the system; any fixed threshold also turns off glibc's adaptive mmap threshold, so the
     renderer's large buffers would be mapped and unmapped on every use. Its workers run without
-    it."""
+    it.
+
+    Its processes print only critical log records: a task's error reaches the client, which raises
+    it, while the workers' own records at a shutdown (a heartbeat that met the closing scheduler,
+    after Ctrl-C) were tracebacks about nothing a user did. ``silence_logs`` sets another level."""
+    import logging
+
     import dask
     from dask.distributed import LocalCluster
 
     config = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None, **monitors}
+    kwargs.setdefault("silence_logs", logging.CRITICAL)
     with dask.config.set(config):
         return LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None,
                             preload=["murk._worker"], **kwargs)
