@@ -14,21 +14,19 @@ fn dir(tag: &str) -> PathBuf {
     d
 }
 
+/// `murk experiment paper --out OUT ARGS…`.
+fn experiment(out: &Path, args: &[&str]) -> (i32, String, String) {
+    let mut all = vec!["experiment", "paper", "--out", out.to_str().unwrap()];
+    all.extend_from_slice(args);
+    murk(&all)
+}
+
 /// A small study: the Z without medium and Fig. 4 (one fog capture), 4 spp.
 fn small_study(out: &Path, extra: &[&str]) -> (i32, String, String) {
-    let out = out.to_str().unwrap();
-    let mut args = vec![
-        "experiment",
-        "paper",
-        "--out",
+    experiment(
         out,
-        "--only",
-        "fig3a,fig4",
-        "--spp",
-        "4",
-    ];
-    args.extend_from_slice(extra);
-    murk(&args)
+        &[&["--only", "fig3a,fig4", "--spp", "4"], extra].concat(),
+    )
 }
 
 #[test]
@@ -115,18 +113,7 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
         assert!(t > 0.0 && t < 1.0, "{row}");
     }
     // A later run of fewer figures leaves only its own pictures and plots.
-    let (code, _, err) = murk(&[
-        "experiment",
-        "paper",
-        "--out",
-        d.to_str().unwrap(),
-        "--only",
-        "fig3a",
-        "--spp",
-        "4",
-        "--shards",
-        "2",
-    ]);
+    let (code, _, err) = experiment(&d, &["--only", "fig3a", "--spp", "4", "--shards", "2"]);
     assert_eq!(code, 0, "{err}");
     assert!(d.join("fig3a-paper.png").exists() && !d.join("fig4-paper.png").exists());
     let plots: Vec<String> = std::fs::read_dir(d.join("plots"))
@@ -168,7 +155,6 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
 #[test]
 fn bad_options_fail_on_one_line() {
     let d = dir("bad");
-    let out = d.to_str().unwrap();
     for (args, want) in [
         (vec!["--only", "fig9"], "unknown figure 'fig9'"),
         (vec!["--seeds", "0"], "seeds must be in 1..=64, got 0"),
@@ -181,9 +167,7 @@ fn bad_options_fail_on_one_line() {
             "'--list-tasks' cannot be used with '--threads <THREADS>'",
         ),
     ] {
-        let mut a = vec!["experiment", "paper", "--out", out];
-        a.extend(args);
-        let (code, _, err) = murk(&a);
+        let (code, _, err) = experiment(&d, &args);
         assert_ne!(code, 0);
         assert_eq!(err.lines().count(), 1, "{err}");
         assert!(err.contains(want), "{err}");
@@ -263,20 +247,18 @@ window.addEventListener('load', () => {
 #[test]
 fn shelf_objects_and_seed_spreads_are_reported() {
     let d = dir("objects");
-    let out = d.to_str().unwrap();
-    let (code, _, err) = murk(&[
-        "experiment",
-        "paper",
-        "--out",
-        out,
-        "--only",
-        "fig5",
-        "--cell",
-        "no medium",
-        "--spp",
-        "4",
-        "--quiet",
-    ]);
+    let (code, _, err) = experiment(
+        &d,
+        &[
+            "--only",
+            "fig5",
+            "--cell",
+            "no medium",
+            "--spp",
+            "4",
+            "--quiet",
+        ],
+    );
     assert_eq!(code, 0, "{err}");
     let csv = std::fs::read_to_string(d.join("objects.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv
@@ -306,20 +288,10 @@ fn shelf_objects_and_seed_spreads_are_reported() {
     }
 
     let d2 = dir("seeds");
-    let out2 = d2.to_str().unwrap();
-    let (code, _, err) = murk(&[
-        "experiment",
-        "paper",
-        "--out",
-        out2,
-        "--only",
-        "fig3a",
-        "--spp",
-        "4",
-        "--seeds",
-        "2",
-        "--quiet",
-    ]);
+    let (code, _, err) = experiment(
+        &d2,
+        &["--only", "fig3a", "--spp", "4", "--seeds", "2", "--quiet"],
+    );
     assert_eq!(code, 0, "{err}");
     let captures: Vec<Vec<u8>> = std::fs::read_dir(d2.join("renders"))
         .unwrap()

@@ -326,11 +326,11 @@ pub fn study_plan<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     let opt = study_options(args)?;
     // Absolute, as the commands are: a task runs from any folder.
-    let out = std::path::absolute(&out).unwrap_or(out);
+    let out = murk_study::plan::absolute(&out);
     let (plan, _lock) = py
         .detach(|| murk_study::prepare(&out, &opt))
         .map_err(to_py)?;
-    let scenes = std::path::absolute(&plan.scenes_dir).unwrap_or_else(|_| plan.scenes_dir.clone());
+    let scenes = murk_study::plan::absolute(&plan.scenes_dir);
     let commands = plan.task_commands(&out, |_, _| true);
     let tasks = PyList::empty(py);
     let mut k = 0;

@@ -36,6 +36,28 @@ pub(crate) fn guarded<T>(path: &Path, f: impl FnOnce() -> Result<T>) -> Result<T
     }
 }
 
+/// The root attribute in which murk stores the CRC-32 of what a file holds (captures, ground truths).
+pub(crate) const CRC32_ATTR: &str = "murk_crc32";
+
+/// Refuses a file whose stored checksum (`stored`, the [`CRC32_ATTR`] attribute, if the file has
+/// one) differs from `got` of the data as read; files without it (another tool's) pass.
+pub(crate) fn check_crc32(
+    path: &Path,
+    stored: Option<&hdf5_pure::AttrValue>,
+    got: impl FnOnce() -> u32,
+) -> Result<()> {
+    let Some(&hdf5_pure::AttrValue::U32(want)) = stored else {
+        return Ok(());
+    };
+    match got() {
+        got if got == want => Ok(()),
+        got => Err(Error::format(
+            path,
+            format!("its data do not match the checksum murk wrote with them ({CRC32_ATTR} {want:08x}, now {got:08x}): the file is damaged, or was changed in place by another tool, whose change murk reads once the attribute is deleted"),
+        )),
+    }
+}
+
 /// Opens an HDF5 file lazily (metadata and data are fetched on demand, so a large capture is not
 /// buffered twice). Distinguishes "cannot open" (Io) from "not HDF5" (Format).
 pub(crate) fn open(path: &Path) -> Result<File> {

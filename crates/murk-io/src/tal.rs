@@ -284,22 +284,10 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
     cap.validate_data().map_err(|e| bad(e.to_string()))?;
     // Files murk wrote carry a checksum: a damaged one would otherwise read as a valid capture
     // (checked after the values, whose own faults, such as NaN written in place, say more).
-    if let Some(want) = file.root().attrs().ok().and_then(|a| match a.get(CRC32) {
-        Some(hdf5_pure::AttrValue::U32(c)) => Some(*c),
-        _ => None,
-    }) {
-        let got = capture_crc32(&cap);
-        if got != want {
-            return Err(bad(format!(
-                "its data do not match the checksum murk wrote with them ({CRC32} {want:08x}, now {got:08x}): the file is damaged, or was changed in place by another tool, whose change murk reads once the attribute is deleted"
-            )));
-        }
-    }
+    let attrs = file.root().attrs().unwrap_or_default();
+    h5::check_crc32(path, attrs.get(h5::CRC32_ATTR), || capture_crc32(&cap))?;
     Ok(cap)
 }
-
-/// The root attribute holding [`capture_crc32`] as murk wrote it.
-const CRC32: &str = "murk_crc32";
 
 /// CRC-32 of what a capture file stores, as stored: H histogram by histogram (murk's order, whatever
 /// the file's layout), then the points, normals and devices, the time axis as f32, the flag and
@@ -453,7 +441,10 @@ pub fn write_capture_compressed(path: &Path, cap: &Capture, level: u32) -> Resul
     };
 
     let mut fb = FileBuilder::new();
-    fb.set_attr(CRC32, hdf5_pure::AttrValue::U32(capture_crc32(cap)));
+    fb.set_attr(
+        h5::CRC32_ATTR,
+        hdf5_pure::AttrValue::U32(capture_crc32(cap)),
+    );
     let h = fb.create_dataset("H");
     h.with_shape(&h_shape).with_f32_data(&tal_h);
     if level > 0 {

@@ -29,7 +29,7 @@ pub fn write_truth_h5(path: &Path, truth: &GroundTruth) -> Result<()> {
         "object_names",
         AttrValue::String(truth.object_names.join("\n")),
     );
-    fb.set_attr(CRC32, AttrValue::U32(truth_crc32(truth)));
+    fb.set_attr(h5::CRC32_ATTR, AttrValue::U32(truth_crc32(truth)));
     fb.set_attr(
         "convention",
         AttrValue::String(
@@ -98,15 +98,7 @@ pub fn read_truth_h5(path: &Path) -> Result<GroundTruth> {
         bounds_max_m: xyz("bounds_max")?,
     };
     check_truth(&truth).map_err(|m| Error::format(path, m))?;
-    if let Some(AttrValue::U32(want)) = attrs.get(CRC32) {
-        let got = truth_crc32(&truth);
-        if got != *want {
-            return Err(Error::format(
-                path,
-                format!("its data do not match the checksum murk wrote with them ({CRC32} {want:08x}, now {got:08x}): the file is damaged, or was changed in place by another tool"),
-            ));
-        }
-    }
+    h5::check_crc32(path, attrs.get(h5::CRC32_ATTR), || truth_crc32(&truth))?;
     Ok(truth)
 }
 
@@ -120,9 +112,6 @@ pub fn looks_like_truth(path: &Path) -> bool {
             has("depth") && has("object") && !has("H")
         })
 }
-
-/// The root attribute holding [`truth_crc32`] as murk wrote it.
-const CRC32: &str = "murk_crc32";
 
 /// CRC-32 of what a ground truth file stores, little-endian: depths, object ids, axes, bounds and
 /// names.

@@ -1,6 +1,7 @@
 //! Ground truth against the scene geometry, computed here independently of the renderer's ray casting:
 //! the first surface along +z from a relay point is the nearest front face whose footprint contains it.
 
+use murk_core::DVec3;
 use murk_render::{Overrides, Scene};
 use std::path::{Path, PathBuf};
 
@@ -89,21 +90,22 @@ fn shelf_truth_matches_its_boxes_letter_and_vase() {
         [0, 1, 2].map(|i| a[i].as_float().unwrap())
     };
     // The vase's triangles as the renderer reads them (f32 vertices, then offset), and the nearest
-    // one a ray along +z from (x, y, 0) crosses (Möller–Trumbore).
+    // one over (x, y): a ray along +z meets a triangle where (x, y) lies in its projection onto the
+    // wall, at the depth its barycentric coordinates there interpolate.
     let vase = objects
         .iter()
         .find(|o| o["name"].as_str() == Some("vase"))
         .unwrap();
-    let offset = v3(&vase["translate"]);
+    let offset = DVec3::from_array(v3(&vase["translate"]));
     let text = std::fs::read_to_string(scene_path(vase["file"].as_str().unwrap())).unwrap();
-    let mut verts: Vec<[f64; 3]> = Vec::new();
+    let mut verts: Vec<DVec3> = Vec::new();
     let mut tris: Vec<[usize; 3]> = Vec::new();
     for line in text.lines() {
         let mut w = line.split_whitespace();
         match w.next() {
             Some("v") => {
                 let c: Vec<f64> = w.map(|s| s.parse::<f32>().unwrap() as f64).collect();
-                verts.push([0, 1, 2].map(|i| c[i] + offset[i]));
+                verts.push(DVec3::new(c[0], c[1], c[2]) + offset);
             }
             Some("f") => {
                 let f: Vec<usize> = w.map(|s| s.parse::<usize>().unwrap() - 1).collect();
@@ -113,35 +115,18 @@ fn shelf_truth_matches_its_boxes_letter_and_vase() {
         }
     }
     let mesh_depth = |x: f64, y: f64| -> Option<f64> {
-        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-        let cross = |a: [f64; 3], b: [f64; 3]| {
-            [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ]
-        };
-        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let (o, d) = ([x, y, 0.0], [0.0, 0.0, 1.0]);
         tris.iter()
             .filter_map(|t| {
-                let (p0, e1, e2) = (
-                    verts[t[0]],
-                    sub(verts[t[1]], verts[t[0]]),
-                    sub(verts[t[2]], verts[t[0]]),
-                );
-                let p = cross(d, e2);
-                let det = dot(e1, p);
+                let [a, b, c] = t.map(|i| verts[i]);
+                let (e1, e2) = (b - a, c - a);
+                let det = e1.x * e2.y - e2.x * e1.y;
                 if det.abs() < 1e-15 {
                     return None;
                 }
-                let s = sub(o, p0);
-                let u = dot(s, p) / det;
-                let q = cross(s, e1);
-                let v = dot(d, q) / det;
-                (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then(|| dot(e2, q) / det)
+                let u = ((x - a.x) * e2.y - e2.x * (y - a.y)) / det;
+                let v = (e1.x * (y - a.y) - (x - a.x) * e1.y) / det;
+                (u >= 0.0 && v >= 0.0 && u + v <= 1.0).then_some(a.z + u * e1.z + v * e2.z)
             })
-            .filter(|t| *t > 0.0)
             .reduce(f64::min)
     };
     let mut seen = std::collections::BTreeSet::new();

@@ -592,11 +592,13 @@ impl Plan {
         dir: &Path,
         keep: impl Fn(&CaptureJob, usize) -> bool,
     ) -> Vec<String> {
-        let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
         let (scenes, dir) = (absolute(&self.scenes_dir), absolute(dir));
         let mut out = Vec::new();
         for c in &self.captures {
-            for (_, t) in c.tasks.iter().enumerate().filter(|(k, _)| keep(c, *k)) {
+            for (k, t) in c.tasks.iter().enumerate() {
+                if !keep(c, k) {
+                    continue;
+                }
                 let mut cmd = format!(
                     "murk render {} --out {} --spp {} --seed {}",
                     shell(&scenes.join(c.scene.file())),
@@ -620,6 +622,11 @@ impl Plan {
         }
         out
     }
+}
+
+/// `p` from the root (as the working folder makes it), so that a task's paths hold wherever it runs.
+pub fn absolute(p: &Path) -> PathBuf {
+    std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
 }
 
 fn shell(p: &Path) -> String {

@@ -74,6 +74,11 @@ fn cpu_path(dir: &Path, job: &CaptureJob, t: usize) -> PathBuf {
     dir.join(&job.tasks[t].out).with_extension("cpu_s")
 }
 
+/// A CPU tally's seconds, if the file is there and holds a number.
+fn read_seconds(path: &Path) -> Option<f64> {
+    std::fs::read_to_string(path).ok()?.trim().parse().ok()
+}
+
 /// A task's CPU tally, written as it renders (at most every 10 s) and when it ends, so that a run
 /// that is stopped or killed still counts what it spent.
 struct Tally {
@@ -88,10 +93,7 @@ impl Tally {
     /// rendered again) starts a new one.
     fn start(path: PathBuf, checkpoint: &Path) -> Tally {
         let before_s = if checkpoint.exists() {
-            std::fs::read_to_string(&path)
-                .ok()
-                .and_then(|s| s.trim().parse().ok())
-                .unwrap_or(0.0)
+            read_seconds(&path).unwrap_or(0.0)
         } else {
             0.0
         };
@@ -416,11 +418,7 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
             .map(|id| {
                 let job = plan.job(id);
                 (0..job.tasks.len())
-                    .map(|t| {
-                        std::fs::read_to_string(cpu_path(dir, job, t))
-                            .ok()
-                            .and_then(|s| s.trim().parse::<f64>().ok())
-                    })
+                    .map(|t| read_seconds(&cpu_path(dir, job, t)))
                     .sum::<Option<f64>>()
                     .map(|s| s / job.capture_ids().len() as f64)
             })
