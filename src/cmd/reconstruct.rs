@@ -35,11 +35,13 @@ pub enum FalloffArg {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum LateralArg {
-    /// Only the wall-plane frequencies whose waves reach each depth plane (faster; differs from `full`
-    /// by the kernel's and the data's leakage beyond them: intensity relL2 1.8e-4 on a synthetic Z,
-    /// 3e-4–6e-4 on real captures).
+    /// Only the wall-plane frequencies whose waves reach each depth plane, and on finely sampled depths
+    /// only every other plane, the others interpolated (faster; differs from `full` by the kernel's and
+    /// the data's leakage beyond them: intensity relL2 1.8e-4 on a synthetic Z, 3e-4–6e-4 on real
+    /// captures).
     Propagating,
-    /// Every frequency: the fast form equals the exact discrete RSD sum to rounding.
+    /// Every frequency and every depth plane: the fast form equals the exact discrete RSD sum to
+    /// rounding.
     Full,
 }
 

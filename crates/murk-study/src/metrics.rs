@@ -329,6 +329,12 @@ fn dft(line: &[(f64, f64)]) -> Vec<(f64, f64)> {
 
 pub use murk_core::median;
 
+/// Whether a depth error is within one voxel of `dz_m`. Depths are stored in f32, so an error of
+/// exactly one voxel reads up to a few 1e-7 relative above it (2.025 − 2.0 = 0.0250001 in f32).
+pub fn within_a_voxel(err_m: f64, dz_m: f64) -> bool {
+    err_m.abs() <= dz_m * (1.0 + 1e-5)
+}
+
 /// Mean and sample standard deviation (n − 1 denominator) of the finite values: `(NaN, NaN)` for
 /// none, and a NaN standard deviation for one (a spread of one value is undefined, not zero).
 pub fn mean_std(values: &[f64]) -> (f64, f64) {
@@ -727,6 +733,14 @@ mod tests {
             })
             .collect();
         assert!(high_frequency_share(&blurred, 32, 32) < high_frequency_share(&sharp, 32, 32));
+    }
+
+    #[test]
+    fn one_voxel_read_in_f32_is_within_a_voxel() {
+        let err = (2.025f32 - 2.0f32) as f64;
+        assert!(err > 0.025 && within_a_voxel(err, 0.025));
+        assert!(within_a_voxel(-0.0125, 0.025));
+        assert!(!within_a_voxel(0.0251, 0.025));
     }
 
     #[test]

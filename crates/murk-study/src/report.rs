@@ -373,7 +373,7 @@ pub fn findings(results: &[CellResult]) -> Vec<String> {
         let (i, d) = (iou(r), mean(r, |s| s.depth_err_m));
         out.push(format!(
             "Fig. 3a, no medium: the paper reconstructs the Z; it is found at its depth (IoU ≥ 0.7, depth within a voxel): {}. IoU {i:.3}, depth error {d:+.3} m against a voxel of {:.3} m.",
-            verdict(i >= 0.7 && d.abs() <= r.voxel_dz_m),
+            verdict(i >= 0.7 && metrics::within_a_voxel(d, r.voxel_dz_m)),
             r.voxel_dz_m
         ));
     }

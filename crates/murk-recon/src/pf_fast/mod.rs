@@ -16,7 +16,9 @@ use rayon::prelude::*;
 use rustfft::num_complex::{Complex32, Complex64};
 use std::ops::Range;
 
+mod depths;
 mod lattice;
+use depths::Depths;
 use std::sync::Mutex;
 
 /// Which histogram feeds grid cell `c` for a given point-side index.
@@ -276,11 +278,13 @@ impl Plan {
     ) -> Result<(Vec<Complex32>, Vec<Slab>)> {
         let (nx, ny, nz) = (self.vol.x.n, self.vol.y.n, self.vol.z.n);
         let sources = self.sources();
-        let (slabs, windows) = self.slabs(sigma_m, wavelength_m)?;
-        progress.start((sources.len() * nz) as u64);
+        let (depths, slabs, windows) = self.depths(sigma_m, wavelength_m)?;
+        let ne = depths.z.len();
+        progress.start((sources.len() * ne) as u64);
         let nxy = nx * ny;
-        // Zero pages from the OS, first touched by the threads that write them.
-        let mut field: Vec<Complex32> = murk_core::buffer::zeroed(nxy * nz);
+        // The evaluated planes, [xy][plane]. Zero pages from the OS, first touched by the threads
+        // that write them.
+        let mut field: Vec<Complex32> = murk_core::buffer::zeroed(nxy * ne);
         // A slab's planes summed over the point-side sources in f64 ([xy][plane], so each voxel's
         // run of planes is contiguous) before the one rounding to f32.
         let mut sum: Vec<Complex64> = Vec::new();
@@ -295,9 +299,9 @@ impl Plan {
             let np = planes.len();
             murk_core::buffer::grow(&mut sum, nxy * np, Complex64::default());
             // The shallowest plane keeps the most lines: grid spectra on its lines serve all.
-            let dz_min = planes
-                .clone()
-                .map(|iz| self.vol.z.at(iz) - self.grid.origin.z)
+            let dz_min = depths.z[planes.clone()]
+                .iter()
+                .map(|z| z - self.grid.origin.z)
                 .fold(f64::INFINITY, f64::min);
             for (i, &src) in sources.iter().enumerate() {
                 let chosen: Vec<[Option<usize>; 2]> = (0..spectra.band.len())
@@ -309,7 +313,8 @@ impl Plan {
                     .into_par_iter()
                     .map(|iz| {
                         let mut ws = lock(&pool);
-                        let plane = self.plane(&mut ws, &spectra, hspec, &chosen, src, iz);
+                        let z = depths.z[iz];
+                        let plane = self.plane(&mut ws, &spectra, hspec, &chosen, src, z);
                         progress.advance(1);
                         plane
                     })
@@ -323,7 +328,7 @@ impl Plan {
                 });
             }
             field
-                .par_chunks_mut(nz)
+                .par_chunks_mut(ne)
                 .zip(sum.par_chunks(np))
                 .for_each(|(col, s)| {
                     for (d, a) in col[planes.clone()].iter_mut().zip(s) {
@@ -340,7 +345,71 @@ impl Plan {
                 dft_len: w.band.nf,
             })
             .collect();
-        Ok((field, slabs))
+        if !depths.interpolates() {
+            return Ok((field, slabs));
+        }
+        let mut volume: Vec<Complex32> = murk_core::buffer::zeroed(nxy * nz);
+        volume
+            .par_chunks_mut(nz)
+            .zip(field.par_chunks(ne))
+            .for_each(|(col, evaluated)| {
+                for (i, v) in col.iter_mut().enumerate() {
+                    *v = depths.read(evaluated, i);
+                }
+            });
+        Ok((volume, slabs))
+    }
+
+    /// The depth planes to evaluate, with their slabs and time windows: every other plane (see
+    /// [`Depths`]) where the fast form may approximate ([`Lateral::Propagating`]) and the field's
+    /// depth band allows, else every plane.
+    fn depths(
+        &self,
+        sigma_m: f64,
+        wavelength_m: f64,
+    ) -> Result<(Depths, Vec<Range<usize>>, Vec<Window>)> {
+        let halved = match self.lateral {
+            Lateral::Propagating => Depths::halved(&self.vol, self.grid.origin.z),
+            Lateral::Full => None,
+        };
+        if let Some(mut d) = halved {
+            let (slabs, windows) = self.slabs(&d.z, sigma_m, wavelength_m)?;
+            if d.design(self.depth_band(&d, &windows)) {
+                return Ok((d, slabs, windows));
+            }
+        }
+        let d = Depths::every(&self.vol);
+        let (slabs, windows) = self.slabs(&d.z, sigma_m, wavelength_m)?;
+        Ok((d, slabs, windows))
+    }
+
+    /// The band (rad/m) of depth frequencies of the field over the planes of `d`: the band's
+    /// wavenumbers times the range of the path's depth rate.
+    fn depth_band(&self, d: &Depths, windows: &[Window]) -> (f64, f64) {
+        let g = &self.grid;
+        let corner = g.point(g.nx - 1, g.ny - 1);
+        let wall = [
+            (g.origin.x.min(corner.x), g.origin.x.max(corner.x)),
+            (g.origin.y.min(corner.y), g.origin.y.max(corner.y)),
+        ];
+        let points: Vec<DVec3> = self
+            .sources()
+            .into_iter()
+            .flatten()
+            .map(|s| self.source_point(s))
+            .collect();
+        let z = (d.z[0], d.z[d.z.len() - 1]);
+        let legs = if points.is_empty() { 2.0 } else { 1.0 };
+        let (r0, r1) = depths::depth_rate(&self.vol, z, wall, g.origin.z, &points, legs);
+        let k0 = windows
+            .iter()
+            .map(|w| w.band.k(0))
+            .fold(f64::INFINITY, f64::min);
+        let k1 = windows
+            .iter()
+            .map(|w| w.band.k(w.band.len() - 1))
+            .fold(0.0, f64::max);
+        ((k0 * r0).min(k1 * r0), (k0 * r1).max(k1 * r1))
     }
 
     /// Splits the depth planes into contiguous slabs, each with its own time window. A slab's paths
@@ -348,13 +417,17 @@ impl Plan {
     /// plane work is proportional to them), but each slab transforms the data and the grid spectra
     /// once more. The split minimises a cost model in FFT point-operations, with planes shared among
     /// the worker threads, by dynamic programming over slab ends.
-    fn slabs(&self, sigma_m: f64, wavelength_m: f64) -> Result<(Vec<Range<usize>>, Vec<Window>)> {
+    fn slabs(
+        &self,
+        zs: &[f64],
+        sigma_m: f64,
+        wavelength_m: f64,
+    ) -> Result<(Vec<Range<usize>>, Vec<Window>)> {
         const MAX_PLANES: usize = 256;
-        let nz = self.vol.z.n;
-        let paths: Vec<(f64, f64)> = (0..nz)
-            .into_par_iter()
-            .map(|iz| {
-                let z = self.vol.z.at(iz);
+        let nz = zs.len();
+        let paths: Vec<(f64, f64)> = zs
+            .par_iter()
+            .map(|&z| {
                 let plane = Volume {
                     z: Axis::new(z, z, 1),
                     ..self.vol
@@ -525,7 +598,7 @@ impl Plan {
         hspec: &[Complex32],
         chosen: &[[Option<usize>; 2]],
         src: Option<usize>,
-        iz: usize,
+        z: f64,
     ) -> Vec<Complex32> {
         let band = &spectra.band;
         let (fx, fy) = (self.fft.fx, self.fft.fy);
@@ -535,7 +608,6 @@ impl Plan {
         let (nx, ny) = (self.vol.x.n, self.vol.y.n);
         // The lattice rows x of the convolution that the resampler reads.
         let xs = gnx - 1..gnx - 1 + vx;
-        let z = self.vol.z.at(iz);
         let dz = z - self.grid.origin.z;
         let (dxs, dys) = (self.grid.step_x.x, self.grid.step_y.y);
         let legs = legs(src);
