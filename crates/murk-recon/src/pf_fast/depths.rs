@@ -24,7 +24,7 @@ pub(super) const MAX_BAND: f64 = 0.75;
 /// The depth planes evaluated and how each volume plane is read from them.
 #[derive(Clone, Debug)]
 pub(super) struct Depths {
-    /// Depths (m) evaluated, increasing.
+    /// Depths (m) evaluated, in the volume's order.
     pub(super) z: Vec<f64>,
     /// Index in `z` of volume plane 0 when planes are interpolated: volume plane i is evaluated
     /// plane `first + i/2` for even i.
@@ -109,7 +109,9 @@ impl Depths {
         let e_last = first + (last_odd - 1) / 2;
         let evaluated = (first + n.div_ceil(2)).max(e_last + TAPS / 2 - SHIFT + 1);
         let z = |e: usize| vol.z.at(0) + 2.0 * (e as f64 - first as f64) * step;
-        if evaluated >= n || z(0) - wall_z < 0.5 * (vol.z.at(0) - wall_z) {
+        // Either end may be the shallow one (a decreasing depth axis).
+        let nearest = (vol.z.at(0).min(vol.z.at(n - 1)) - wall_z) * 0.5;
+        if evaluated >= n || z(0).min(z(evaluated - 1)) - wall_z < nearest {
             return None;
         }
         Some(Depths {
@@ -127,9 +129,10 @@ impl Depths {
     /// Designs the interpolator for depth frequencies in `band` (rad/m, the path's depth rate times
     /// the band's wavenumbers); false (and nothing designed) when the band is wider than MAX_BAND.
     pub(super) fn design(&mut self, band: (f64, f64)) -> bool {
+        // Signed: a decreasing depth axis turns the demodulation's phase around.
         let h = self.z[1] - self.z[0];
         let centre = 0.5 * (band.0 + band.1);
-        let half = 0.5 * (band.1 - band.0) * h / PI;
+        let half = 0.5 * (band.1 - band.0) * h.abs() / PI;
         if half > MAX_BAND {
             return false;
         }

@@ -71,6 +71,8 @@ impl Kb {
 /// Depth planes evaluated together over one time window.
 #[derive(Clone, Debug)]
 pub struct Slab {
+    /// Indices among the evaluated planes, which are every volume plane or every other one and a
+    /// few past the ends (see [`Lateral::Propagating`]).
     pub planes: Range<usize>,
     pub frequencies: usize,
     pub dft_len: usize,
@@ -412,7 +414,7 @@ impl Plan {
         ((k0 * r0).min(k1 * r0), (k0 * r1).max(k1 * r1))
     }
 
-    /// Splits the depth planes into contiguous slabs, each with its own time window. A slab's paths
+    /// Splits the planes at depths `zs` into contiguous slabs, each with its own time window. A slab's paths
     /// span less than the whole volume's, so its DFT is shorter and holds fewer band frequencies (the
     /// plane work is proportional to them), but each slab transforms the data and the grid spectra
     /// once more. The split minimises a cost model in FFT point-operations, with planes shared among
