@@ -988,17 +988,17 @@ fn interpolated_depth_planes_match_planes_evaluated_alone() {
     for kind in [LayoutKind::LaserGridSinglePoint, LayoutKind::Confocal] {
         let cap = capture(kind, 0.1, true);
         let vol = Volume {
-            z: Axis::new(0.4, 0.6, 41),
+            z: Axis::new(0.4, 0.7, 61),
             ..aligned_volume()
         };
         let fast = field(&cap, &vol, &params, PfForm::Fast, &NoProgress).unwrap();
         assert!(
-            evaluated(&fast) < 30,
+            evaluated(&fast) < 40,
             "{kind:?}: {} planes",
             evaluated(&fast)
         );
         let peak = fast.values.iter().map(|v| v.norm()).fold(0.0, f32::max);
-        for iz in [0, 1, 3, 19, 20, 21, 39, 40] {
+        for iz in [0, 1, 3, 19, 20, 21, 57, 59, 60] {
             let z = vol.z.at(iz);
             let one = Volume {
                 z: Axis::new(z, z, 1),
@@ -1015,13 +1015,13 @@ fn interpolated_depth_planes_match_planes_evaluated_alone() {
         }
         // The same depths in decreasing order: the same field, plane for plane.
         let down = Volume {
-            z: Axis::new(0.6, 0.4, 41),
+            z: Axis::new(0.7, 0.4, 61),
             ..vol
         };
         let rev = field(&cap, &down, &params, PfForm::Fast, &NoProgress).unwrap();
-        assert!(evaluated(&rev) < 30, "{kind:?}: {} planes", evaluated(&rev));
+        assert!(evaluated(&rev) < 40, "{kind:?}: {} planes", evaluated(&rev));
         let err = (0..vol.x.n * vol.y.n)
-            .flat_map(|c| (0..41).map(move |iz| (c * 41 + iz, c * 41 + 40 - iz)))
+            .flat_map(|c| (0..61).map(move |iz| (c * 61 + iz, c * 61 + 60 - iz)))
             .map(|(a, b)| (fast.values[a] - rev.values[b]).norm() / peak)
             .fold(0.0, f32::max);
         assert!(

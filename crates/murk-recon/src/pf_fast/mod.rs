@@ -354,11 +354,7 @@ impl Plan {
         volume
             .par_chunks_mut(nz)
             .zip(field.par_chunks(ne))
-            .for_each(|(col, evaluated)| {
-                for (i, v) in col.iter_mut().enumerate() {
-                    *v = depths.read(evaluated, i);
-                }
-            });
+            .for_each(|(col, evaluated)| depths.read(evaluated, col));
         Ok((volume, slabs))
     }
 
