@@ -83,7 +83,7 @@ pub enum Lateral {
     /// `Full` the intensity differs by relL2 1.8e-4 on the synthetic Z letter (128², 142² × 30
     /// voxels), 3.4e-4 and 6.4e-4 on the real (confocal) mannequin and letter S (docs/reconstruction.md).
     /// Where the depth step is fine against the field's depth band, only every other plane is
-    /// evaluated and the others interpolated by a 20-tap least-squares filter ("Depth planes" there).
+    /// evaluated and the others interpolated by a 28-tap least-squares filter ("Depth planes" there).
     #[default]
     Propagating,
     /// Every frequency of the FFT grid and every depth plane: the fast form equals the exact discrete
