@@ -11,6 +11,7 @@ mod compensation;
 mod fft2;
 mod pf_exact;
 mod pf_fast;
+mod phase;
 pub mod pipeline;
 mod resample;
 pub mod spectrum;

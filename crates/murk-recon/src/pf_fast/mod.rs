@@ -6,6 +6,7 @@
 
 use crate::cmul;
 use crate::fft2::{kept_lines, kept_spans, Fft2};
+use crate::phase;
 use crate::resample::{KaiserBessel, Resampler};
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
@@ -609,48 +610,43 @@ impl Plan {
         let dz = z - self.grid.origin.z;
         let (dxs, dys) = (self.grid.step_x.x, self.grid.step_y.y);
         let legs = legs(src);
-        // k_0 = m_lo·Δk, so a phase at k_0 is the per-frequency step to the power m_lo: one sincos
-        // per entry instead of two.
-        let (m0, dk) = (band.m_lo as u32, band.dk());
+        // k_0 = m_lo·Δk: a phase at k_0 is m_lo times the per-frequency step's.
+        let (m0, dk) = (band.m_lo, band.dk());
         // The kernel depends on |dx| and |dy| only: its sines, cosines and per-frequency recurrence
         // live in a table over the distinct (|dx|, |dy|) (a quarter of the support when the volume is
         // centred on the wall) that is mirrored into the FFT input.
         let (cx, cy) = (self.cx, self.cy);
         let (mx, my) = (reach(cx, gx), reach(cy, gy));
-        ws.tcur.clear();
-        ws.tstep.clear();
-        // On a square lattice the table is symmetric (bit for bit: the same products, summed
-        // commutatively), so its lower half is copied from rows already computed.
-        let square = mx == my && dxs == dys;
+        // Angles and amplitudes first, then their phasors in one vectorised pass. On a square lattice
+        // the table comes out symmetric bit for bit (the same products, summed commutatively).
+        ws.theta.clear();
+        ws.amp.clear();
         for ax in 0..mx {
             let dx = ax as f64 * dxs;
             for ay in 0..my {
-                if square && ay < ax {
-                    let mirrored = ay * my + ax;
-                    ws.tcur.push(ws.tcur[mirrored]);
-                    ws.tstep.push(ws.tstep[mirrored]);
-                    continue;
-                }
                 let dy = ay as f64 * dys;
                 let r = (dx * dx + dy * dy + dz * dz).sqrt();
-                let amp = amplitude(self.falloff, r).powf(legs);
-                let step = Complex64::from_polar(1.0, dk * legs * r);
-                ws.tcur.push(c32(step.powu(m0) * amp));
-                ws.tstep.push(c32(step));
+                ws.theta.push(dk * legs * r);
+                ws.amp.push(amplitude(self.falloff, r).powf(legs));
             }
         }
+        ws.tcur.resize(mx * my, Complex32::default());
+        ws.tstep.resize(mx * my, Complex32::default());
+        phase::phasors(&ws.theta, &ws.amp, m0 as f64, &mut ws.tcur, &mut ws.tstep);
         // Exact phase of the point-side leg, per voxel (y-major, like `ws.field`); confocal data have
         // none.
         if let Some(s) = src {
-            for ix in 0..nx {
-                for iy in 0..ny {
+            ws.theta.clear();
+            ws.amp.clear();
+            for iy in 0..ny {
+                for ix in 0..nx {
                     let v = DVec3::new(self.vol.x.at(ix), self.vol.y.at(iy), z);
                     let d = (v - self.source_point(s)).length();
-                    let step = Complex64::from_polar(1.0, dk * d);
-                    ws.pbase[iy * nx + ix] = c32(step.powu(m0) * amplitude(self.falloff, d));
-                    ws.pstep[iy * nx + ix] = c32(step);
+                    ws.theta.push(dk * d);
+                    ws.amp.push(amplitude(self.falloff, d));
                 }
             }
+            phase::phasors(&ws.theta, &ws.amp, m0 as f64, &mut ws.pbase, &mut ws.pstep);
         }
         // Confocal data has no point-side phase, so the sum over frequencies commutes with the inverse
         // FFT and the resampling: accumulate spectra and transform back once per plane.
@@ -778,6 +774,10 @@ struct Workspace {
     /// 1e-5).
     tcur: Vec<Complex32>,
     tstep: Vec<Complex32>,
+    /// Angles (rad) and amplitudes of the kernel's table or the point-side phases, before their
+    /// phasors.
+    theta: Vec<f64>,
+    amp: Vec<f64>,
     /// Confocal: the plane's spectrum summed over frequencies.
     spec_acc: Vec<Complex32>,
     /// Folded kernel spectrum: the y-transformed distinct rows, transposed.
@@ -812,6 +812,8 @@ impl Workspace {
             scratch: plan.fft.scratch(),
             tcur: Vec::new(),
             tstep: Vec::new(),
+            theta: Vec::new(),
+            amp: Vec::new(),
             spec_acc: vec![Complex32::default(); fx * fy],
             // Folded kernel spectrum: the distinct rows' columns ky ≤ fy/2, the most it keeps.
             cols: only(folds, (fy / 2 + 1) * (plan.cx as usize + 1)),
