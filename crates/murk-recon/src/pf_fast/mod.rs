@@ -372,9 +372,11 @@ impl Plan {
             Lateral::Full => None,
         };
         if let Some(mut d) = halved {
-            let (slabs, windows) = self.slabs(&d.z, sigma_m, wavelength_m)?;
-            if d.design(self.depth_band(&d, &windows)) {
-                return Ok((d, slabs, windows));
+            // Planes past the ends lengthen the window; where that fails, every plane is evaluated.
+            if let Ok((slabs, windows)) = self.slabs(&d.z, sigma_m, wavelength_m) {
+                if d.design(self.depth_band(&d, &windows)) {
+                    return Ok((d, slabs, windows));
+                }
             }
         }
         let d = Depths::every(&self.vol);
