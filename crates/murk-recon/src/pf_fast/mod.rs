@@ -416,8 +416,8 @@ impl Plan {
     /// Splits the planes at depths `zs` into contiguous slabs, each with its own time window. A
     /// slab's paths span less than the whole volume's, so its DFT is shorter and holds fewer band
     /// frequencies (the plane work is proportional to them), but each slab transforms the data and
-    /// the grid spectra once more. The split minimises a cost model in FFT point-operations, with planes shared among
-    /// the worker threads, by dynamic programming over slab ends.
+    /// the grid spectra once more. The split minimises a cost model in FFT point-operations, with
+    /// planes shared among the worker threads, by dynamic programming over slab ends.
     fn slabs(
         &self,
         zs: &[f64],
