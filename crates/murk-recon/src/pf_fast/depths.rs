@@ -95,7 +95,7 @@ impl Depths {
     }
 
     /// Every other plane of `vol` and a few past each end, or None when those would come closer to
-    /// the wall (depth `wall_z`) than half the volume's first plane, or there would be no fewer
+    /// the wall (depth `wall_z`) than half the volume's shallower end, or there would be no fewer
     /// planes or fewer than the interpolator's taps.
     pub(super) fn halved(vol: &Volume, wall_z: f64) -> Option<Depths> {
         let n = vol.z.n;
