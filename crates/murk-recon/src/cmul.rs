@@ -12,22 +12,39 @@ pub fn mul_assign(a: &mut [Complex32], b: &[Complex32]) {
     if has_avx2_fma() {
         let p = a.as_mut_ptr();
         // SAFETY: AVX2 and FMA were just detected; `n` bounds every access; in place is allowed.
-        let done = unsafe { avx::mul(p, p, b.as_ptr(), n, false) };
+        let done = unsafe { avx::mul(p, p, b.as_ptr(), n) };
         return tail(&mut a[done..n], &b[done..n]);
     }
     tail(&mut a[..n], &b[..n]);
 }
 
-/// `dst[i] += a[i] · b[i]`.
-pub fn mul_add(dst: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {
-    let n = dst.len().min(a.len()).min(b.len());
+/// `acc += a·phase`, then `phase *= step`: a point-side phase applied and advanced to the next
+/// frequency in one pass, so the phases are read and written once per frequency, not twice.
+pub fn mul_add_advance(
+    acc: &mut [Complex32],
+    a: &[Complex32],
+    phase: &mut [Complex32],
+    step: &[Complex32],
+) {
+    let n = acc.len().min(a.len()).min(phase.len()).min(step.len());
+    let mut done = 0;
     #[cfg(target_arch = "x86_64")]
     if has_avx2_fma() {
-        // SAFETY: as in `mul_assign`; `dst` does not alias `a` or `b` (borrow rules).
-        let done = unsafe { avx::mul(dst.as_mut_ptr(), a.as_ptr(), b.as_ptr(), n, true) };
-        return tail2(&mut dst[done..n], &a[done..n], &b[done..n]);
+        // SAFETY: AVX2 and FMA were just detected; all four slices hold at least n values.
+        done = unsafe {
+            avx::mul_add_advance(
+                acc.as_mut_ptr(),
+                a.as_ptr(),
+                phase.as_mut_ptr(),
+                step.as_ptr(),
+                n,
+            )
+        };
     }
-    tail2(&mut dst[..n], &a[..n], &b[..n]);
+    for i in done..n {
+        acc[i] += a[i] * phase[i];
+        phase[i] *= step[i];
+    }
 }
 
 /// `a[i] += b[i]`.
@@ -42,12 +59,6 @@ fn tail(d: &mut [Complex32], b: &[Complex32]) {
     d.iter_mut().zip(b).for_each(|(d, b)| *d *= b);
 }
 
-fn tail2(d: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {
-    d.iter_mut()
-        .zip(a.iter().zip(b))
-        .for_each(|(d, (a, b))| *d += a * b);
-}
-
 #[cfg(target_arch = "x86_64")]
 mod avx {
     use rustfft::num_complex::Complex32;
@@ -58,29 +69,62 @@ mod avx {
     ///
     /// # Safety
     /// AVX2 and FMA must be available, and `dst`, `a`, `b` valid for `n` elements.
+    /// The product of four complex values in each of `a` and `b`.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn product(a: __m256, b: __m256) -> __m256 {
+        let br = _mm256_moveldup_ps(b);
+        let bi = _mm256_movehdup_ps(b);
+        let swapped = _mm256_permute_ps(a, 0b10_11_00_01);
+        _mm256_fmaddsub_ps(a, br, _mm256_mul_ps(swapped, bi))
+    }
+
+    /// [`super::mul_add_advance`] over the first n/4·4 values; returns how many it did.
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn mul_add_advance(
+        acc: *mut Complex32,
+        a: *const Complex32,
+        phase: *mut Complex32,
+        step: *const Complex32,
+        n: usize,
+    ) -> usize {
+        let (acc, a, phase, step) = (
+            acc as *mut f32,
+            a as *const f32,
+            phase as *mut f32,
+            step as *const f32,
+        );
+        let full = n / 4 * 4;
+        let mut i = 0;
+        while i < full {
+            let p = _mm256_loadu_ps(phase.add(2 * i));
+            let sum = _mm256_add_ps(
+                _mm256_loadu_ps(acc.add(2 * i)),
+                product(_mm256_loadu_ps(a.add(2 * i)), p),
+            );
+            _mm256_storeu_ps(acc.add(2 * i), sum);
+            _mm256_storeu_ps(
+                phase.add(2 * i),
+                product(p, _mm256_loadu_ps(step.add(2 * i))),
+            );
+            i += 4;
+        }
+        full
+    }
+
+    /// `dst = a·b` over the first n/4·4 values (dst may be a); returns how many it did.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn mul(
         dst: *mut Complex32,
         a: *const Complex32,
         b: *const Complex32,
         n: usize,
-        add: bool,
     ) -> usize {
-        // Complex32 is #[repr(C)] {re, im}: four of them are eight interleaved f32.
         let (d, a, b) = (dst as *mut f32, a as *const f32, b as *const f32);
         let full = n / 4 * 4;
         let mut i = 0;
         while i < full {
-            let va = _mm256_loadu_ps(a.add(2 * i));
-            let vb = _mm256_loadu_ps(b.add(2 * i));
-            // (ar·br − ai·bi, ai·br + ar·bi) per lane pair.
-            let br = _mm256_moveldup_ps(vb);
-            let bi = _mm256_movehdup_ps(vb);
-            let swapped = _mm256_permute_ps(va, 0b10_11_00_01);
-            let mut p = _mm256_fmaddsub_ps(va, br, _mm256_mul_ps(swapped, bi));
-            if add {
-                p = _mm256_add_ps(p, _mm256_loadu_ps(d.add(2 * i)));
-            }
+            let p = product(_mm256_loadu_ps(a.add(2 * i)), _mm256_loadu_ps(b.add(2 * i)));
             _mm256_storeu_ps(d.add(2 * i), p);
             i += 4;
         }
@@ -109,10 +153,12 @@ mod tests {
             let mut d = a.clone();
             mul_assign(&mut d, &b);
             assert!(close(&d, &want), "mul_assign, n = {n}");
-            let mut d = c.clone();
-            mul_add(&mut d, &a, &b);
+            let (mut d, mut p) = (c.clone(), a.clone());
+            mul_add_advance(&mut d, &b, &mut p, &c);
             let want_add: Vec<Complex32> = c.iter().zip(&want).map(|(c, w)| c + w).collect();
-            assert!(close(&d, &want_add), "mul_add, n = {n}");
+            let want_p: Vec<Complex32> = a.iter().zip(&c).map(|(a, c)| a * c).collect();
+            assert!(close(&d, &want_add), "mul_add_advance's sum, n = {n}");
+            assert!(close(&p, &want_p), "mul_add_advance's phase, n = {n}");
         }
     }
 }

@@ -706,8 +706,7 @@ impl Plan {
             }
             self.field_at_voxels(ws, lines, self.resamplers(chosen[j]));
             // Exact phase of the point-side leg.
-            cmul::mul_add(&mut acc, &ws.field, &ws.pbase);
-            cmul::mul_assign(&mut ws.pbase, &ws.pstep);
+            cmul::mul_add_advance(&mut acc, &ws.field, &mut ws.pbase, &ws.pstep);
         }
         if confocal {
             self.fft
