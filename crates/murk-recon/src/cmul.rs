@@ -27,11 +27,16 @@ pub fn mul_add_advance(
     step: &[Complex32],
 ) {
     let n = acc.len().min(a.len()).min(phase.len()).min(step.len());
-    let mut done = 0;
+    let scalar = |from: usize, acc: &mut [Complex32], phase: &mut [Complex32]| {
+        for i in from..n {
+            acc[i] += a[i] * phase[i];
+            phase[i] *= step[i];
+        }
+    };
     #[cfg(target_arch = "x86_64")]
     if has_avx2_fma() {
         // SAFETY: AVX2 and FMA were just detected; all four slices hold at least n values.
-        done = unsafe {
+        let done = unsafe {
             avx::mul_add_advance(
                 acc.as_mut_ptr(),
                 a.as_ptr(),
@@ -40,11 +45,9 @@ pub fn mul_add_advance(
                 n,
             )
         };
+        return scalar(done, acc, phase);
     }
-    for i in done..n {
-        acc[i] += a[i] * phase[i];
-        phase[i] *= step[i];
-    }
+    scalar(0, acc, phase)
 }
 
 /// `a[i] += b[i]`.
