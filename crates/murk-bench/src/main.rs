@@ -336,7 +336,7 @@ fn paper_case(
     let (p, _) = murk_core::Reconstruction::new(vol, intensity, "pf").peak();
     say(quiet, format!(
         "{label} (fast PF; {} of {} depth planes evaluated, in {} slabs of {:.1} frequencies per plane on average, against {} over the whole volume's window): median {:.3} s (runs {:?}); synthesis {:.2} s; peak depth {:.3} m (Z at 2.000 m); peak RSS {:.0} MiB",
-        info.slabs.iter().map(|s| s.planes.len()).sum::<usize>(),
+        info.planes_evaluated(),
         vol.z.n,
         info.slabs.len(),
         info.frequencies_per_plane(),

@@ -206,10 +206,16 @@ impl ReconInfo {
         ]
     }
 
+    /// Depth planes the fast form evaluated (every plane, or every other one and a few past the ends;
+    /// see [`Lateral::Propagating`]); 0 for the exact form.
+    pub fn planes_evaluated(&self) -> usize {
+        self.slabs.iter().map(|s| s.planes.len()).sum()
+    }
+
     /// Band frequencies per evaluated depth plane: the mean over the fast form's slabs, else the whole
     /// window's.
     pub fn frequencies_per_plane(&self) -> f64 {
-        let planes: usize = self.slabs.iter().map(|s| s.planes.len()).sum();
+        let planes = self.planes_evaluated();
         if planes == 0 {
             return self.frequencies as f64;
         }
@@ -413,7 +419,7 @@ impl PfPlan {
                 "lateral".into(),
                 format!("{:?}", self.params.lateral).to_lowercase(),
             ));
-            let evaluated: usize = f.info.slabs.iter().map(|s| s.planes.len()).sum();
+            let evaluated = f.info.planes_evaluated();
             if evaluated != f.volume.z.n {
                 rows.push((
                     "depth_planes".into(),

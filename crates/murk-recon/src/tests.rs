@@ -984,7 +984,7 @@ fn a_volume_or_gate_beyond_the_window_is_refused() {
 #[test]
 fn interpolated_depth_planes_match_planes_evaluated_alone() {
     let params = PfParams::default();
-    let evaluated = |f: &Field| f.info.slabs.iter().map(|s| s.planes.len()).sum::<usize>();
+    let evaluated = |f: &Field| f.info.planes_evaluated();
     for kind in [LayoutKind::LaserGridSinglePoint, LayoutKind::Confocal] {
         let cap = capture(kind, 0.1, true);
         let vol = Volume {

@@ -47,10 +47,7 @@ pub(super) fn depth_rate(
     points: &[DVec3],
     legs: f64,
 ) -> (f64, f64) {
-    let span = |a: &murk_core::Axis| {
-        let (p, q) = (a.at(0), a.at(a.n - 1));
-        (p.min(q), p.max(q))
-    };
+    let span = |a: &murk_core::Axis| (a.start.min(a.end), a.start.max(a.end));
     let (vx, vy) = (span(&vol.x), span(&vol.y));
     // Lateral distance range between the volume's box and another box (or point).
     let rho = |bx: (f64, f64), by: (f64, f64)| {
@@ -102,16 +99,16 @@ impl Depths {
         if n < 2 {
             return None;
         }
-        let step = vol.z.at(1) - vol.z.at(0);
+        let step = vol.z.step();
         // Odd plane i reads TAPS evaluated planes from e − (TAPS/2 − 1) (e: plane i − 1's), moved
         // inward by up to SHIFT at the ends.
         let first = TAPS / 2 - 1 - SHIFT;
         let last_odd = if n.is_multiple_of(2) { n - 1 } else { n - 2 };
         let e_last = first + (last_odd - 1) / 2;
         let evaluated = (first + n.div_ceil(2)).max(e_last + TAPS / 2 - SHIFT + 1);
-        let z = |e: usize| vol.z.at(0) + 2.0 * (e as f64 - first as f64) * step;
+        let z = |e: usize| vol.z.start + 2.0 * (e as f64 - first as f64) * step;
         // Either end may be the shallow one (a decreasing depth axis).
-        let nearest = (vol.z.at(0).min(vol.z.at(n - 1)) - wall_z) * 0.5;
+        let nearest = (vol.z.start.min(vol.z.end) - wall_z) * 0.5;
         if evaluated >= n || evaluated < TAPS || z(0).min(z(evaluated - 1)) - wall_z < nearest {
             return None;
         }
@@ -124,7 +121,7 @@ impl Depths {
 
     /// Whether planes between the evaluated ones are interpolated.
     pub(super) fn interpolates(&self) -> bool {
-        self.first > 0
+        !self.weights.is_empty()
     }
 
     /// Designs the interpolator for depth frequencies in `band` (rad/m, the path's depth rate times
@@ -158,7 +155,7 @@ impl Depths {
 
     /// A column of the volume (`out`, every plane) from its evaluated planes `col`.
     pub(super) fn read(&self, col: &[Complex32], out: &mut [Complex32]) {
-        if self.weights.is_empty() {
+        if !self.interpolates() {
             out.copy_from_slice(col);
             return;
         }
