@@ -18,6 +18,20 @@ pub fn mul_assign(a: &mut [Complex32], b: &[Complex32]) {
     tail(&mut a[..n], &b[..n]);
 }
 
+/// `dst[i] = a[i]·b[i]`.
+pub fn mul(dst: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {
+    let n = dst.len().min(a.len()).min(b.len());
+    let mut done = 0;
+    #[cfg(target_arch = "x86_64")]
+    if has_avx2_fma() {
+        // SAFETY: AVX2 and FMA were just detected; `n` bounds every access; `dst` is exclusive.
+        done = unsafe { avx::mul(dst.as_mut_ptr(), a.as_ptr(), b.as_ptr(), n) };
+    }
+    for i in done..n {
+        dst[i] = a[i] * b[i];
+    }
+}
+
 /// `acc += a·phase`, then `phase *= step`: a point-side phase applied and advanced to the next
 /// frequency in one pass, so the phases are read and written once per frequency, not twice.
 pub fn mul_add_advance(
@@ -156,6 +170,9 @@ mod tests {
             let mut d = a.clone();
             mul_assign(&mut d, &b);
             assert!(close(&d, &want), "mul_assign, n = {n}");
+            let mut d = c.clone();
+            mul(&mut d, &a, &b);
+            assert!(close(&d, &want), "mul, n = {n}");
             let (mut d, mut p) = (c.clone(), a.clone());
             mul_add_advance(&mut d, &b, &mut p, &c);
             let want_add: Vec<Complex32> = c.iter().zip(&want).map(|(c, w)| c + w).collect();

@@ -50,17 +50,23 @@ pub(super) fn reach(c: i64, len: usize) -> usize {
     c.unsigned_abs().max((len as i64 - 1 - c).unsigned_abs()) as usize + 1
 }
 
-/// `dst[k] = src[k]` for k < src.len(), then `dst[k] = src[dst.len() − k]`: a spectrum over
-/// k ≤ N/2 extended to all k by symmetry.
+/// `dst[k] = src[k]·h[k]` for k ≤ N/2 and `dst[k] = src[N − k]·h[k]` above: a spectrum over
+/// k ≤ N/2 extended to all N = dst.len() by symmetry, times `h`; where `h` is zero (`cut` < |k|,
+/// k taken modulo N) the product is written as zero without reading either.
 #[inline(always)]
-fn unfold(dst: &mut [Complex32], src: &[Complex32]) {
+fn unfold_mul(dst: &mut [Complex32], src: &[Complex32], h: &[Complex32], cut: usize) {
     let n = dst.len();
-    let (lo, hi) = dst.split_at_mut(src.len());
-    lo.copy_from_slice(src);
-    for (d, s) in hi.iter_mut().rev().zip(&src[1..]) {
+    debug_assert!(src.len() == n / 2 + 1 && cut <= n / 2);
+    let hi = (n - cut).max(cut + 1);
+    cmul::mul(&mut dst[..=cut], &src[..=cut], &h[..=cut]);
+    dst[cut + 1..hi]
+        .iter_mut()
+        .for_each(|v| *v = Complex32::default());
+    let top = &mut dst[hi..];
+    for (d, s) in top.iter_mut().rev().zip(&src[1..]) {
         *d = *s;
     }
-    debug_assert!(n - src.len() < src.len());
+    cmul::mul_assign(top, &h[hi..]);
 }
 
 /// Each line of `lines` (`len` values each) = [`mirror`] of the next `stride` values of `src` over
@@ -111,7 +117,7 @@ pub(super) enum Sink {
 
 impl Plan {
     /// For a symmetric support (see [`Fold`]): the kernel's spectrum at the current frequency times
-    /// `h` ([ky][kx]) on the lines kept for `lines`, delivered to `sink`. Along y only the distinct
+    /// `h` ([ky][kx], zero at |kx| > `x_lines`) on the lines kept for `lines`, delivered to `sink`. Along y only the distinct
     /// rows |dx| ≤ cx are transformed, in batches whose columns ky ≤ min(fy/2, lines) are gathered
     /// into `ws.cols`; along x, batches of those columns are transformed, and each is unfolded into
     /// the lines ky and fy − ky as it is multiplied, so no whole-spectrum buffer is written or read.
@@ -120,7 +126,7 @@ impl Plan {
         ws: &mut Workspace,
         h: &[Complex32],
         [gx, gy, my]: [usize; 3],
-        lines: usize,
+        [lines, x_lines]: [usize; 2],
         sink: &Sink,
     ) {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
@@ -160,8 +166,8 @@ impl Plan {
                 .enumerate()
             {
                 let t = &mut ws.tlines[i * fx..(i + 1) * fx];
-                unfold(t, &klines[(s - s0) * fx..(s - s0) * fx + hx]);
-                cmul::mul_assign(t, &h[ky * fx..(ky + 1) * fx]);
+                let kline = &klines[(s - s0) * fx..(s - s0) * fx + hx];
+                unfold_mul(t, kline, &h[ky * fx..(ky + 1) * fx], x_lines);
             }
             let runs = [(s0, 0..ns), (fy + 1 - mirrored.end, ns..n)];
             match sink {

@@ -226,6 +226,20 @@ impl Plan {
         })
     }
 
+    /// How the field of wavenumber `k` is read on planes at `dz_min` or deeper: its kernels and the
+    /// band along x its grid spectra are cut to.
+    fn reading(&self, k: f64, dz_min: f64) -> Reading {
+        let kernels = self.kernels(k, dz_min);
+        let half = self.fft.fx / 2;
+        Reading {
+            kernels,
+            x_lines: match kernels[X] {
+                Some(_) => self.lines_along(X, k, dz_min).min(half),
+                None => half,
+            },
+        }
+    }
+
     /// The resamplers that read the field of a frequency with kernels `chosen` (x, y).
     fn resamplers(&self, chosen: [Option<usize>; 2]) -> [&Resampler; 2] {
         let pick = |axis: usize, sinc| chosen[axis].map_or(sinc, |i| &self.kb[axis][i].resampler);
@@ -307,17 +321,17 @@ impl Plan {
                 .map(|z| z - self.grid.origin.z)
                 .fold(f64::INFINITY, f64::min);
             for (i, &src) in sources.iter().enumerate() {
-                let chosen: Vec<[Option<usize>; 2]> = (0..spectra.band.len())
-                    .map(|j| self.kernels(legs(src) * spectra.band.k(j), dz_min))
+                let reads: Vec<Reading> = (0..spectra.band.len())
+                    .map(|j| self.reading(legs(src) * spectra.band.k(j), dz_min))
                     .collect();
-                let hspec = self.grid_spectra(&spectra, src, dz_min, &chosen, &mut grid, &pool);
+                let hspec = self.grid_spectra(&spectra, src, dz_min, &reads, &mut grid, &pool);
                 let out: Vec<Vec<Complex32>> = planes
                     .clone()
                     .into_par_iter()
                     .map(|iz| {
                         let mut ws = lock(&pool);
                         let z = depths.z[iz];
-                        let plane = self.plane(&mut ws, &spectra, hspec, &chosen, src, z);
+                        let plane = self.plane(&mut ws, &spectra, hspec, &reads, src, z);
                         progress.advance(1);
                         plane
                     })
@@ -488,14 +502,14 @@ impl Plan {
 
     /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout, on
     /// the lines that planes at `dz_min` or deeper keep (the others are garbage), divided by the
-    /// spectra of the kernels `chosen` for it and cut to their bands; the buffers are reused across
-    /// slabs.
+    /// spectra of the kernels `reads` chose for it and cut to their bands; the buffers are reused
+    /// across slabs.
     fn grid_spectra<'b>(
         &self,
         spectra: &Part,
         src: Option<usize>,
         dz_min: f64,
-        chosen: &[[Option<usize>; 2]],
+        reads: &[Reading],
         buf: &'b mut GridBuffers,
         pool: &[Mutex<Workspace>],
     ) -> &'b [Complex32] {
@@ -554,26 +568,21 @@ impl Plan {
                         }
                     }
                 }
-                self.divide_by_kernels(t, chosen[j], lines, self.lines_along(X, k, dz_min));
+                self.divide_by_kernels(t, &reads[j], lines);
             });
         &out[..nb * fx * fy]
     }
 
-    /// `t` ([ky][kx], kept `lines` along y) divided by the spectra of the kernels `chosen` for it, and
-    /// zero past `lines_x` along x where a kernel is chosen for x (its band ends there).
-    fn divide_by_kernels(
-        &self,
-        t: &mut [Complex32],
-        chosen: [Option<usize>; 2],
-        lines: usize,
-        lines_x: usize,
-    ) {
+    /// `t` ([ky][kx], kept `lines` along y) divided by the spectra of the kernels `read` chose for
+    /// it, and zero past its `x_lines` along x (where a kernel is chosen for x, its band ends there).
+    fn divide_by_kernels(&self, t: &mut [Complex32], read: &Reading, lines: usize) {
+        let chosen = read.kernels;
         if chosen == [None, None] {
             return;
         }
         let (fx, fy) = (self.fft.fx, self.fft.fy);
-        // Along x: the kernel's 1/φ̂ on the bins within lines_x of kx = 0, zero between them.
-        let cut = lines_x.min(fx / 2);
+        // Along x: the kernel's 1/φ̂ on the bins within x_lines of kx = 0, zero between them.
+        let cut = read.x_lines;
         let along_x = chosen[X].map(|i| &self.kb[X][i].inverse);
         for ky in kept_lines(fy, lines).into_iter().flatten() {
             let y = chosen[Y].map_or(1.0, |i| self.kb[Y][i].inverse[ky]);
@@ -597,7 +606,7 @@ impl Plan {
         ws: &mut Workspace,
         spectra: &Part,
         hspec: &[Complex32],
-        chosen: &[[Option<usize>; 2]],
+        reads: &[Reading],
         src: Option<usize>,
         z: f64,
     ) -> Vec<Complex32> {
@@ -668,7 +677,7 @@ impl Plan {
                     true => Sink::Accumulate,
                     false => Sink::InverseX(xs.clone()),
                 };
-                self.folded_lines(ws, h, [gx, gy, my], lines, &sink);
+                self.folded_lines(ws, h, [gx, gy, my], [lines, reads[j].x_lines], &sink);
             } else {
                 wide(
                     #[inline(always)]
@@ -704,7 +713,7 @@ impl Plan {
             if confocal {
                 continue;
             }
-            self.field_at_voxels(ws, lines, self.resamplers(chosen[j]));
+            self.field_at_voxels(ws, lines, self.resamplers(reads[j].kernels));
             // Exact phase of the point-side leg.
             cmul::mul_add_advance(&mut acc, &ws.field, &mut ws.pbase, &ws.pstep);
         }
@@ -719,6 +728,14 @@ impl Plan {
         transpose::transpose(&acc, &mut out, nx, ny);
         out
     }
+}
+
+/// How one band frequency's field is read (see [`Plan::reading`]).
+struct Reading {
+    /// Per axis, the Kaiser–Bessel kernel of `Plan::kb` or `None` for the windowed sinc.
+    kernels: [Option<usize>; 2],
+    /// The grid's spectrum is zero at kx further than this from 0 (fx/2: nowhere).
+    x_lines: usize,
 }
 
 /// The largest lateral wavenumber (rad/m) the kernel of wavenumber `k` carries to a plane at `dz`
