@@ -189,13 +189,20 @@ impl Plan {
         }
     }
 
-    /// The field at the voxels (`ws.field`, y-major) from the convolution's x-transformed lattice
-    /// rows in `ws.g` ([x][ky], rows [gnx−1, gnx−1+vx), kept lines only): along x first, still in ky
-    /// (resampling along x and the inverse FFT along y commute), so only nx rows, not vx, are
-    /// transformed along y; then along y at the voxels, with the resamplers `r` (x, y): off the
-    /// lattice a windowed sinc or a Kaiser–Bessel kernel ([`Plan::kernels`]), on it one tap of
-    /// weight 1.
-    pub(super) fn field_at_voxels(&self, ws: &mut Workspace, lines: usize, r: [&Resampler; 2]) {
+    /// The field at the voxels (y-major), delivered row by row into `acc` as `into` says, from the
+    /// convolution's x-transformed lattice rows in `ws.g` ([x][ky], rows [gnx−1, gnx−1+vx), kept
+    /// lines only): along x first, still in ky (resampling along x and the inverse FFT along y
+    /// commute), so only nx rows, not vx, are transformed along y; then along y at the voxels, with
+    /// the resamplers `r` (x, y): off the lattice a windowed sinc or a Kaiser–Bessel kernel
+    /// ([`Plan::kernels`]), on it one tap of weight 1.
+    pub(super) fn field_at_voxels(
+        &self,
+        ws: &mut Workspace,
+        lines: usize,
+        r: [&Resampler; 2],
+        acc: &mut [Complex32],
+        into: Deliver,
+    ) {
         let (nx, fy) = (self.vol.x.n, self.fft.fy);
         wide(
             #[inline(always)]
@@ -204,7 +211,7 @@ impl Plan {
         self.fft.inverse_y(&mut ws.tmp[..nx * fy], &mut ws.scratch);
         wide(
             #[inline(always)]
-            || self.resample_y(ws, r[1]),
+            || self.resample_y(ws, r[1], acc, into),
         );
     }
 
@@ -230,33 +237,59 @@ impl Plan {
         }
     }
 
-    /// `ws.field` ([y][x]) from the rows of `ws.tmp` ([voxel x][lattice y] after the inverse along
-    /// y): a gather on the lattice, else the taps' weighted sum of transposed rows, so each tap is one
-    /// more contiguous row of nx values, which vectorises where short per-voxel dot products do not.
+    /// Each row y of the field at the voxels (into `ws.row`, then `acc` as `into` says) from the
+    /// rows of `ws.tmp` ([voxel x][lattice y] after the inverse along y): a gather on the lattice,
+    /// else the taps' weighted sum of transposed rows, so each tap is one more contiguous row of nx
+    /// values, which vectorises where short per-voxel dot products do not. One row at a time, so
+    /// the field stays in L1 on its way into `acc`.
     #[inline(always)]
-    fn resample_y(&self, ws: &mut Workspace, ry: &Resampler) {
+    fn resample_y(&self, ws: &mut Workspace, ry: &Resampler, acc: &mut [Complex32], into: Deliver) {
         let (nx, fy) = (self.vol.x.n, self.fft.fy);
         let y0 = self.grid.ny - 1;
-        if ry.taps == 1 {
-            for (ix, row) in ws.tmp.chunks_exact(fy).enumerate() {
-                for (iy, &sy) in ry.starts.iter().enumerate() {
-                    ws.field[iy * nx + ix] = row[y0 + sy];
+        if ry.taps > 1 {
+            transpose_part(&ws.tmp[y0..], fy, 0..nx, 0..ry.len, &mut ws.tmp_t, nx);
+        }
+        let Workspace {
+            tmp,
+            tmp_t,
+            row,
+            pbase,
+            pstep,
+            ..
+        } = ws;
+        for (iy, acc) in acc.chunks_exact_mut(nx).enumerate() {
+            let sy = ry.starts[iy];
+            if ry.taps == 1 {
+                for (v, t) in row.iter_mut().zip(tmp.chunks_exact(fy)) {
+                    *v = t[y0 + sy];
+                }
+            } else {
+                let rows = ry
+                    .weights_of(iy)
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &wk)| (&tmp_t[(sy + k) * nx..(sy + k + 1) * nx], wk));
+                weighted_sum(row, rows);
+            }
+            let voxels = iy * nx..(iy + 1) * nx;
+            match into {
+                Deliver::Set => acc.copy_from_slice(row),
+                Deliver::AddPhased => {
+                    cmul::mul_add_advance(acc, row, &mut pbase[voxels.clone()], &pstep[voxels])
                 }
             }
-            return;
-        }
-        let vy = ry.len;
-        transpose_part(&ws.tmp[y0..], fy, 0..nx, 0..vy, &mut ws.tmp_t, nx);
-        for (iy, f) in ws.field.chunks_exact_mut(nx).enumerate() {
-            let sy = ry.starts[iy];
-            let rows = ry
-                .weights_of(iy)
-                .iter()
-                .enumerate()
-                .map(|(k, &wk)| (&ws.tmp_t[(sy + k) * nx..(sy + k + 1) * nx], wk));
-            weighted_sum(f, rows);
         }
     }
+}
+
+/// How [`Plan::field_at_voxels`] puts the field into its accumulator.
+#[derive(Clone, Copy)]
+pub(super) enum Deliver {
+    /// Overwrites it.
+    Set,
+    /// Adds it times the point-side phase (`ws.pbase`), and advances that phase to the next
+    /// frequency (`ws.pstep`).
+    AddPhased,
 }
 
 /// `out` = Σ weight·row over `rows`, over the interleaved (re, im) floats: plain f32 loops vectorise

@@ -10,7 +10,7 @@ use crate::phase;
 use crate::resample::{KaiserBessel, Resampler};
 use crate::spectrum::{next_fast_len, path_range, Part, Window};
 use crate::{Falloff, Lateral, Progress};
-use lattice::{mirror, reach, Fold, Sink, BATCH};
+use lattice::{mirror, reach, Deliver, Fold, Sink, BATCH};
 use murk_core::simd::wide;
 use murk_core::{Axis, Capture, CaptureKind, DVec3, Error, RegularGrid, Result, Volume};
 use rayon::prelude::*;
@@ -644,7 +644,7 @@ impl Plan {
         ws.tcur.resize(mx * my, Complex32::default());
         ws.tstep.resize(mx * my, Complex32::default());
         phase::phasors(&ws.theta, &ws.amp, m0 as f64, &mut ws.tcur, &mut ws.tstep);
-        // Exact phase of the point-side leg, per voxel (y-major, like `ws.field`); confocal data have
+        // Exact phase of the point-side leg, per voxel (y-major, like the summed field); confocal data have
         // none.
         if let Some(s) = src {
             ws.theta.clear();
@@ -667,7 +667,7 @@ impl Plan {
                 .iter_mut()
                 .for_each(|v| *v = Complex32::default());
         }
-        // Summed field, y-major like `ws.field`.
+        // Summed field, y-major ([y][x]).
         let mut acc = vec![Complex32::default(); nx * ny];
         for j in 0..band.len() {
             let lines = self.lines(legs * band.k(j), dz);
@@ -713,15 +713,15 @@ impl Plan {
             if confocal {
                 continue;
             }
-            self.field_at_voxels(ws, lines, self.resamplers(reads[j].kernels));
-            // Exact phase of the point-side leg.
-            cmul::mul_add_advance(&mut acc, &ws.field, &mut ws.pbase, &ws.pstep);
+            // With the exact phase of the point-side leg.
+            let r = self.resamplers(reads[j].kernels);
+            self.field_at_voxels(ws, lines, r, &mut acc, Deliver::AddPhased);
         }
         if confocal {
             self.fft
                 .inverse_x(&mut ws.spec_acc, &mut ws.g, xs, fy / 2, &mut ws.scratch);
-            self.field_at_voxels(ws, fy / 2, [&self.rx, &self.ry]);
-            acc.copy_from_slice(&ws.field);
+            let r = [&self.rx, &self.ry];
+            self.field_at_voxels(ws, fy / 2, r, &mut acc, Deliver::Set);
         }
         // The voxels' order in the volume: x-major.
         let mut out = vec![Complex32::default(); nx * ny];
@@ -807,8 +807,8 @@ struct Workspace {
     /// Point-side phase per voxel and its per-frequency step (f32 recurrence, as for the kernel).
     pbase: Vec<Complex32>,
     pstep: Vec<Complex32>,
-    /// The camera-side field at the voxels for the current frequency, y-major ([y][x]).
-    field: Vec<Complex32>,
+    /// One row (y) of the camera-side field at the voxels for the current frequency.
+    row: Vec<Complex32>,
     /// The field resampled along x ([voxel x][ky], then [voxel x][lattice y]) and the part of it that
     /// the voxels read, transposed ([lattice y][voxel x]).
     tmp: Vec<Complex32>,
@@ -839,7 +839,7 @@ impl Workspace {
             tlines: only(folds, 2 * BATCH * fx),
             pbase: vec![Complex32::default(); nv],
             pstep: vec![Complex32::default(); nv],
-            field: vec![Complex32::default(); nv],
+            row: vec![Complex32::default(); plan.vol.x.n],
             tmp: vec![Complex32::default(); plan.vol.x.n * fy],
             tmp_t: vec![Complex32::default(); plan.vol.x.n * plan.ry.len],
         }
