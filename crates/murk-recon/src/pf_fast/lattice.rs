@@ -117,7 +117,8 @@ pub(super) enum Sink {
 
 impl Plan {
     /// For a symmetric support (see [`Fold`]): the kernel's spectrum at the current frequency times
-    /// `h` ([ky][kx], zero at |kx| > `x_lines`) on the lines kept for `lines`, delivered to `sink`. Along y only the distinct
+    /// `h` ([ky][kx], zero at |kx| > `x_lines`) on the lines kept for `lines`, delivered to `sink`;
+    /// the kernel's table (`ws.tcur`) is left advanced to the next frequency. Along y only the distinct
     /// rows |dx| ≤ cx are transformed, in batches whose columns ky ≤ min(fy/2, lines) are gathered
     /// into `ws.cols`; along x, batches of those columns are transformed, and each is unfolded into
     /// the lines ky and fy − ky as it is multiplied, so no whole-spectrum buffer is written or read.
@@ -145,6 +146,9 @@ impl Plan {
                 my,
                 [gy, cy as usize],
             );
+            // The rows just read, advanced to the next frequency while they are in L1.
+            let read = b0 * my..(b0 + nb) * my;
+            cmul::mul_assign(&mut ws.tcur[read.clone()], &ws.tstep[read]);
             self.fft.rows_y(block, &mut ws.scratch);
             // Only the hy columns that are read.
             transpose_part(block, fy, 0..nb, 0..hy, &mut ws.cols[b0..], rows);

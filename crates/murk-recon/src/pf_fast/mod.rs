@@ -707,9 +707,9 @@ impl Plan {
                     self.fft
                         .inverse_x(&mut ws.t, &mut ws.g, xs.clone(), lines, &mut ws.scratch);
                 }
+                // The kernel's table at the next frequency.
+                cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             }
-            // The kernel's table at the next frequency.
-            cmul::mul_assign(&mut ws.tcur, &ws.tstep);
             if confocal {
                 continue;
             }
