@@ -32,6 +32,22 @@ pub fn mul(dst: &mut [Complex32], a: &[Complex32], b: &[Complex32]) {
     }
 }
 
+/// Σ a[i]·b[i].
+pub fn dot(a: &[Complex32], b: &[Complex32]) -> Complex32 {
+    let n = a.len().min(b.len());
+    let mut done = 0;
+    let mut sum = Complex32::default();
+    #[cfg(target_arch = "x86_64")]
+    if has_avx2_fma() {
+        // SAFETY: AVX2 and FMA were just detected; `n` bounds every access.
+        (sum, done) = unsafe { avx::dot(a.as_ptr(), b.as_ptr(), n) };
+    }
+    a[done..n]
+        .iter()
+        .zip(&b[done..n])
+        .fold(sum, |s, (a, b)| s + a * b)
+}
+
 /// `acc += a·phase`, then `phase *= step`: a point-side phase applied and advanced to the next
 /// frequency in one pass, so the phases are read and written once per frequency, not twice.
 pub fn mul_add_advance(
@@ -129,6 +145,26 @@ mod avx {
         full
     }
 
+    /// [`super::dot`] over the first n/4·4 values, and how many that is.
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn dot(a: *const Complex32, b: *const Complex32, n: usize) -> (Complex32, usize) {
+        let (a, b) = (a as *const f32, b as *const f32);
+        let full = n / 4 * 4;
+        let mut acc = _mm256_setzero_ps();
+        let mut i = 0;
+        while i < full {
+            let p = product(_mm256_loadu_ps(a.add(2 * i)), _mm256_loadu_ps(b.add(2 * i)));
+            acc = _mm256_add_ps(acc, p);
+            i += 4;
+        }
+        // The four lanes' complex sums: high half onto low, then the second complex onto the first.
+        let half = _mm_add_ps(_mm256_castps256_ps128(acc), _mm256_extractf128_ps(acc, 1));
+        let pair = _mm_add_ps(half, _mm_movehl_ps(half, half));
+        let mut out = [0f32; 4];
+        _mm_storeu_ps(out.as_mut_ptr(), pair);
+        (Complex32::new(out[0], out[1]), full)
+    }
+
     /// `dst = a·b` over the first n/4·4 values (dst may be a); returns how many it did.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn mul(
@@ -152,6 +188,7 @@ mod avx {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rustfft::num_complex::Complex64;
 
     fn data(n: usize, seed: f32) -> Vec<Complex32> {
         (0..n)
@@ -173,6 +210,13 @@ mod tests {
             let mut d = c.clone();
             mul(&mut d, &a, &b);
             assert!(close(&d, &want), "mul, n = {n}");
+            // Against an f64 sum, within f32 rounding of the terms' magnitudes.
+            let got = dot(&a, &b);
+            let wide = |v: Complex32| Complex64::new(v.re as f64, v.im as f64);
+            let want_dot: Complex64 = want.iter().map(|&w| wide(w)).sum();
+            let scale: f64 = want.iter().map(|w| w.norm() as f64).sum();
+            let err = (wide(got) - want_dot).norm();
+            assert!(err <= 1e-6 * scale.max(1.0), "dot, n = {n}: {err}");
             let (mut d, mut p) = (c.clone(), a.clone());
             mul_add_advance(&mut d, &b, &mut p, &c);
             let want_add: Vec<Complex32> = c.iter().zip(&want).map(|(c, w)| c + w).collect();

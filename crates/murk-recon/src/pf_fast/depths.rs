@@ -5,6 +5,7 @@
 //! (plus a few past each end), and the planes between are read by a least-squares band-limited
 //! interpolator with the band's centre demodulated (docs/reconstruction.md, "Depth planes").
 
+use crate::cmul;
 use murk_core::{DVec3, Volume};
 use rustfft::num_complex::{Complex32, Complex64};
 use std::f64::consts::PI;
@@ -171,16 +172,7 @@ impl Depths {
             let ideal = e as i64 + 1 - (TAPS / 2) as i64;
             let start = ideal.clamp(0, last);
             let w = &self.weights[(start - ideal + SHIFT as i64) as usize];
-            let taps = &col[start as usize..start as usize + TAPS];
-            // Four independent lanes, so the sum vectorises (one running sum cannot be reordered).
-            let (mut re, mut im) = ([0.0f32; 4], [0.0f32; 4]);
-            for (a, w) in taps.chunks_exact(4).zip(w.chunks_exact(4)) {
-                for l in 0..4 {
-                    re[l] += a[l].re * w[l].re - a[l].im * w[l].im;
-                    im[l] += a[l].re * w[l].im + a[l].im * w[l].re;
-                }
-            }
-            *o = Complex32::new(re.iter().sum(), im.iter().sum());
+            *o = cmul::dot(&col[start as usize..start as usize + TAPS], w);
         }
     }
 }
