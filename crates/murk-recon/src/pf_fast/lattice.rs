@@ -50,14 +50,57 @@ pub(super) fn reach(c: i64, len: usize) -> usize {
     c.unsigned_abs().max((len as i64 - 1 - c).unsigned_abs()) as usize + 1
 }
 
+/// Where the upper run of a line of N values cut to |k| ≤ `cut` (k modulo N) starts: past the
+/// lower run 0..=cut, and at N/2 + 1 or later.
+fn upper(n: usize, cut: usize) -> usize {
+    (n - cut).max(cut + 1)
+}
+
+/// Values of a line of `n` cut to |k| ≤ `cut`: its lower run 0..=cut and its upper run.
+pub(super) fn packed_len(n: usize, cut: usize) -> usize {
+    cut + 1 + n - upper(n, cut)
+}
+
+/// Position among the packed lines (see [`pack`]) of line ky = s, or of ky = N − s when `mirrored`.
+fn packed_index(s: usize, mirrored: bool) -> usize {
+    match (s, mirrored) {
+        (0, _) => 0,
+        (s, false) => 2 * s - 1,
+        (s, true) => 2 * s,
+    }
+}
+
+/// The lines of `t` ([ky][kx], `n = [fx, fy]`) kept for `lines`, each cut to |kx| ≤ `cut`, into
+/// `out` in the order [`Plan::folded_lines`] reads them: ky = 0, then ky = s and fy − s for
+/// s = 1, 2, …, so that a plane keeping fewer lines reads a prefix, and each frequency's spectrum
+/// streams from one contiguous run of memory.
+pub(super) fn pack(
+    t: &[Complex32],
+    [fx, fy]: [usize; 2],
+    lines: usize,
+    cut: usize,
+    out: &mut [Complex32],
+) {
+    let len = packed_len(fx, cut);
+    let top = upper(fx, cut);
+    for ky in kept_lines(fy, lines).into_iter().flatten() {
+        let mirrored = ky > fy / 2;
+        let s = if mirrored { fy - ky } else { ky };
+        let dst = &mut out[packed_index(s, mirrored) * len..][..len];
+        let line = &t[ky * fx..(ky + 1) * fx];
+        dst[..=cut].copy_from_slice(&line[..=cut]);
+        dst[cut + 1..].copy_from_slice(&line[top..]);
+    }
+}
+
 /// `dst[k] = src[k]·h[k]` for k ≤ N/2 and `dst[k] = src[N − k]·h[k]` above: a spectrum over
-/// k ≤ N/2 extended to all N = dst.len() by symmetry, times `h`; where `h` is zero (`cut` < |k|,
-/// k taken modulo N) the product is written as zero without reading either.
+/// k ≤ N/2 extended to all N = dst.len() by symmetry, times a line `h` packed to |k| ≤ `cut` (see
+/// [`pack`]); elsewhere, where the line is zero, the product is written as zero.
 #[inline(always)]
 fn unfold_mul(dst: &mut [Complex32], src: &[Complex32], h: &[Complex32], cut: usize) {
     let n = dst.len();
-    debug_assert!(src.len() == n / 2 + 1 && cut <= n / 2);
-    let hi = (n - cut).max(cut + 1);
+    debug_assert!(src.len() == n / 2 + 1 && h.len() == packed_len(n, cut));
+    let hi = upper(n, cut);
     cmul::mul(&mut dst[..=cut], &src[..=cut], &h[..=cut]);
     dst[cut + 1..hi]
         .iter_mut()
@@ -66,7 +109,7 @@ fn unfold_mul(dst: &mut [Complex32], src: &[Complex32], h: &[Complex32], cut: us
     for (d, s) in top.iter_mut().rev().zip(&src[1..]) {
         *d = *s;
     }
-    cmul::mul_assign(top, &h[hi..]);
+    cmul::mul_assign(top, &h[cut + 1..]);
 }
 
 /// Each line of `lines` (`len` values each) = [`mirror`] of the next `stride` values of `src` over
@@ -117,7 +160,8 @@ pub(super) enum Sink {
 
 impl Plan {
     /// For a symmetric support (see [`Fold`]): the kernel's spectrum at the current frequency times
-    /// `h` ([ky][kx], zero at |kx| > `x_lines`) on the lines kept for `lines`, delivered to `sink`;
+    /// `h` (lines packed to |kx| ≤ `x_lines`, see [`pack`]) on the lines kept for `lines`, delivered
+    /// to `sink`;
     /// the kernel's table (`ws.tcur`) is left advanced to the next frequency. Along y only the distinct
     /// rows |dx| ≤ cx are transformed, in batches whose columns ky ≤ min(fy/2, lines) are gathered
     /// into `ws.cols`; along x, batches of those columns are transformed, and each is unfolded into
@@ -133,6 +177,7 @@ impl Plan {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
         let hy = (fy / 2).min(lines) + 1;
         let hx = fx / 2 + 1;
+        let h_len = packed_len(fx, x_lines);
         let rows = self.cx as usize + 1;
         let (cx, cy) = (self.cx, self.cy);
         debug_assert!(cx >= 0 && cy >= 0, "a folded support is centred inside it");
@@ -171,7 +216,8 @@ impl Plan {
             {
                 let t = &mut ws.tlines[i * fx..(i + 1) * fx];
                 let kline = &klines[(s - s0) * fx..(s - s0) * fx + hx];
-                unfold_mul(t, kline, &h[ky * fx..(ky + 1) * fx], x_lines);
+                let hline = &h[packed_index(s, ky != s) * h_len..][..h_len];
+                unfold_mul(t, kline, hline, x_lines);
             }
             let runs = [(s0, 0..ns), (fy + 1 - mirrored.end, ns..n)];
             match sink {

@@ -331,7 +331,7 @@ impl Plan {
                     .map(|iz| {
                         let mut ws = lock(&pool);
                         let z = depths.z[iz];
-                        let plane = self.plane(&mut ws, &spectra, hspec, &reads, src, z);
+                        let plane = self.plane(&mut ws, &spectra, &hspec, &reads, src, z);
                         progress.advance(1);
                         plane
                     })
@@ -501,9 +501,10 @@ impl Plan {
     }
 
     /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout, on
-    /// the lines that planes at `dz_min` or deeper keep (the others are garbage), divided by the
-    /// spectra of the kernels `reads` chose for it and cut to their bands; the buffers are reused
-    /// across slabs.
+    /// the lines that planes at `dz_min` or deeper keep, divided by the spectra of the kernels
+    /// `reads` chose for it and cut to their bands: with a folded kernel only those lines and kx,
+    /// packed (see [`lattice::pack`]), else whole (the lines not kept are garbage). The buffers are
+    /// reused across slabs.
     fn grid_spectra<'b>(
         &self,
         spectra: &Part,
@@ -512,7 +513,7 @@ impl Plan {
         reads: &[Reading],
         buf: &'b mut GridBuffers,
         pool: &[Mutex<Workspace>],
-    ) -> &'b [Complex32] {
+    ) -> GridSpectra<'b> {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
         let (gnx, gny) = (self.grid.nx, self.grid.ny);
         let cells = gnx * gny;
@@ -534,43 +535,88 @@ impl Plan {
                     }
                 }
             });
+        let lines: Vec<usize> = (0..nb)
+            .map(|j| self.lines(legs(src) * spectra.band.k(j), dz_min))
+            .collect();
+        let mut offsets = vec![0];
+        for (l, r) in lines.iter().zip(reads) {
+            let size = match self.fold {
+                Some(_) => (2 * l + 1).min(fy) * lattice::packed_len(fx, r.x_lines),
+                None => fx * fy,
+            };
+            offsets.push(offsets[offsets.len() - 1] + size);
+        }
         let out = &mut buf.spec;
-        murk_core::buffer::grow(out, nb * fx * fy, Complex32::default());
-        out[..nb * fx * fy]
-            .par_chunks_mut(fx * fy)
+        murk_core::buffer::grow(out, offsets[nb], Complex32::default());
+        let mut parts = Vec::with_capacity(nb);
+        let mut rest = &mut out[..offsets[nb]];
+        for w in offsets.windows(2) {
+            let (part, tail) = std::mem::take(&mut rest).split_at_mut(w[1] - w[0]);
+            parts.push(part);
+            rest = tail;
+        }
+        parts
+            .into_par_iter()
             .zip(by_freq[..nb * cells].par_chunks(cells))
             .enumerate()
-            .for_each(|(j, (t, cells))| {
-                let k = legs(src) * spectra.band.k(j);
-                let lines = self.lines(k, dz_min);
+            .for_each(|(j, (part, cells))| {
+                let lines = lines[j];
                 let mut ws = lock(pool);
                 let Workspace {
                     grid_in: a,
+                    g,
                     scratch,
                     ..
                 } = &mut *ws;
-                // Rows x ≥ gnx stay zero: only the grid's rows are written and transformed.
-                for ix in 0..gnx {
-                    let row = &mut a[ix * fy..(ix + 1) * fy];
-                    row[..gny].copy_from_slice(&cells[ix * gny..(ix + 1) * gny]);
-                    row[gny..]
-                        .iter_mut()
-                        .for_each(|v| *v = Complex32::default());
-                }
-                self.fft.forward_lines(a, gnx, t, lines, scratch);
-                // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
-                for span in kept_spans(fy, lines, fx) {
-                    match &self.fold {
-                        Some(f) => cmul::mul_assign(&mut t[span.clone()], &f.phases[span]),
-                        None => {
-                            let norm = 1.0 / (fx * fy) as f32;
-                            t[span].iter_mut().for_each(|v| *v *= norm)
-                        }
+                let spectrum = [a, scratch];
+                match self.fold {
+                    // Transformed whole, then packed.
+                    Some(_) => {
+                        self.grid_spectrum(cells, lines, &reads[j], spectrum, g);
+                        lattice::pack(g, [fx, fy], lines, reads[j].x_lines, part);
                     }
+                    None => self.grid_spectrum(cells, lines, &reads[j], spectrum, part),
                 }
-                self.divide_by_kernels(t, &reads[j], lines);
             });
-        &out[..nb * fx * fy]
+        GridSpectra {
+            data: &out[..offsets[nb]],
+            offsets,
+        }
+    }
+
+    /// FFT2 of one frequency's `cells` (the grid's spectra, [x][y]) into `t` ([ky][kx]) on the kept
+    /// `lines`, normalised (and folded, see [`Fold`]) for the inverse, and divided by the kernels
+    /// `read` chose; `a` holds the zero-padded grid and `scratch` the FFT's scratch.
+    fn grid_spectrum(
+        &self,
+        cells: &[Complex32],
+        lines: usize,
+        read: &Reading,
+        [a, scratch]: [&mut Vec<Complex32>; 2],
+        t: &mut [Complex32],
+    ) {
+        let (fx, fy) = (self.fft.fx, self.fft.fy);
+        let (gnx, gny) = (self.grid.nx, self.grid.ny);
+        // Rows x ≥ gnx stay zero: only the grid's rows are written and transformed.
+        for ix in 0..gnx {
+            let row = &mut a[ix * fy..(ix + 1) * fy];
+            row[..gny].copy_from_slice(&cells[ix * gny..(ix + 1) * gny]);
+            row[gny..]
+                .iter_mut()
+                .for_each(|v| *v = Complex32::default());
+        }
+        self.fft.forward_lines(a, gnx, t, lines, scratch);
+        // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
+        for span in kept_spans(fy, lines, fx) {
+            match &self.fold {
+                Some(f) => cmul::mul_assign(&mut t[span.clone()], &f.phases[span]),
+                None => {
+                    let norm = 1.0 / (fx * fy) as f32;
+                    t[span].iter_mut().for_each(|v| *v *= norm)
+                }
+            }
+        }
+        self.divide_by_kernels(t, read, lines);
     }
 
     /// `t` ([ky][kx], kept `lines` along y) divided by the spectra of the kernels `read` chose for
@@ -605,7 +651,7 @@ impl Plan {
         &self,
         ws: &mut Workspace,
         spectra: &Part,
-        hspec: &[Complex32],
+        hspec: &GridSpectra,
         reads: &[Reading],
         src: Option<usize>,
         z: f64,
@@ -669,15 +715,15 @@ impl Plan {
         }
         // Summed field, y-major ([y][x]).
         let mut acc = vec![Complex32::default(); nx * ny];
-        for j in 0..band.len() {
+        for (j, read) in reads.iter().enumerate() {
             let lines = self.lines(legs * band.k(j), dz);
-            let h = &hspec[j * fx * fy..(j + 1) * fx * fy];
+            let h = hspec.at(j);
             if self.fold.is_some() {
                 let sink = match confocal {
                     true => Sink::Accumulate,
                     false => Sink::InverseX(xs.clone()),
                 };
-                self.folded_lines(ws, h, [gx, gy, my], [lines, reads[j].x_lines], &sink);
+                self.folded_lines(ws, h, [gx, gy, my], [lines, read.x_lines], &sink);
             } else {
                 wide(
                     #[inline(always)]
@@ -714,7 +760,7 @@ impl Plan {
                 continue;
             }
             // With the exact phase of the point-side leg.
-            let r = self.resamplers(reads[j].kernels);
+            let r = self.resamplers(read.kernels);
             self.field_at_voxels(ws, lines, r, &mut acc, Deliver::AddPhased);
         }
         if confocal {
@@ -770,6 +816,19 @@ fn c32(v: Complex64) -> Complex32 {
 fn lock(pool: &[Mutex<Workspace>]) -> std::sync::MutexGuard<'_, Workspace> {
     let slot = rayon::current_thread_index().unwrap_or(0) % pool.len();
     pool[slot].lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The grid's spectrum of each band frequency (see [`Plan::grid_spectra`]).
+struct GridSpectra<'a> {
+    data: &'a [Complex32],
+    /// Where frequency j's spectrum starts in `data`, and past the last, where it ends.
+    offsets: Vec<usize>,
+}
+
+impl GridSpectra<'_> {
+    fn at(&self, j: usize) -> &[Complex32] {
+        &self.data[self.offsets[j]..self.offsets[j + 1]]
+    }
 }
 
 /// The grid's spectra: the frequency-major copy and its FFT2s, kept across slabs.
