@@ -391,3 +391,44 @@ fn floats_mut(v: &mut [Complex32]) -> &mut [f32] {
     // SAFETY: as in `floats`; the borrow is exclusive for the returned slice's lifetime.
     unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast(), 2 * v.len()) }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every kept line, read back where `folded_lines` looks for it, holds its values at |kx| ≤ cut
+    /// in both runs, for even and odd lengths, cut or whole lines, and few or all lines kept.
+    #[test]
+    fn packed_lines_are_found_where_they_are_read() {
+        for [fx, fy] in [[270, 270], [9, 7], [8, 10]] {
+            let t: Vec<Complex32> = (0..fx * fy)
+                .map(|i| Complex32::new(i as f32, -(i as f32)))
+                .collect();
+            for lines in [0, 1, 2, fy / 2 - 1, fy / 2, fy] {
+                for cut in [0, 1, fx / 2 - 1, fx / 2] {
+                    let kept = (2 * lines + 1).min(fy);
+                    let len = packed_len(fx, cut);
+                    let mut out = vec![Complex32::new(f32::NAN, 0.0); kept * len];
+                    pack(&t, [fx, fy], lines, cut, &mut out);
+                    let hy = (fy / 2).min(lines) + 1;
+                    let direct = (0..hy).map(|s| (s, s, false));
+                    let mirrored = (1..hy.min(fy.div_ceil(2))).map(|s| (fy - s, s, true));
+                    let mut read = 0;
+                    for (ky, s, m) in direct.chain(mirrored) {
+                        let line = &out[packed_index(s, m) * len..][..len];
+                        let row = &t[ky * fx..(ky + 1) * fx];
+                        let top = upper(fx, cut);
+                        assert_eq!(&line[..=cut], &row[..=cut], "{fx}×{fy}, ky {ky}");
+                        assert_eq!(&line[cut + 1..], &row[top..], "{fx}×{fy}, ky {ky}");
+                        read += 1;
+                    }
+                    assert_eq!(
+                        read, kept,
+                        "{fx}×{fy}, lines {lines}: every packed line is read"
+                    );
+                    assert!(out.iter().all(|v| !v.re.is_nan()), "nothing left unwritten");
+                }
+            }
+        }
+    }
+}
