@@ -468,6 +468,9 @@ pub fn intensity(
     field: &[Complex32],
     compensation: Compensation,
 ) -> Vec<f32> {
+    if compensation == Compensation::None {
+        return field.par_iter().map(|u| u.norm_sqr()).collect();
+    }
     let confocal = cap.kind() == CaptureKind::Confocal;
     let (point, aperture) = compensation_points(cap);
     field
@@ -488,6 +491,9 @@ fn clamped_gain_warning(
     volume: &Volume,
     compensation: Compensation,
 ) -> Option<String> {
+    if compensation == Compensation::None {
+        return None;
+    }
     let confocal = cap.kind() == CaptureKind::Confocal;
     let (point, aperture) = compensation_points(cap);
     let clamped = (0..volume.len())
