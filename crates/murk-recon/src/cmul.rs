@@ -88,6 +88,18 @@ pub fn add_assign(a: &mut [Complex32], b: &[Complex32]) {
     );
 }
 
+/// The interleaved (re, im) floats of complex values.
+pub fn floats(v: &[Complex32]) -> &[f32] {
+    // SAFETY: num-complex's Complex<f32> is #[repr(C)] {re, im}: n of them are 2n f32, same alignment.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast(), 2 * v.len()) }
+}
+
+/// [`floats`], to write.
+pub fn floats_mut(v: &mut [Complex32]) -> &mut [f32] {
+    // SAFETY: as in `floats`; the borrow is exclusive for the returned slice's lifetime.
+    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast(), 2 * v.len()) }
+}
+
 fn tail(d: &mut [Complex32], b: &[Complex32]) {
     d.iter_mut().zip(b).for_each(|(d, b)| *d *= b);
 }

@@ -4,9 +4,10 @@
 
 use murk_core::{Capture, DVec3, Error, Result, Volume};
 use rayon::prelude::*;
-use realfft::RealFftPlanner;
 use rustfft::num_complex::{Complex32, Complex64};
+use rustfft::{Fft, FftPlanner};
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// Gaussian envelope truncation used for time windows and padding, in units of σ.
 const ENVELOPE_SIGMAS: f64 = 4.0;
@@ -216,8 +217,8 @@ impl Window {
         let i_hi = want_hi.clamp(0, t.bins as i64) as usize;
         // The window the paths need, not the data we have, sets the period. A read lies at least one
         // margin inside the window, so the nearest wrapped image of any data bin is at least a margin
-        // away: it weighs no more than the data the crop already drops. Even lengths keep realfft on
-        // its fast path.
+        // away: it weighs no more than the data the crop already drops. Lengths are even: the real DFT
+        // is a complex one of half the length (see [`HalfLength`]).
         let pad = 1;
         // Checked before rounding up to a fast length, whose search is linear in the length.
         let span_bins = want_hi.saturating_sub(want_lo).max(1);
@@ -249,6 +250,44 @@ impl Window {
     }
 }
 
+/// A real DFT of even length N restricted to a band's bins: the samples, read as N/2 complex values
+/// (even ones real, odd ones imaginary), take one complex FFT of N/2, and only the band's bins are
+/// separated into the real signal's spectrum, not all N/2 + 1.
+struct HalfLength {
+    fft: Arc<dyn Fft<f32>>,
+    /// e^{−2πi·m/N} at the band's bins m.
+    twiddles: Vec<Complex32>,
+    m_lo: usize,
+}
+
+impl HalfLength {
+    fn new(band: &Band, planner: &mut FftPlanner<f32>) -> HalfLength {
+        let twiddles = (0..band.len())
+            .map(|j| {
+                let turn = -2.0 * PI * (band.m_lo + j) as f64 / band.nf as f64;
+                let c = Complex64::from_polar(1.0, turn);
+                Complex32::new(c.re as f32, c.im as f32)
+            })
+            .collect();
+        HalfLength {
+            fft: planner.plan_fft_forward(band.nf / 2),
+            twiddles,
+            m_lo: band.m_lo,
+        }
+    }
+
+    /// The real signal's DFT at the band's j-th bin m from the half-length transform `z`: the
+    /// even samples' spectrum plus e^{−2πi·m/N} times the odd samples'.
+    fn bin(&self, z: &[Complex32], j: usize) -> Complex32 {
+        let half = z.len();
+        let m = (self.m_lo + j) % half;
+        let (a, b) = (z[m], z[(half - m) % half].conj());
+        let even = (a + b) * 0.5;
+        let odd = (a - b) * Complex32::new(0.0, -0.5);
+        even + self.twiddles[j] * odd
+    }
+}
+
 /// Transforms every histogram over each window and keeps the windows' bands, path offsets applied as
 /// exact phases.
 pub fn spectra<'w>(cap: &Capture, windows: &'w [Window]) -> Spectra<'w> {
@@ -261,23 +300,24 @@ pub fn spectra<'w>(cap: &Capture, windows: &'w [Window]) -> Spectra<'w> {
     // Zero pages from the OS, first touched by the threads that write the rows (a window with no
     // data leaves its part zero).
     let mut spec: Vec<Complex32> = murk_core::buffer::zeroed(cap.n_hist() * stride);
-    let ffts: Vec<_> = {
-        let mut planner = RealFftPlanner::<f32>::new();
+    let halves: Vec<HalfLength> = {
+        let mut planner = FftPlanner::<f32>::new();
         windows
             .iter()
-            .map(|w| planner.plan_fft_forward(w.band.nf))
+            .map(|w| HalfLength::new(&w.band, &mut planner))
             .collect()
     };
     spec.par_chunks_mut(stride.max(1))
         .enumerate()
         .for_each_init(
             || {
-                ffts.iter()
+                halves
+                    .iter()
                     .map(|f| {
+                        let n = f.fft.len();
                         (
-                            f.make_input_vec(),
-                            f.make_output_vec(),
-                            f.make_scratch_vec(),
+                            vec![Complex32::default(); n],
+                            vec![Complex32::default(); f.fft.get_inplace_scratch_len()],
                         )
                     })
                     .collect::<Vec<_>>()
@@ -286,31 +326,34 @@ pub fn spectra<'w>(cap: &Capture, windows: &'w [Window]) -> Spectra<'w> {
                 let h = cap.histogram(i);
                 let (l, s) = cap.hist_pair(i);
                 let bounces_m = cap.first_bounce_m(l) + cap.last_bounce_m(s);
-                for (((w, fft), (input, output, scratch)), &o) in
-                    windows.iter().zip(&ffts).zip(bufs.iter_mut()).zip(&offsets)
+                for (((w, half), (z, scratch)), &o) in windows
+                    .iter()
+                    .zip(&halves)
+                    .zip(bufs.iter_mut())
+                    .zip(&offsets)
                 {
                     if w.empty {
                         continue;
                     }
                     let band = &w.band;
                     let (lead, n) = (w.lead, w.i_hi - w.i_lo);
+                    let input = crate::cmul::floats_mut(z);
                     input[..lead].iter_mut().for_each(|v| *v = 0.0);
                     input[lead + n..].iter_mut().for_each(|v| *v = 0.0);
                     input[lead..lead + n].copy_from_slice(&h[w.i_lo..w.i_hi]);
-                    fft.process_with_scratch(input, output, scratch)
-                        .expect("realfft lengths match their plan");
+                    half.fft.process_with_scratch(z, scratch);
                     let shift = bounces_m - w.s_pad0_m;
                     // exp(ik_j·shift) by recurrence from k_0 (f64: no drift over a band), times the
                     // pulse weight and the 1/nf scale.
                     let mut ph = Complex64::from_polar(1.0 / band.nf as f64, band.k(0) * shift);
                     let step = Complex64::from_polar(1.0, band.dk() * shift);
-                    for ((r, x), wj) in row[o..o + band.len()]
+                    for (j, (r, wj)) in row[o..o + band.len()]
                         .iter_mut()
-                        .zip(&output[band.m_lo..])
                         .zip(&band.weights)
+                        .enumerate()
                     {
                         let p = ph * *wj;
-                        *r = Complex32::new(x.re, x.im) * Complex32::new(p.re as f32, p.im as f32);
+                        *r = half.bin(z, j) * Complex32::new(p.re as f32, p.im as f32);
                         ph *= step;
                     }
                 }
@@ -338,6 +381,41 @@ mod tests {
         let jc = (5104.0 * 0.001 / lambda).round() as usize - b.m_lo;
         // W(f_c) = 1 up to the off-grid distance of the nearest bin.
         assert!((b.weights[jc] - 1.0).abs() < 1e-3, "{}", b.weights[jc]);
+    }
+
+    /// The half-length transform's band bins against a direct f64 DFT, over every bin 0..=N/2.
+    #[test]
+    fn half_length_bins_match_a_direct_dft() {
+        for nf in [50, 2000] {
+            let band = Band {
+                nf,
+                bin_width_m: 0.001,
+                m_lo: 0,
+                weights: vec![1.0; nf / 2 + 1],
+            };
+            let half = HalfLength::new(&band, &mut FftPlanner::new());
+            let x: Vec<f32> = (0..nf)
+                .map(|n| ((n * 7919) % 101) as f32 / 50.0 - 1.0)
+                .collect();
+            let mut z: Vec<Complex32> = x
+                .chunks_exact(2)
+                .map(|p| Complex32::new(p[0], p[1]))
+                .collect();
+            half.fft.process(&mut z);
+            let scale: f64 = x.iter().map(|v| v.abs() as f64).sum();
+            for m in 0..=nf / 2 {
+                let want: Complex64 = x
+                    .iter()
+                    .enumerate()
+                    .map(|(n, &v)| {
+                        Complex64::from_polar(v as f64, -2.0 * PI * (m * n) as f64 / nf as f64)
+                    })
+                    .sum();
+                let got = half.bin(&z, m);
+                let err = (Complex64::new(got.re as f64, got.im as f64) - want).norm();
+                assert!(err <= 1e-6 * scale, "N = {nf}, bin {m}: {err}");
+            }
+        }
     }
 
     #[test]

@@ -350,12 +350,12 @@ pub(super) enum Deliver {
 #[inline(always)]
 fn weighted_sum<'r>(out: &mut [Complex32], rows: impl Iterator<Item = (&'r [Complex32], f32)>) {
     const MAX_ROWS: usize = 2 * crate::resample::HALF_TAPS as usize;
-    let out = floats_mut(out);
+    let out = cmul::floats_mut(out);
     let n = out.len();
     let mut taps: [(&[f32], f32); MAX_ROWS] = [(&[], 0.0); MAX_ROWS];
     let mut count = 0;
     for (row, w) in rows {
-        taps[count] = (&floats(row)[..n], w);
+        taps[count] = (&cmul::floats(row)[..n], w);
         count += 1;
     }
     let taps = &taps[..count];
@@ -379,17 +379,6 @@ fn summed_blocks<const B: usize>(out: &mut [f32], taps: &[(&[f32], f32)], range:
         }
         out[c..c + B].copy_from_slice(&acc);
     }
-}
-
-/// The interleaved (re, im) floats of complex values.
-fn floats(v: &[Complex32]) -> &[f32] {
-    // SAFETY: num-complex's Complex<f32> is #[repr(C)] {re, im}: n of them are 2n f32, same alignment.
-    unsafe { std::slice::from_raw_parts(v.as_ptr().cast(), 2 * v.len()) }
-}
-
-fn floats_mut(v: &mut [Complex32]) -> &mut [f32] {
-    // SAFETY: as in `floats`; the borrow is exclusive for the returned slice's lifetime.
-    unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr().cast(), 2 * v.len()) }
 }
 
 #[cfg(test)]
