@@ -148,12 +148,26 @@ pub fn transpose_part(
     assert!((rows.end - 1) * src_stride + cols.end <= src.len());
     assert!((cols.end - 1) * dst_stride + rows.end <= dst.len());
     let (s, d) = (src.as_ptr(), dst.as_mut_ptr());
+    #[cfg(target_arch = "x86_64")]
+    let avx = murk_core::simd::has_avx2_fma();
     for r0 in rows.clone().step_by(TILE) {
         let r1 = (r0 + TILE).min(rows.end);
         for c0 in cols.clone().step_by(TILE) {
             let c1 = (c0 + TILE).min(cols.end);
             // SAFETY: r < rows.end and c < cols.end, checked against both lengths above.
             unsafe {
+                #[cfg(target_arch = "x86_64")]
+                if avx && r1 - r0 == TILE && c1 - c0 == TILE {
+                    for (r, c) in [(0, 0), (0, 4), (4, 0), (4, 4)] {
+                        avx::transpose4(
+                            s.add((r0 + r) * src_stride + c0 + c),
+                            src_stride,
+                            d.add((c0 + c) * dst_stride + r0 + r),
+                            dst_stride,
+                        );
+                    }
+                    continue;
+                }
                 if r1 - r0 == TILE && c1 - c0 == TILE {
                     for c in 0..TILE {
                         for r in 0..TILE {
@@ -169,6 +183,41 @@ pub fn transpose_part(
                     }
                 }
             }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use rustfft::num_complex::Complex32;
+    use std::arch::x86_64::*;
+
+    /// A 4 × 4 block of complex values transposed, each value moved as one 64-bit lane: rows of
+    /// `src` (`src_stride` apart) become columns of `dst`.
+    ///
+    /// # Safety
+    /// AVX must be available, and four rows of four values valid at both pointers with their strides.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn transpose4(
+        src: *const Complex32,
+        src_stride: usize,
+        dst: *mut Complex32,
+        dst_stride: usize,
+    ) {
+        let row = |i: usize| _mm256_loadu_pd(src.add(i * src_stride) as *const f64);
+        let (a, b, c, d) = (row(0), row(1), row(2), row(3));
+        // [a0 b0 a2 b2], [a1 b1 a3 b3], [c0 d0 c2 d2], [c1 d1 c3 d3].
+        let (ab0, ab1) = (_mm256_unpacklo_pd(a, b), _mm256_unpackhi_pd(a, b));
+        let (cd0, cd1) = (_mm256_unpacklo_pd(c, d), _mm256_unpackhi_pd(c, d));
+        let out = [
+            _mm256_permute2f128_pd(ab0, cd0, 0x20),
+            _mm256_permute2f128_pd(ab1, cd1, 0x20),
+            _mm256_permute2f128_pd(ab0, cd0, 0x31),
+            _mm256_permute2f128_pd(ab1, cd1, 0x31),
+        ];
+        for (i, v) in out.into_iter().enumerate() {
+            _mm256_storeu_pd(dst.add(i * dst_stride) as *mut f64, v);
         }
     }
 }
