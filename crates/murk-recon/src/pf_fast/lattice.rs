@@ -161,11 +161,11 @@ pub(super) enum Sink {
 impl Plan {
     /// For a symmetric support (see [`Fold`]): the kernel's spectrum at the current frequency times
     /// `h` (lines packed to |kx| ≤ `x_lines`, see [`pack`]) on the lines kept for `lines`, delivered
-    /// to `sink`;
-    /// the kernel's table (`ws.tcur`) is left advanced to the next frequency. Along y only the distinct
-    /// rows |dx| ≤ cx are transformed, in batches whose columns ky ≤ min(fy/2, lines) are gathered
-    /// into `ws.cols`; along x, batches of those columns are transformed, and each is unfolded into
-    /// the lines ky and fy − ky as it is multiplied, so no whole-spectrum buffer is written or read.
+    /// to `sink`; the kernel's table (`ws.tcur`) is left advanced to the next frequency. Along y only
+    /// the distinct rows |dx| ≤ cx are transformed, in batches whose columns ky ≤ min(fy/2, lines)
+    /// are gathered into `ws.cols`; along x, batches of those columns are transformed, and each is
+    /// unfolded into the lines ky and fy − ky as it is multiplied, so no whole-spectrum buffer is
+    /// written or read.
     pub(super) fn folded_lines(
         &self,
         ws: &mut Workspace,

@@ -233,6 +233,7 @@ impl Plan {
         let half = self.fft.fx / 2;
         Reading {
             kernels,
+            lines: self.lines(k, dz_min),
             x_lines: match kernels[X] {
                 Some(_) => self.lines_along(X, k, dz_min).min(half),
                 None => half,
@@ -324,7 +325,7 @@ impl Plan {
                 let reads: Vec<Reading> = (0..spectra.band.len())
                     .map(|j| self.reading(legs(src) * spectra.band.k(j), dz_min))
                     .collect();
-                let hspec = self.grid_spectra(&spectra, src, dz_min, &reads, &mut grid, &pool);
+                let hspec = self.grid_spectra(&spectra, src, &reads, &mut grid, &pool);
                 let out: Vec<Vec<Complex32>> = planes
                     .clone()
                     .into_par_iter()
@@ -501,15 +502,14 @@ impl Plan {
     }
 
     /// FFT2 of each band frequency's spectrum laid out on the wall grid, in the transposed layout, on
-    /// the lines that planes at `dz_min` or deeper keep, divided by the spectra of the kernels
-    /// `reads` chose for it and cut to their bands: with a folded kernel only those lines and kx,
+    /// the lines its `reads` entry keeps (the slab's shallowest plane's), divided by the spectra of
+    /// the kernels it chose and cut to their bands: with a folded kernel only those lines and kx,
     /// packed (see [`lattice::pack`]), else whole (the lines not kept are garbage). The buffers are
     /// reused across slabs.
     fn grid_spectra<'b>(
         &self,
         spectra: &Part,
         src: Option<usize>,
-        dz_min: f64,
         reads: &[Reading],
         buf: &'b mut GridBuffers,
         pool: &[Mutex<Workspace>],
@@ -535,13 +535,10 @@ impl Plan {
                     }
                 }
             });
-        let lines: Vec<usize> = (0..nb)
-            .map(|j| self.lines(legs(src) * spectra.band.k(j), dz_min))
-            .collect();
         let mut offsets = vec![0];
-        for (l, r) in lines.iter().zip(reads) {
+        for r in reads {
             let size = match self.fold {
-                Some(_) => (2 * l + 1).min(fy) * lattice::packed_len(fx, r.x_lines),
+                Some(_) => (2 * r.lines + 1).min(fy) * lattice::packed_len(fx, r.x_lines),
                 None => fx * fy,
             };
             offsets.push(offsets[offsets.len() - 1] + size);
@@ -560,7 +557,7 @@ impl Plan {
             .zip(by_freq[..nb * cells].par_chunks(cells))
             .enumerate()
             .for_each(|(j, (part, cells))| {
-                let lines = lines[j];
+                let read = &reads[j];
                 let mut ws = lock(pool);
                 let Workspace {
                     grid_in: a,
@@ -572,10 +569,10 @@ impl Plan {
                 match self.fold {
                     // Transformed whole, then packed.
                     Some(_) => {
-                        self.grid_spectrum(cells, lines, &reads[j], spectrum, g);
-                        lattice::pack(g, [fx, fy], lines, reads[j].x_lines, part);
+                        self.grid_spectrum(cells, read, spectrum, g);
+                        lattice::pack(g, [fx, fy], read.lines, read.x_lines, part);
                     }
-                    None => self.grid_spectrum(cells, lines, &reads[j], spectrum, part),
+                    None => self.grid_spectrum(cells, read, spectrum, part),
                 }
             });
         GridSpectra {
@@ -584,19 +581,19 @@ impl Plan {
         }
     }
 
-    /// FFT2 of one frequency's `cells` (the grid's spectra, [x][y]) into `t` ([ky][kx]) on the kept
-    /// `lines`, normalised (and folded, see [`Fold`]) for the inverse, and divided by the kernels
-    /// `read` chose; `a` holds the zero-padded grid and `scratch` the FFT's scratch.
+    /// FFT2 of one frequency's `cells` (the grid's spectra, [x][y]) into `t` ([ky][kx]) on the lines
+    /// `read` keeps, normalised (and folded, see [`Fold`]) for the inverse, and divided by the kernels
+    /// it chose; `a` holds the zero-padded grid and `scratch` the FFT's scratch.
     fn grid_spectrum(
         &self,
         cells: &[Complex32],
-        lines: usize,
         read: &Reading,
         [a, scratch]: [&mut Vec<Complex32>; 2],
         t: &mut [Complex32],
     ) {
         let (fx, fy) = (self.fft.fx, self.fft.fy);
         let (gnx, gny) = (self.grid.nx, self.grid.ny);
+        let lines = read.lines;
         // Rows x ≥ gnx stay zero: only the grid's rows are written and transformed.
         for ix in 0..gnx {
             let row = &mut a[ix * fy..(ix + 1) * fy];
@@ -616,12 +613,13 @@ impl Plan {
                 }
             }
         }
-        self.divide_by_kernels(t, read, lines);
+        self.divide_by_kernels(t, read);
     }
 
-    /// `t` ([ky][kx], kept `lines` along y) divided by the spectra of the kernels `read` chose for
-    /// it, and zero past its `x_lines` along x (where a kernel is chosen for x, its band ends there).
-    fn divide_by_kernels(&self, t: &mut [Complex32], read: &Reading, lines: usize) {
+    /// `t` ([ky][kx], on the lines `read` keeps) divided by the spectra of the kernels it chose, and
+    /// zero past its `x_lines` along x (where a kernel is chosen for x, its band ends there).
+    fn divide_by_kernels(&self, t: &mut [Complex32], read: &Reading) {
+        let lines = read.lines;
         let chosen = read.kernels;
         if chosen == [None, None] {
             return;
@@ -780,6 +778,9 @@ impl Plan {
 struct Reading {
     /// Per axis, the Kaiser–Bessel kernel of `Plan::kb` or `None` for the windowed sinc.
     kernels: [Option<usize>; 2],
+    /// The lines the slab's shallowest plane keeps (see [`Plan::lines`]): those of the grid's
+    /// spectrum.
+    lines: usize,
     /// The grid's spectrum is zero at kx further than this from 0 (fx/2: nowhere).
     x_lines: usize,
 }
