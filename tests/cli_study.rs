@@ -359,6 +359,19 @@ fn a_rendered_ground_truth_is_described_by_info() {
     ] {
         assert!(info.contains(want), "{want} not in:\n{info}");
     }
+    // The memory budget bounds a ground truth's arrays as it does a capture's: 16² f64 depths are
+    // 2 KiB, over a 1 000-byte budget.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_murk"))
+        .args(["info", truth.to_str().unwrap()])
+        .env("MURK_MAX_BYTES", "1000")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.lines().count() == 1 && err.contains("z-truth.h5") && err.contains("read limit"),
+        "{err}"
+    );
     // One bit of a depth changed (the last 2.0 in the file lies in the depth map): named as a
     // damaged ground truth, not as a file that is no capture.
     let mut bytes = std::fs::read(&truth).unwrap();

@@ -72,7 +72,7 @@ pub fn read_truth_h5(path: &Path) -> Result<GroundTruth> {
         Some(AttrValue::String(s)) if !s.is_empty() => s.lines().map(String::from).collect(),
         _ => Vec::new(),
     };
-    let limit = 1 << 30;
+    let limit = crate::tal::read_limit_bytes();
     let real = |name: &str| -> Result<(Vec<usize>, Vec<f64>)> {
         let ds = h5::dataset(path, &file, name)?;
         h5::read_real::<f64>(path, &ds, name, limit)
