@@ -106,14 +106,15 @@ fn tail(d: &mut [Complex32], b: &[Complex32]) {
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
+    //! Each function handles the largest multiple of 4 values below `n`.
+    //!
+    //! # Safety (every function)
+    //! AVX2 and FMA must be available, and every pointer valid for `n` values; an output may equal
+    //! an input (each group of four is read before it is written).
+
     use rustfft::num_complex::Complex32;
     use std::arch::x86_64::*;
 
-    /// `dst[i] = a[i]·b[i]` (or `+=` when `add`) for the largest multiple of 4 below `n`; returns it.
-    /// `dst` may equal `a` (each group of four is read before it is written).
-    ///
-    /// # Safety
-    /// AVX2 and FMA must be available, and `dst`, `a`, `b` valid for `n` elements.
     /// The product of four complex values in each of `a` and `b`.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
@@ -177,7 +178,7 @@ mod avx {
         (Complex32::new(out[0], out[1]), full)
     }
 
-    /// `dst = a·b` over the first n/4·4 values (dst may be a); returns how many it did.
+    /// `dst = a·b` over the first n/4·4 values; returns how many it did.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn mul(
         dst: *mut Complex32,

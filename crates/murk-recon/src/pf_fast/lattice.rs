@@ -57,8 +57,15 @@ fn upper(n: usize, cut: usize) -> usize {
 }
 
 /// Values of a line of `n` cut to |k| ≤ `cut`: its lower run 0..=cut and its upper run.
-pub(super) fn packed_len(n: usize, cut: usize) -> usize {
+fn packed_len(n: usize, cut: usize) -> usize {
     cut + 1 + n - upper(n, cut)
+}
+
+/// Values a spectrum of `[fx, fy]` takes packed (see [`pack`]): its lines kept for `lines`, each
+/// cut to |kx| ≤ `cut`.
+pub(super) fn packed_size([fx, fy]: [usize; 2], lines: usize, cut: usize) -> usize {
+    let kept: usize = kept_lines(fy, lines).iter().map(|r| r.len()).sum();
+    kept * packed_len(fx, cut)
 }
 
 /// Position among the packed lines (see [`pack`]) of line ky = s, or of ky = N − s when `mirrored`.

@@ -538,7 +538,7 @@ impl Plan {
         let mut offsets = vec![0];
         for r in reads {
             let size = match self.fold {
-                Some(_) => (2 * r.lines + 1).min(fy) * lattice::packed_len(fx, r.x_lines),
+                Some(_) => lattice::packed_size([fx, fy], r.lines, r.x_lines),
                 None => fx * fy,
             };
             offsets.push(offsets[offsets.len() - 1] + size);
@@ -604,13 +604,11 @@ impl Plan {
         }
         self.fft.forward_lines(a, gnx, t, lines, scratch);
         // The inverse FFT is unnormalised: fold 1/(fx·fy) in here, once.
+        let norm = 1.0 / (fx * fy) as f32;
         for span in kept_spans(fy, lines, fx) {
             match &self.fold {
                 Some(f) => cmul::mul_assign(&mut t[span.clone()], &f.phases[span]),
-                None => {
-                    let norm = 1.0 / (fx * fy) as f32;
-                    t[span].iter_mut().for_each(|v| *v *= norm)
-                }
+                None => t[span].iter_mut().for_each(|v| *v *= norm),
             }
         }
         self.divide_by_kernels(t, read);
@@ -688,15 +686,16 @@ impl Plan {
         ws.tcur.resize(mx * my, Complex32::default());
         ws.tstep.resize(mx * my, Complex32::default());
         phase::phasors(&ws.theta, &ws.amp, m0 as f64, &mut ws.tcur, &mut ws.tstep);
-        // Exact phase of the point-side leg, per voxel (y-major, like the summed field); confocal data have
-        // none.
+        // Exact phase of the point-side leg, per voxel (y-major, like the summed field); confocal
+        // data have none.
         if let Some(s) = src {
+            let point = self.source_point(s);
             ws.theta.clear();
             ws.amp.clear();
             for iy in 0..ny {
                 for ix in 0..nx {
                     let v = DVec3::new(self.vol.x.at(ix), self.vol.y.at(iy), z);
-                    let d = (v - self.source_point(s)).length();
+                    let d = (v - point).length();
                     ws.theta.push(dk * d);
                     ws.amp.push(amplitude(self.falloff, d));
                 }
