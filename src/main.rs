@@ -36,6 +36,8 @@ enum Command {
     Synth(cmd::synth::SynthArgs),
     /// Reconstruct a capture into a volume (.npy / .h5) and pictures.
     Reconstruct(cmd::reconstruct::ReconstructArgs),
+    /// Estimate the medium (μt, albedo, HG g) from a capture's medium-only bins.
+    Medium(cmd::medium::MediumArgs),
     /// Render a scene file (scenes/*.toml) into a capture by time-resolved volumetric path tracing.
     Render(cmd::render::RenderArgs),
     /// Import a real capture (a public NLOS dataset with --format, or any 3-D array) into y-tal HDF5.
@@ -98,6 +100,7 @@ fn main() {
         Command::Info(a) => cmd::info::run(a),
         Command::Synth(a) => cmd::synth::run(a, cli.quiet),
         Command::Reconstruct(a) => cmd::reconstruct::run(a, cli.quiet),
+        Command::Medium(a) => cmd::medium::run(a, cli.quiet),
         Command::Render(a) => cmd::render::run(a, cli.quiet),
         Command::Import(a) => cmd::import::run(a, cli.quiet),
         Command::Figure(a) => cmd::figure::run(a, cli.quiet),

@@ -220,8 +220,10 @@ fn cut_real_cdt_letter_s() {
 }
 
 /// The T behind 1 m of fog (`scenes/t-wall-medium.toml`, 256 spp): the medium's backscatter near the
-/// relay is the brightest signal, so without a gate the peak sits on the default volume's nearest
-/// plane (a warning says so); fading out the paths below 1.5 m puts it on the T at 1.0 m.
+/// relay is the brightest signal, so without the medium-aware path and without a gate the peak sits on
+/// the default volume's nearest plane (a warning says so). With no flags the medium is detected, its
+/// response removed and the depth range searched: the peak is on the T at 1.0 m. Fading out the paths
+/// below 1.5 m also puts it there.
 #[test]
 fn gate_removes_the_fog_near_the_relay() {
     let d = dir("gate");
@@ -239,13 +241,33 @@ fn gate_removes_the_fog_near_the_relay() {
             .parse()
             .unwrap()
     };
-    let (code, summary, err) = murk(&["reconstruct", s(&cap), "--out", s(&out)]);
+    let plain = [
+        "reconstruct",
+        s(&cap),
+        "--out",
+        s(&out),
+        "--medium-removal",
+        "off",
+        "--depth-search",
+        "off",
+    ];
+    let (code, summary, err) = murk(&plain);
     assert_eq!(code, 0, "{err}");
     assert!(
         err.contains("nearest plane") && err.contains("--gate"),
         "{err}"
     );
     assert!((peak_z(&summary) - 0.1).abs() < 1e-6, "{summary}");
+    assert!(!summary.contains("medium:") && !summary.contains("depth search"));
+
+    let (code, summary, err) = murk(&["reconstruct", s(&cap), "--out", s(&out)]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("nearest plane"), "{err}");
+    assert!((peak_z(&summary) - 1.0).abs() < 0.05, "{summary}");
+    assert!(
+        summary.contains("medium: detected") && summary.contains("depth search: over z 0.1:"),
+        "{summary}"
+    );
 
     let (code, summary, err) = murk(&["reconstruct", s(&cap), "--out", s(&out), "--gate", "1.5"]);
     assert_eq!(code, 0, "{err}");

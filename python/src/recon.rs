@@ -5,6 +5,7 @@ use crate::compute;
 use murk_baselines::{Reflectance, SlabParams};
 use murk_core::window::WindowEnd;
 use murk_core::{Error, Named, Result, Volume};
+use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
 use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
 use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
@@ -32,6 +33,8 @@ pub struct Args {
     lateral: String,
     gate: String,
     window_end: String,
+    medium_removal: String,
+    depth_search: String,
     t_offset: Option<String>,
     snr: Option<f64>,
     weighting: String,
@@ -52,6 +55,10 @@ impl Args {
             t_offset: TOffset::parse(self.t_offset.as_deref(), &o, &method)?,
             gate: self.gate.parse::<Gate>()?,
             window_end: WindowEnd::named(&self.window_end)?,
+            medium: MediumAware {
+                removal: MediumRemoval::named(&self.medium_removal)?,
+                depth_search: DepthSearch::named(&self.depth_search)?,
+            },
         })
     }
 

@@ -3,6 +3,7 @@ pub mod experiment;
 pub mod figure;
 pub mod import;
 pub mod info;
+pub mod medium;
 pub mod progress;
 pub mod reconstruct;
 pub mod render;

@@ -5,6 +5,7 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use murk_baselines::SlabParams;
 use murk_core::{CaptureKind, Named, Volume};
+use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
 use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
 use murk_recon::{Compensation, Wavelength};
 use murk_view::pictures;
@@ -52,6 +53,7 @@ pub enum LateralArg {
 murk reconstruct capture.h5 --out volume.npy --png pictures/\n  \
 murk reconstruct capture.h5 --out volume.h5 --wavefactor 8 --cycles 4 --volume -1:1:73,-1:1:59,1.5:2.5:73\n  \
 murk reconstruct fog.h5 --out v.npy --compensate paper --mu-t 1.0 --albedo 0.5\n  \
+murk reconstruct fog.h5 --out v.npy --medium-removal off --depth-search off   # as before the medium-aware path\n  \
 murk reconstruct letter_s.h5 --method cdt --out cdt.h5 --png cdt/\n  \
 murk reconstruct letter_s.h5 --method pf --wavefactor 8 --cycles 8 --t-offset slab --out pf.h5\n\n\
 Methods pf, pf-exact, bp and fbp reconstruct on --volume. lct, fk and cdt need a confocal capture on a regular\n\
@@ -118,8 +120,33 @@ pub struct ReconstructArgs {
     /// volume; `off` keeps every path.
     #[arg(long, default_value = "auto", value_name = "PATH_M|auto|off")]
     pub gate: String,
+    /// The medium's response: `auto` detects a medium in the early bins (signal right after every
+    /// histogram's earliest path, decaying) and, for pf, pf-exact, bp and fbp, subtracts its response
+    /// fitted from the capture (rings of equal laser–sensor separation, smoothed over 0.5 m of path);
+    /// `fit` always subtracts it, for any method; `off` never. The summary's `medium` row says what was
+    /// found and the share of signal removed.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub medium_removal: MediumRemovalArg,
+    /// With the default volume and a detected medium, `auto` first reconstructs the whole reach and
+    /// keeps the depths within 0.5 m of the plane where the signal focuses best (the summary's `depth
+    /// search` row); `off` keeps the default volume.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub depth_search: DepthSearchArg,
     #[command(flatten)]
     pub slab: SlabArgs,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum MediumRemovalArg {
+    Auto,
+    Fit,
+    Off,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum DepthSearchArg {
+    Auto,
+    Off,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -195,6 +222,10 @@ impl ReconstructArgs {
             t_offset: TOffset::parse(self.t_offset.as_deref(), &o, &method)?,
             gate: self.gate.parse::<Gate>().context("--gate")?,
             window_end: library(self.window_end)?,
+            medium: MediumAware {
+                removal: library::<MediumRemoval>(self.medium_removal)?,
+                depth_search: library::<DepthSearch>(self.depth_search)?,
+            },
         })
     }
 
@@ -300,6 +331,8 @@ mod tests {
         assert_eq!(names::<LateralArg>(), library_names::<Lateral>());
         assert_eq!(names::<WeightingArg>(), library_names::<Reflectance>());
         assert_eq!(names::<WindowEndArg>(), library_names::<WindowEnd>());
+        assert_eq!(names::<MediumRemovalArg>(), library_names::<MediumRemoval>());
+        assert_eq!(names::<DepthSearchArg>(), library_names::<DepthSearch>());
         let mut with_none = vec!["none".to_string()];
         with_none.extend(names::<CompensateArg>());
         assert_eq!(with_none, Compensation::NAMES);

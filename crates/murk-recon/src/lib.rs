@@ -9,6 +9,7 @@
 mod cmul;
 mod compensation;
 mod fft2;
+pub mod medium;
 mod pf_exact;
 mod pf_fast;
 mod phase;

@@ -4,6 +4,7 @@
 //! rows that say how it was made, warnings). `murk reconstruct` and the Python module are this call;
 //! a new method is its own module plus one arm in [`Method`], [`Method::NAMES`] and [`Engine`].
 
+use crate::medium::{self, detect::Signature, removal, DepthSearch, MediumAware, MediumRemoval};
 use crate::{Compensation, Falloff, Lateral, PfForm, PfParams, PfPlan, Progress, Wavelength};
 use murk_baselines::{
     BpOptions, CdtParams, CdtPlan, FbpOptions, FkParams, FkPlan, LctParams, LctPlan, Pulse,
@@ -283,6 +284,8 @@ pub struct Request {
     pub t_offset: TOffset,
     pub gate: Gate,
     pub window_end: WindowEnd,
+    /// The medium's response removed, and the depth range searched, when a medium is detected.
+    pub medium: MediumAware,
 }
 
 impl Request {
@@ -294,6 +297,7 @@ impl Request {
             t_offset: TOffset::None,
             gate: Gate::Auto,
             window_end: WindowEnd::Auto,
+            medium: MediumAware::default(),
         }
     }
 }
@@ -358,6 +362,10 @@ pub struct Plan {
     /// Whether `open_m` was set by hand (`Gate::At`), which makes a gate that fades nothing worth saying.
     gate_given: bool,
     window_end: WindowEnd,
+    /// Whether (and when) the medium's response is subtracted before the gate.
+    removal: MediumRemoval,
+    /// Whether the method reconstructs on a volume (auto removal serves only those).
+    on_volume: bool,
     /// The geometry the plan was made for, with the time offset applied.
     geometry: Capture,
     engine: Engine,
@@ -434,6 +442,8 @@ impl Plan {
             open_m,
             gate_given: matches!(req.gate, Gate::At(_)),
             window_end: req.window_end,
+            removal: req.medium.removal,
+            on_volume: !m.own_grid(),
             geometry,
             engine,
         })
@@ -441,6 +451,17 @@ impl Plan {
 
     /// Reconstructs `cap`, which must have the geometry the plan was made for.
     pub fn run(&self, mut cap: Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        // Measured on the time stamps as stored: the medium's earliest paths are physical ones.
+        let removed = match (self.removal, self.on_volume) {
+            (MediumRemoval::Off, _) | (MediumRemoval::Auto, false) => None,
+            (MediumRemoval::Fit, _) => Some(removal::subtract(&mut cap, None)),
+            (MediumRemoval::Auto, true) => {
+                let signature = Signature::measure(&cap);
+                signature
+                    .is_medium()
+                    .then(|| removal::subtract(&mut cap, Some(signature)))
+            }
+        };
         cap.time.start_m -= self.offset_m;
         if !self.geometry.same_geometry(&cap) {
             return Err(Error::param(
@@ -514,13 +535,46 @@ impl Plan {
         out.warnings.extend(end.warning());
         out.warnings.extend(near_face_warning(&out, &gated));
         out.rows.extend(closing_rows(self.offset_m, &gated, &end));
+        // Said only where a medium was met, so that captures without one keep their summaries.
+        out.rows.extend(removed.map(|r| ("medium".to_string(), r.describe())));
         Ok(out)
     }
 }
 
-/// Runs `req` on `cap` (plans and runs).
+/// Runs `req` on `cap` (plans and runs). With the default volume, a method on a volume and a capture
+/// whose early bins are a medium's response, the depth range is first searched ([`medium::search`]).
 pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Reconstruction> {
-    Plan::new(&cap, req, progress)?.run(cap, progress)
+    let (req, searched) = search_depth(&cap, req, progress)?;
+    let mut out = Plan::new(&cap, &req, progress)?.run(cap, progress)?;
+    out.rows.extend(searched.map(|line| ("depth search".to_string(), line)));
+    Ok(out)
+}
+
+/// `req` with the volume the depth search chose, and its line for the summary; `req` unchanged where
+/// no search applies.
+pub fn search_depth(
+    cap: &Capture,
+    req: &Request,
+    progress: &dyn Progress,
+) -> Result<(Request, Option<String>)> {
+    let applies = req.volume == VolumeSpec::Default
+        && req.medium.depth_search == DepthSearch::Auto
+        && req.medium.removal != MediumRemoval::Off
+        && !req.method.own_grid()
+        && Signature::measure(cap).is_medium();
+    if !applies {
+        return Ok((*req, None));
+    }
+    let whole = Plan::new(cap, req, progress)?.run(cap.clone(), progress)?;
+    let Some(found) = medium::search::choose(&whole) else {
+        return Ok((*req, None));
+    };
+    let line = found.describe(&whole.volume);
+    let mut chosen = *req;
+    if let Some(v) = found.volume {
+        chosen.volume = VolumeSpec::Given(v);
+    }
+    Ok((chosen, Some(line)))
 }
 
 fn closing_rows(offset_m: f64, gated: &GateReport, end: &EndReport) -> Vec<(String, String)> {

@@ -1,0 +1,471 @@
+//! The fit: the capture's ring-averaged medium-only bins against the table, interpolated, by a grid
+//! search over (μt, α, g) that also gives each parameter's profile and so its uncertainty.
+
+use crate::table::ResponseTable;
+use crate::Fixed;
+use murk_core::{Capture, Error, Result};
+use murk_recon::medium::detect::Signature;
+use murk_recon::pipeline::{self, Method, Options, Request, VolumeSpec};
+use rayon::prelude::*;
+
+/// Which parameters are fitted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FitParams {
+    pub mu_t: bool,
+    pub albedo: bool,
+    pub g: bool,
+}
+
+impl FitParams {
+    pub const ALL: FitParams = FitParams {
+        mu_t: true,
+        albedo: true,
+        g: true,
+    };
+
+    /// Reads a comma-separated list of `mu_t`, `albedo`, `g`.
+    pub fn parse(text: &str) -> Result<FitParams> {
+        let mut p = FitParams {
+            mu_t: false,
+            albedo: false,
+            g: false,
+        };
+        for name in text.split(',').map(str::trim) {
+            match name {
+                "mu_t" => p.mu_t = true,
+                "albedo" => p.albedo = true,
+                "g" => p.g = true,
+                other => {
+                    return Err(Error::param(format!(
+                        "fit '{other}': expected a list of mu_t, albedo, g"
+                    )))
+                }
+            }
+        }
+        Ok(p)
+    }
+
+    fn count(&self) -> usize {
+        [self.mu_t, self.albedo, self.g].iter().filter(|&&b| b).count()
+    }
+}
+
+/// One estimated parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Parameter {
+    pub value: f64,
+    /// The posterior's standard deviation over the searched grid (flat priors; the noise taken from
+    /// the residual, with neighbouring bins' correlation counted). 0 when fixed.
+    pub uncertainty: f64,
+    pub fitted: bool,
+    /// Whether the data tell the value: its uncertainty is under a sixth of the searched range (for
+    /// μt, in ln μt).
+    pub constrained: bool,
+}
+
+/// The fit's answer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    pub mu_t_per_m: Parameter,
+    pub albedo: Parameter,
+    pub g: Parameter,
+    /// Whether the capture's intensity scale is the renderer's (a murk render) or was fitted.
+    pub absolute: bool,
+    /// The medium-only bins: from the window's start to this path (m).
+    pub from_m: f64,
+    pub until_m: f64,
+    /// Ring × coarse-bin values fitted.
+    pub values_used: usize,
+    pub rings: usize,
+    /// RMS of ln(data / model) over the values used.
+    pub residual_rms: f64,
+    pub signature: Signature,
+    pub table_nodes: (usize, usize, usize),
+}
+
+impl Estimate {
+    /// One JSON object (the keys `murk medium --json` documents).
+    pub fn to_json(&self) -> String {
+        let p = |name: &str, q: &Parameter| {
+            format!(
+                "\"{name}\": {}, \"{name}_uncertainty\": {}, \"{name}_fitted\": {}, \"{name}_constrained\": {}",
+                num(q.value),
+                num(q.uncertainty),
+                q.fitted,
+                q.constrained
+            )
+        };
+        format!(
+            "{{\"medium\": true, {}, {}, {}, \"amplitude\": \"{}\", \"bins_from_m\": {}, \"bins_until_m\": {}, \"values_used\": {}, \"rings\": {}, \"residual_rms_ln\": {}, \"forward_model\": \"murk render, medium only, {}×{}×{} (μt × g × albedo) nodes\"}}",
+            p("mu_t_per_m", &self.mu_t_per_m),
+            p("albedo", &self.albedo),
+            p("g", &self.g),
+            if self.absolute { "absolute" } else { "fitted scale" },
+            num(self.from_m),
+            num(self.until_m),
+            self.values_used,
+            self.rings,
+            num(self.residual_rms),
+            self.table_nodes.0,
+            self.table_nodes.1,
+            self.table_nodes.2
+        )
+    }
+
+    /// Rows for a summary.
+    pub fn rows(&self) -> Vec<(String, String)> {
+        let p = |q: &Parameter| match (q.fitted, q.constrained) {
+            (false, _) => format!("{} (given)", murk_core::short(q.value)),
+            (true, true) => format!(
+                "{} ± {}",
+                murk_core::short(q.value),
+                murk_core::short(q.uncertainty)
+            ),
+            (true, false) => format!(
+                "{} ± {} (not constrained by these bins)",
+                murk_core::short(q.value),
+                murk_core::short(q.uncertainty)
+            ),
+        };
+        vec![
+            ("mu_t_per_m".into(), p(&self.mu_t_per_m)),
+            ("albedo".into(), p(&self.albedo)),
+            ("g".into(), p(&self.g)),
+            (
+                "bins".into(),
+                format!(
+                    "{} to {} m of path ({} ring × bin values, {} rings of laser–sensor separation)",
+                    murk_core::short(self.from_m),
+                    murk_core::short(self.until_m),
+                    self.values_used,
+                    self.rings
+                ),
+            ),
+            (
+                "fit".into(),
+                format!(
+                    "residual {:.1} % rms; intensity scale {}",
+                    100.0 * self.residual_rms,
+                    if self.absolute {
+                        "the renderer's (a murk render)"
+                    } else {
+                        "fitted"
+                    }
+                ),
+            ),
+            ("medium detected".into(), self.signature.describe()),
+        ]
+    }
+}
+
+fn num(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.6}")
+    } else {
+        "null".into()
+    }
+}
+
+/// Where the scene's own signal begins: the shortest path to the depth range that the medium-aware
+/// depth search keeps (half a metre in front of the plane where the signal focuses); without one, 30 %
+/// into the window.
+pub fn scene_onset_m(cap: &Capture) -> Result<f64> {
+    let method = Method::from_name("pf", cap.kind(), &Options::default())?;
+    let (req, _) = pipeline::search_depth(cap, &Request::new(method), &murk_core::NoProgress)?;
+    let fallback = cap.time.start_m + 0.3 * (cap.time.end_m() - cap.time.start_m);
+    Ok(match req.volume {
+        VolumeSpec::Given(v) => {
+            let onset = murk_core::window::shortest_path_m(cap, &v);
+            if onset > cap.time.start_m + 0.2 {
+                onset.min(cap.time.end_m())
+            } else {
+                fallback
+            }
+        }
+        VolumeSpec::Default => fallback,
+    })
+}
+
+/// How far off a model without signal at a value counts (its ratio to the data there).
+const NO_SIGNAL_RATIO: f64 = 1e3;
+
+/// Candidate values searched per parameter.
+const MU_STEPS: usize = 72;
+const ALBEDO_STEP: f64 = 0.01;
+const G_STEP: f64 = 0.05;
+
+/// Fits `cap`'s bins before `until_m` with `table`.
+pub fn fit(
+    cap: &Capture,
+    table: &ResponseTable,
+    until_m: f64,
+    which: &FitParams,
+    fixed: &Fixed,
+    signature: Signature,
+) -> Result<Estimate> {
+    let red = &table.reduction;
+    let data = red.reduce(cap);
+    let n = red.coarse_bins;
+    // A ring's mean over the capture's points and over the table's coarser grid agree only where the
+    // response no longer changes fast across the ring's separations: from 1.5 × its largest one.
+    let ring_max = red.ring_max_separations(cap);
+    let used: Vec<usize> = (0..red.rings())
+        .flat_map(|r| (0..n).map(move |b| (r, b)))
+        .filter(|&(r, b)| {
+            let path_m = red.path_m(cap, b);
+            path_m < until_m && path_m >= 1.5 * ring_max[r]
+        })
+        .map(|(r, b)| r * n + b)
+        .filter(|&i| data[i] > 0.0 && data[i].is_finite() && table.covers(i))
+        .collect();
+    if used.len() < 8 {
+        return Err(Error::param(format!(
+            "only {} medium-only values before {} m of path: too few to fit a medium (the window starts at {} m)",
+            used.len(),
+            murk_core::short(until_m),
+            murk_core::short(cap.time.start_m)
+        )));
+    }
+    let ln_data: Vec<f64> = used.iter().map(|&i| data[i].ln()).collect();
+    let absolute = cap.scene_info.contains("generator: murk render");
+    let range = |nodes: &[f64]| (nodes[0], nodes[nodes.len() - 1]);
+    let (mu_lo, mu_hi) = range(&table.mu_t_per_m);
+    let mus: Vec<f64> = if which.mu_t {
+        (0..MU_STEPS)
+            .map(|k| mu_lo * (mu_hi / mu_lo).powf(k as f64 / (MU_STEPS - 1) as f64))
+            .collect()
+    } else {
+        vec![fixed.mu_t_per_m]
+    };
+    let steps = |lo: f64, hi: f64, step: f64| -> Vec<f64> {
+        let k = ((hi - lo) / step).floor() as usize;
+        (0..=k).map(|i| lo + i as f64 * step).collect()
+    };
+    let albedos = if which.albedo {
+        let (lo, hi) = range(&table.albedos);
+        steps(lo, hi, ALBEDO_STEP)
+    } else {
+        vec![fixed.albedo]
+    };
+    let gs = if which.g {
+        let (lo, hi) = range(&table.g);
+        steps(lo, hi, G_STEP)
+    } else {
+        vec![fixed.g]
+    };
+    // Sum of squares at every candidate, [mu][albedo][g].
+    let ssr: Vec<f64> = mus
+        .par_iter()
+        .flat_map_iter(|&mu| {
+            let mut row = Vec::with_capacity(albedos.len() * gs.len());
+            for &a in &albedos {
+                for &g in &gs {
+                    let model = interpolate(table, mu, a, g, &used);
+                    row.push(sum_of_squares(&ln_data, &model, absolute));
+                }
+            }
+            row
+        })
+        .collect();
+    let (na, ng) = (albedos.len(), gs.len());
+    let (best, &min) = ssr
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))
+        .ok_or_else(|| Error::param("no candidate to fit"))?;
+    if !min.is_finite() {
+        return Err(Error::param(
+            "the medium's model has no signal where the capture has: no fit (is the medium inside the scene's extent?)",
+        ));
+    }
+    let (bm, ba, bg) = (best / (na * ng), (best / ng) % na, best % ng);
+    // The residuals of neighbouring bins are correlated (the table's Monte Carlo noise is smooth over
+    // a few bins, and so are model errors): the likelihood counts the effective number of
+    // independent values, N·(1 − ρ)/(1 + ρ) for a lag-one correlation ρ.
+    let best_model = interpolate(table, mus[bm], albedos[ba], gs[bg], &used);
+    let residual = residuals(&ln_data, &best_model, absolute);
+    let rho = lag_one_correlation(&residual, &used, n).clamp(0.0, 0.95);
+    let n_eff = (used.len() as f64 * (1.0 - rho) / (1.0 + rho)).max(1.0);
+    let spread = min / n_eff;
+    // The posterior over the candidate grid (flat in ln μt, α and g): its mean and standard
+    // deviation, which follow a valley of equally good fits instead of the noise's choice in it.
+    let weight: Vec<f64> = ssr
+        .iter()
+        .map(|&x| (-(x - min) / (2.0 * spread.max(f64::MIN_POSITIVE))).exp())
+        .collect();
+    let total: f64 = weight.iter().sum();
+    let moments = |value: &dyn Fn(usize) -> f64| -> (f64, f64) {
+        let mean = weight.iter().enumerate().map(|(i, w)| w * value(i)).sum::<f64>() / total;
+        let var = weight
+            .iter()
+            .enumerate()
+            .map(|(i, w)| w * (value(i) - mean).powi(2))
+            .sum::<f64>()
+            / total;
+        (mean, var.sqrt())
+    };
+    let parameter = |fitted: bool, values: &[f64], axis: usize, log: bool| -> Parameter {
+        if !fitted {
+            return Parameter {
+                value: values[0],
+                uncertainty: 0.0,
+                fitted: false,
+                constrained: true,
+            };
+        }
+        let index = |i: usize| [i / (na * ng), (i / ng) % na, i % ng][axis];
+        let (value, uncertainty) = if log {
+            let (m, sd) = moments(&|i| values[index(i)].ln());
+            (m.exp(), m.exp() * sd)
+        } else {
+            moments(&|i| values[index(i)])
+        };
+        let span = if log {
+            values[values.len() - 1].ln() - values[0].ln()
+        } else {
+            values[values.len() - 1] - values[0]
+        };
+        let relative = if log { uncertainty / value } else { uncertainty };
+        Parameter {
+            value,
+            uncertainty,
+            fitted: true,
+            constrained: relative < span / 6.0,
+        }
+    };
+    Ok(Estimate {
+        mu_t_per_m: parameter(which.mu_t, &mus, 0, true),
+        albedo: parameter(which.albedo, &albedos, 1, false),
+        g: parameter(which.g, &gs, 2, false),
+        absolute,
+        from_m: cap.time.start_m,
+        until_m: until_m.min(cap.time.end_m()),
+        values_used: used.len(),
+        rings: red.rings(),
+        residual_rms: (min / used.len() as f64).sqrt(),
+        signature,
+        table_nodes: (table.mu_t_per_m.len(), table.g.len(), table.albedos.len()),
+    })
+}
+
+/// ln(data / model) per used value, less the best common offset when the scale is free.
+fn residuals(ln_data: &[f64], model: &[f64], absolute: bool) -> Vec<f64> {
+    let diff: Vec<f64> = ln_data
+        .iter()
+        .zip(model)
+        .map(|(d, &m)| if m > 0.0 { d - m.ln() } else { NO_SIGNAL_RATIO.ln() })
+        .collect();
+    let offset = if absolute {
+        0.0
+    } else {
+        diff.iter().sum::<f64>() / diff.len() as f64
+    };
+    diff.iter().map(|x| x - offset).collect()
+}
+
+/// The correlation of residuals at neighbouring coarse bins of one ring (`used` holds ring·n + bin).
+fn lag_one_correlation(residual: &[f64], used: &[usize], n: usize) -> f64 {
+    let mean = residual.iter().sum::<f64>() / residual.len() as f64;
+    let var: f64 = residual.iter().map(|r| (r - mean).powi(2)).sum();
+    let cov: f64 = (1..used.len())
+        .filter(|&k| used[k] == used[k - 1] + 1 && used[k] % n != 0)
+        .map(|k| (residual[k] - mean) * (residual[k - 1] - mean))
+        .sum();
+    if var > 0.0 {
+        cov / var
+    } else {
+        0.0
+    }
+}
+
+/// Σ (ln data − ln model)², less the best common offset when the scale is free; a model without
+/// signal at a value counts as off by a factor of [`NO_SIGNAL_RATIO`] there.
+fn sum_of_squares(ln_data: &[f64], model: &[f64], absolute: bool) -> f64 {
+    let floor = NO_SIGNAL_RATIO.ln();
+    let diff = ln_data.iter().zip(model).map(|(d, &m)| {
+        if m > 0.0 && m.is_finite() {
+            d - m.ln()
+        } else {
+            floor
+        }
+    });
+    let offset = if absolute {
+        0.0
+    } else {
+        diff.clone().sum::<f64>() / ln_data.len() as f64
+    };
+    diff.map(|x| (x - offset).powi(2)).sum()
+}
+
+/// The table's response at (mu, albedo, g) for the reduced values `used`: linear in albedo (a
+/// polynomial of low order there), and ln(response) bilinear in ln μt and g where every corner is
+/// positive (linear otherwise). ln-linear in g follows the phase function's steep change: at
+/// backscatter HG falls from 1 (g = 0) to 0.31 (g = 0.4) of isotropic, and a linear interpolation
+/// is 17 % off at g = 0.2 where the ln-linear one is 0.6 % off.
+fn interpolate(table: &ResponseTable, mu: f64, albedo: f64, g: f64, used: &[usize]) -> Vec<f64> {
+    let (m0, m1, wm) = bracket(&table.mu_t_per_m, mu, true);
+    let (a0, a1, wa) = bracket(&table.albedos, albedo, false);
+    let (g0, g1, wg) = bracket(&table.g, g, false);
+    let at = |m: usize, g: usize| -> Vec<f64> {
+        let (lo, hi) = (table.node(m, g, a0), table.node(m, g, a1));
+        used.iter()
+            .map(|&i| (1.0 - wa) * lo[i] + wa * hi[i])
+            .collect()
+    };
+    let corners = [
+        (at(m0, g0), (1.0 - wm) * (1.0 - wg)),
+        (at(m0, g1), (1.0 - wm) * wg),
+        (at(m1, g0), wm * (1.0 - wg)),
+        (at(m1, g1), wm * wg),
+    ];
+    (0..used.len())
+        .map(|k| {
+            if corners.iter().all(|(v, _)| v[k] > 0.0) {
+                corners.iter().map(|(v, w)| w * v[k].ln()).sum::<f64>().exp()
+            } else {
+                corners.iter().map(|(v, w)| w * v[k]).sum()
+            }
+        })
+        .collect()
+}
+
+/// The nodes around `x` (clamped to the range) and the weight of the upper one; `log`: in ln x.
+fn bracket(nodes: &[f64], x: f64, log: bool) -> (usize, usize, f64) {
+    if nodes.len() == 1 {
+        return (0, 0, 0.0);
+    }
+    let k = nodes
+        .iter()
+        .position(|&v| v > x)
+        .unwrap_or(nodes.len())
+        .clamp(1, nodes.len() - 1);
+    let (a, b) = (nodes[k - 1], nodes[k]);
+    let f = |v: f64| if log { v.ln() } else { v };
+    let w = ((f(x) - f(a)) / (f(b) - f(a))).clamp(0.0, 1.0);
+    (k - 1, k, w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bracket_finds_neighbours_and_weights() {
+        let n = [1.0, 2.0, 4.0];
+        assert_eq!(bracket(&n, 3.0, false), (1, 2, 0.5));
+        let (a, b, w) = bracket(&n, 2.0f64.sqrt() * 2.0, true);
+        assert_eq!((a, b), (1, 2));
+        assert!((w - 0.5).abs() < 1e-12);
+        assert_eq!(bracket(&n, 9.0, false), (1, 2, 1.0));
+        assert_eq!(bracket(&n, 0.1, false), (0, 1, 0.0));
+        assert_eq!(bracket(&[0.5], 3.0, false), (0, 0, 0.0));
+    }
+
+    #[test]
+    fn fit_params_parse() {
+        assert_eq!(FitParams::parse("mu_t,albedo,g").unwrap(), FitParams::ALL);
+        let p = FitParams::parse("mu_t").unwrap();
+        assert!(p.mu_t && !p.albedo && !p.g);
+        assert!(FitParams::parse("mu_s").is_err());
+    }
+}

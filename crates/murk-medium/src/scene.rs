@@ -1,0 +1,72 @@
+//! The capture's own scene with every object removed: what the renderer draws as the medium's
+//! response alone.
+
+use murk_core::{Capture, Error, Result};
+
+/// The resolved scene TOML that `murk render` stored in the capture's `scene_info`, without its
+/// `[[object]]` tables. The medium's values in it are replaced by the table's; only the geometry
+/// (relay, capture layout, time axis, the medium's extent) is used.
+pub fn medium_only(cap: &Capture) -> Result<String> {
+    let text = stored_scene(&cap.scene_info).ok_or_else(|| {
+        Error::param(
+            "the capture carries no scene description (scene_info.scene, which murk render writes): the medium's forward model needs the relay, the capture layout and the medium's extent; captures from other sources are not supported yet",
+        )
+    })?;
+    let mut table: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| Error::param(format!("scene_info.scene: {}", e.message())))?;
+    table.remove("object");
+    if !table.contains_key("medium") {
+        return Err(Error::param(
+            "scene_info.scene has no [medium] table: the extent of the medium is unknown",
+        ));
+    }
+    toml::to_string(&table).map_err(|e| Error::param(format!("scene_info.scene: {e}")))
+}
+
+/// The block under `scene: |` in `scene_info` (YAML literal block, indented by two spaces).
+fn stored_scene(scene_info: &str) -> Option<String> {
+    let mut lines = scene_info.lines().skip_while(|l| l.trim_end() != "scene: |");
+    lines.next()?;
+    let body: Vec<&str> = lines
+        .take_while(|l| l.is_empty() || l.starts_with("  "))
+        .map(|l| l.strip_prefix("  ").unwrap_or(""))
+        .collect();
+    (!body.is_empty()).then(|| body.join("\n"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_stored_scene_is_read_and_its_objects_dropped() {
+        let info = "generator: murk render\nscene: |\n  [medium]\n  mu_t = 1.0\n  \n  [[object]]\n  shape = \"quad\"\n  [relay]\n  kind = \"wall\"\nalbedo: 0.5\n";
+        let text = stored_scene(info).unwrap();
+        assert!(text.starts_with("[medium]\nmu_t = 1.0\n"));
+        assert!(!text.contains("albedo: 0.5"));
+        let cap = Capture {
+            scene_info: info.to_string(),
+            ..murk_core::Capture::confocal(
+                murk_core::PointSet::wall_grid(murk_core::DVec3::ZERO, 1.0, 1.0, 2, 2),
+                murk_core::TimeAxis {
+                    start_m: 0.0,
+                    bin_width_m: 0.01,
+                    bins: 4,
+                },
+                vec![0.0; 16],
+                String::new(),
+            )
+        };
+        let only = medium_only(&cap).unwrap();
+        assert!(only.contains("[medium]") && only.contains("[relay]") && !only.contains("object"));
+        let none = Capture {
+            scene_info: "generator: murk synth\n".into(),
+            ..cap
+        };
+        assert!(medium_only(&none)
+            .unwrap_err()
+            .to_string()
+            .contains("no scene description"));
+    }
+}

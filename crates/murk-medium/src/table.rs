@@ -1,0 +1,235 @@
+//! The medium-only responses that the fit interpolates: the capture's geometry without objects,
+//! rendered once per (μt, g) of a grid, each render an albedo sweep, reduced to ring means.
+
+use crate::fit::FitParams;
+use crate::Fixed;
+use murk_core::{Capture, Error, Result};
+use murk_render::{Overrides, Plan, RenderOptions, Scene};
+use rayon::prelude::*;
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::Duration;
+
+/// How the table is rendered.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableSpec {
+    /// The render's grid side (the capture's own extent, fewer points: rings average them).
+    pub grid: usize,
+    pub spp: u64,
+    pub seed: u64,
+    /// μt nodes (1/m), ascending; the fit interpolates ln(response) linearly in ln μt.
+    pub mu_t_per_m: Vec<f64>,
+    /// g nodes, ascending.
+    pub g: Vec<f64>,
+    /// Albedo nodes of each render's sweep, ascending (at most 16).
+    pub albedos: Vec<f64>,
+}
+
+impl Default for TableSpec {
+    fn default() -> TableSpec {
+        TableSpec {
+            grid: 8,
+            spp: 64,
+            seed: 0,
+            mu_t_per_m: (0..12).map(|i| 0.25 * 1.35f64.powi(i)).collect(),
+            g: vec![-0.8, -0.4, 0.0, 0.4, 0.8],
+            albedos: (0..16).map(|i| 0.04 + 0.063 * i as f64).collect(),
+        }
+    }
+}
+
+/// Rings of laser–sensor separation and coarse bins: how a capture is reduced before fitting.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reduction {
+    /// Upper separation (m) of each ring but the last.
+    pub edges: Vec<f64>,
+    /// Capture bins per coarse bin.
+    pub per_bin: usize,
+    pub coarse_bins: usize,
+}
+
+/// Rings and coarse bins of at least this path (m).
+const RINGS: usize = 4;
+const COARSE_M: f64 = 0.02;
+
+impl Reduction {
+    /// Rings at the quartiles of `cap`'s separations; coarse bins of at least 2 cm of path.
+    pub fn of(cap: &Capture) -> Reduction {
+        let mut sep = separations(cap);
+        sep.sort_by(f64::total_cmp);
+        let mut edges: Vec<f64> = (1..RINGS).map(|r| sep[r * sep.len() / RINGS]).collect();
+        edges.dedup();
+        let per_bin = ((COARSE_M / cap.time.bin_width_m).ceil() as usize).max(1);
+        Reduction {
+            edges,
+            per_bin,
+            coarse_bins: cap.time.bins / per_bin,
+        }
+    }
+
+    pub fn rings(&self) -> usize {
+        self.edges.len() + 1
+    }
+
+    /// Ring means over coarse bins, `[ring][bin]` flattened; NaN for a ring without histograms.
+    pub fn reduce(&self, cap: &Capture) -> Vec<f64> {
+        let n = self.coarse_bins;
+        let mut sum = vec![0.0f64; self.rings() * n];
+        let mut count = vec![0usize; self.rings()];
+        for (i, d) in separations(cap).into_iter().enumerate() {
+            let r = self.edges.iter().take_while(|&&e| d >= e).count();
+            count[r] += 1;
+            let h = cap.histogram(i);
+            for (b, s) in sum[r * n..(r + 1) * n].iter_mut().enumerate() {
+                *s += h[b * self.per_bin..(b + 1) * self.per_bin]
+                    .iter()
+                    .map(|&v| v as f64)
+                    .sum::<f64>();
+            }
+        }
+        for (r, &c) in count.iter().enumerate() {
+            for s in &mut sum[r * n..(r + 1) * n] {
+                *s = if c > 0 { *s / c as f64 } else { f64::NAN };
+            }
+        }
+        sum
+    }
+
+    /// The largest separation (m) of `cap`'s histograms in each ring.
+    pub fn ring_max_separations(&self, cap: &Capture) -> Vec<f64> {
+        let mut max = vec![0.0f64; self.rings()];
+        for d in separations(cap) {
+            let r = self.edges.iter().take_while(|&&e| d >= e).count();
+            max[r] = max[r].max(d);
+        }
+        max
+    }
+
+    /// The path (m) at the middle of coarse bin `b` of `cap`.
+    pub fn path_m(&self, cap: &Capture, b: usize) -> f64 {
+        cap.time.start_m + (b as f64 + 0.5) * self.per_bin as f64 * cap.time.bin_width_m
+    }
+}
+
+fn separations(cap: &Capture) -> Vec<f64> {
+    (0..cap.n_hist())
+        .map(|i| {
+            let (l, s) = cap.hist_pair(i);
+            cap.illum.points[l].distance(cap.sensor.points[s])
+        })
+        .collect()
+}
+
+/// Reduced medium-only responses on the (μt, g, albedo) grid.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResponseTable {
+    pub mu_t_per_m: Vec<f64>,
+    pub g: Vec<f64>,
+    pub albedos: Vec<f64>,
+    pub reduction: Reduction,
+    pub spec: TableSpec,
+    /// `[mu][g][albedo][ring][bin]` flattened.
+    values: Vec<f64>,
+}
+
+impl ResponseTable {
+    /// Renders `scene_text` (a medium-only scene of `cap`'s geometry) at every node. A parameter that
+    /// is not fitted gets one node, its fixed value.
+    pub fn build(
+        scene_text: &str,
+        cap: &Capture,
+        spec: &TableSpec,
+        fit: &FitParams,
+        fixed: &Fixed,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<ResponseTable> {
+        let mu_t = if fit.mu_t {
+            spec.mu_t_per_m.clone()
+        } else {
+            vec![fixed.mu_t_per_m]
+        };
+        let g = if fit.g { spec.g.clone() } else { vec![fixed.g] };
+        let albedos = if fit.albedo {
+            spec.albedos.clone()
+        } else {
+            vec![fixed.albedo]
+        };
+        let reduction = Reduction::of(cap);
+        let nodes: Vec<(f64, f64)> = mu_t
+            .iter()
+            .flat_map(|&m| g.iter().map(move |&g| (m, g)))
+            .collect();
+        let done = AtomicUsize::new(0);
+        progress(0, nodes.len());
+        let rendered: Vec<Vec<f64>> = nodes
+            .par_iter()
+            .map(|&(m, gv)| {
+                let out = render_node(scene_text, cap, spec, &albedos, m, gv, &reduction);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, nodes.len());
+                out
+            })
+            .collect::<Result<_>>()?;
+        Ok(ResponseTable {
+            mu_t_per_m: mu_t,
+            g,
+            albedos,
+            reduction,
+            spec: spec.clone(),
+            values: rendered.concat(),
+        })
+    }
+
+    /// Whether reduced value `i` has signal at nine in ten of the table's nodes or more: where the
+    /// renders hold no paths the model cannot be compared.
+    pub fn covers(&self, i: usize) -> bool {
+        let per = self.reduction.rings() * self.reduction.coarse_bins;
+        let nodes = self.values.len() / per;
+        let lit = (0..nodes).filter(|k| self.values[k * per + i] > 0.0).count();
+        lit * 10 >= nodes * 9
+    }
+
+    /// The reduced response at node (mu, g, albedo): `[ring][bin]`.
+    pub fn node(&self, mu: usize, g: usize, albedo: usize) -> &[f64] {
+        let per = self.reduction.rings() * self.reduction.coarse_bins;
+        let i = (mu * self.g.len() + g) * self.albedos.len() + albedo;
+        &self.values[i * per..(i + 1) * per]
+    }
+}
+
+/// One (μt, g) node: the sweep's captures reduced, albedo after albedo.
+fn render_node(
+    scene_text: &str,
+    cap: &Capture,
+    spec: &TableSpec,
+    albedos: &[f64],
+    mu_t: f64,
+    g: f64,
+    reduction: &Reduction,
+) -> Result<Vec<f64>> {
+    let top = albedos.iter().copied().fold(0.0, f64::max);
+    let ov = Overrides {
+        grid: Some(spec.grid),
+        bins: None,
+        set: vec![
+            format!("medium.mu_t={mu_t}"),
+            format!("medium.g={g}"),
+            format!("medium.albedo={top}"),
+        ],
+    };
+    let scene = Scene::from_str(scene_text, Path::new("scene_info.scene"), &ov)?;
+    if !scene.capture.time.same_as_stored(&cap.time) {
+        return Err(Error::param(
+            "scene_info.scene's time axis differs from the capture's: the capture was changed after rendering",
+        ));
+    }
+    let plan = Plan::sweep(&scene, albedos)?;
+    let opt = RenderOptions {
+        spp: spec.spp,
+        seed: spec.seed,
+        shard: None,
+        checkpoint: None,
+        checkpoint_every: Duration::from_secs(3600),
+    };
+    let caps = plan.render_all_until(&opt, &|_, _| {}, &AtomicBool::new(false))?;
+    Ok(caps.iter().flat_map(|c| reduction.reduce(c)).collect())
+}

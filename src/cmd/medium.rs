@@ -1,0 +1,91 @@
+//! `murk medium`: the medium's μt, albedo and g estimated from a capture's medium-only bins.
+
+use crate::cmd::progress::{say, Bar};
+use anyhow::Context;
+use clap::Args;
+use murk_medium::{EstimateOptions, FitParams, Fixed, Outcome};
+use murk_recon::Progress;
+use std::path::PathBuf;
+
+#[derive(Args)]
+#[command(after_help = "Examples:\n  \
+murk medium fog.h5\n  \
+murk medium fog.h5 --json                       # one JSON object: mu_t_per_m, albedo, g, their uncertainties, …\n  \
+murk medium fog.h5 --fit mu_t,albedo --g 0.7    # g known: fit the other two\n  \
+murk medium fog.h5 --until 3.5                  # the medium-only bins end at 3.5 m of path\n\n\
+The forward model is murk's renderer: the capture's own scene (its scene_info, as murk render writes it)\n\
+without objects, rendered on a grid of μt × g nodes, each an albedo sweep, and interpolated. The fit\n\
+compares ring means (rings of equal laser–sensor separation) over 2 cm bins, from the window's start\n\
+to where the scene's own signal begins (the medium-aware depth search of `murk reconstruct`), in\n\
+ln(intensity). Uncertainties: the range where the sum of squares stays within one residual variance\n\
+of its minimum, the other parameters re-fitted. A capture without a medium answers 'no medium\n\
+detected'. docs/medium.md has the accuracy over the paper's sweep.")]
+pub struct MediumArgs {
+    /// A y-tal HDF5 capture rendered by murk.
+    pub file: PathBuf,
+    /// Print one JSON object instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+    /// The parameters to fit (comma-separated of mu_t, albedo, g); the others take --mu-t, --albedo, --g.
+    #[arg(long, default_value = "mu_t,albedo,g")]
+    pub fit: String,
+    /// μt (1/m) when it is not fitted.
+    #[arg(long = "mu-t", default_value_t = 1.0)]
+    pub mu_t_per_m: f64,
+    /// Albedo when it is not fitted.
+    #[arg(long, default_value_t = 0.5)]
+    pub albedo: f64,
+    /// HG g when it is not fitted.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub g: f64,
+    /// The last path (m) of the medium-only bins (default: where the scene's signal begins).
+    #[arg(long, value_name = "PATH_M")]
+    pub until: Option<f64>,
+}
+
+pub fn run(a: MediumArgs, quiet: bool) -> anyhow::Result<()> {
+    let cap = murk_io::read_capture(&a.file)?;
+    let opt = EstimateOptions {
+        fit: FitParams::parse(&a.fit).context("--fit")?,
+        fixed: Fixed {
+            mu_t_per_m: a.mu_t_per_m,
+            albedo: a.albedo,
+            g: a.g,
+        },
+        until_m: a.until,
+        ..EstimateOptions::default()
+    };
+    let bar = Bar::new("medium", quiet || a.json);
+    let t0 = std::time::Instant::now();
+    let outcome = murk_medium::estimate(&cap, &opt, &|done, total| {
+        if done == 0 {
+            bar.start(total as u64);
+        } else {
+            bar.advance(1);
+        }
+    })
+    .with_context(|| a.file.display().to_string())?;
+    bar.finish();
+    let secs = t0.elapsed().as_secs_f64();
+    match outcome {
+        Outcome::NoMedium(s) => {
+            if a.json {
+                println!(
+                    "{{\"medium\": false, \"reason\": \"no medium detected: {}\"}}",
+                    s.describe()
+                );
+            } else {
+                say(quiet, format!("no medium detected: {}", s.describe()));
+            }
+        }
+        Outcome::Fitted(e) if a.json => println!("{}", e.to_json()),
+        Outcome::Fitted(e) => {
+            say(quiet, format!("  capture: {}", a.file.display()));
+            for (k, v) in e.rows() {
+                say(quiet, format!("  {k}: {v}"));
+            }
+            say(quiet, format!("  seconds: {secs:.1}"));
+        }
+    }
+    Ok(())
+}
