@@ -80,6 +80,7 @@ __all__ = [
     "render_albedos",
     "merge",
     "reconstruct",
+    "estimate_medium",
     "Error",
     "InputError",
     "FileError",
@@ -415,6 +416,37 @@ def reconstruct(
     )
     x, y, z = axes
     return Reconstruction(intensity, x, y, z, dict(rows), list(warnings))
+
+
+def estimate_medium(
+    capture: Union[Capture, str, os.PathLike],
+    *,
+    fit: Sequence[str] = ("mu_t", "albedo", "g"),
+    mu_t: float = 1.0,
+    albedo: float = 0.5,
+    g: float = 0.0,
+    until: Optional[float] = None,
+    threads: Optional[int] = None,
+    progress: Progress = None,
+) -> Dict[str, Any]:
+    """Estimates the medium of a capture rendered by murk, as ``murk medium --json`` does: a dict
+    with ``medium`` (False when none is detected, with a ``reason``), and otherwise ``mu_t_per_m``,
+    ``albedo``, ``g``, each with ``_uncertainty``, ``_fitted`` and ``_constrained``, the bins used
+    and the fit's residual. ``fit`` names the parameters to fit; the others take ``mu_t``,
+    ``albedo`` and ``g``. ``until``: the last path (m) of the medium-only bins (default: where the
+    scene's own signal begins).
+
+    >>> m = murk.estimate_medium("fog.h5")
+    >>> m["mu_t_per_m"], m["albedo"], m["g_constrained"]
+    """
+    import json
+
+    text = _murk.estimate_medium(
+        capture if isinstance(capture, Capture) else _path(capture, "capture"),
+        ",".join(fit), float(mu_t), float(albedo), float(g), until, threads,
+        _progress(progress, "medium"),
+    )
+    return json.loads(text)
 
 
 def __getattr__(name):

@@ -2,6 +2,7 @@
 //! these functions (defaults, progress bars, Dask); every computation is the crates' own code.
 
 mod capture;
+mod medium;
 mod ops;
 mod recon;
 
@@ -208,6 +209,7 @@ fn _murk(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ops::study_plan, m)?)?;
     m.add_function(wrap_pyfunction!(ops::run_study, m)?)?;
     m.add_function(wrap_pyfunction!(recon::reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(medium::estimate_medium, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

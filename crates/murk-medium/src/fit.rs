@@ -44,10 +44,6 @@ impl FitParams {
         }
         Ok(p)
     }
-
-    fn count(&self) -> usize {
-        [self.mu_t, self.albedo, self.g].iter().filter(|&&b| b).count()
-    }
 }
 
 /// One estimated parameter.
@@ -167,22 +163,18 @@ fn num(v: f64) -> String {
 }
 
 /// Where the scene's own signal begins: the shortest path to the depth range that the medium-aware
-/// depth search keeps (half a metre in front of the plane where the signal focuses); without one, 30 %
-/// into the window.
+/// depth search keeps (half a metre in front of the plane where the signal focuses), but no earlier
+/// than a fifth into the window: in dense media the search can stop at an artefact near the wall, and
+/// a fit needs the bins. Without a search result, 30 % into the window.
 pub fn scene_onset_m(cap: &Capture) -> Result<f64> {
     let method = Method::from_name("pf", cap.kind(), &Options::default())?;
     let (req, _) = pipeline::search_depth(cap, &Request::new(method), &murk_core::NoProgress)?;
-    let fallback = cap.time.start_m + 0.3 * (cap.time.end_m() - cap.time.start_m);
+    let (start, span) = (cap.time.start_m, cap.time.end_m() - cap.time.start_m);
     Ok(match req.volume {
-        VolumeSpec::Given(v) => {
-            let onset = murk_core::window::shortest_path_m(cap, &v);
-            if onset > cap.time.start_m + 0.2 {
-                onset.min(cap.time.end_m())
-            } else {
-                fallback
-            }
-        }
-        VolumeSpec::Default => fallback,
+        VolumeSpec::Given(v) => murk_core::window::shortest_path_m(cap, &v)
+            .max(start + 0.2 * span)
+            .min(cap.time.end_m()),
+        VolumeSpec::Default => start + 0.3 * span,
     })
 }
 
@@ -325,6 +317,17 @@ pub fn fit(
         } else {
             values[values.len() - 1] - values[0]
         };
+        // No finer than the searched grid: half its step.
+        let step = if values.len() > 1 {
+            if log {
+                value * (values[1] / values[0] - 1.0)
+            } else {
+                values[1] - values[0]
+            }
+        } else {
+            0.0
+        };
+        let uncertainty = uncertainty.max(step / 2.0);
         let relative = if log { uncertainty / value } else { uncertainty };
         Parameter {
             value,
@@ -398,14 +401,16 @@ fn sum_of_squares(ln_data: &[f64], model: &[f64], absolute: bool) -> f64 {
 }
 
 /// The table's response at (mu, albedo, g) for the reduced values `used`: linear in albedo (a
-/// polynomial of low order there), and ln(response) bilinear in ln μt and g where every corner is
-/// positive (linear otherwise). ln-linear in g follows the phase function's steep change: at
-/// backscatter HG falls from 1 (g = 0) to 0.31 (g = 0.4) of isotropic, and a linear interpolation
-/// is 17 % off at g = 0.2 where the ln-linear one is 0.6 % off.
+/// polynomial of low order there), and ln(response) bilinear in ln μt and in [`backscatter_ln`]`(g)`
+/// where every corner is positive (linear otherwise). The latter makes the once-scattered light of
+/// a backward-looking capture, proportional to the phase function at backscatter, exact between g
+/// nodes: HG there falls from 1 (g = 0) to 0.31 (g = 0.4) and 0.06 (g = 0.8) of isotropic, and
+/// linear weights in g were 17 % off at g = 0.2 and 12 % at g = 0.7.
 fn interpolate(table: &ResponseTable, mu: f64, albedo: f64, g: f64, used: &[usize]) -> Vec<f64> {
     let (m0, m1, wm) = bracket(&table.mu_t_per_m, mu, true);
     let (a0, a1, wa) = bracket(&table.albedos, albedo, false);
-    let (g0, g1, wg) = bracket(&table.g, g, false);
+    let backscatter: Vec<f64> = table.g.iter().map(|&g| backscatter_ln(g)).collect();
+    let (g0, g1, wg) = bracket(&backscatter, backscatter_ln(g), false);
     let at = |m: usize, g: usize| -> Vec<f64> {
         let (lo, hi) = (table.node(m, g, a0), table.node(m, g, a1));
         used.iter()
@@ -427,6 +432,12 @@ fn interpolate(table: &ResponseTable, mu: f64, albedo: f64, g: f64, used: &[usiz
             }
         })
         .collect()
+}
+
+/// ln of the Henyey–Greenstein phase function at backscatter relative to isotropic, (1 − g)/(1 + g)²,
+/// negated so that it grows with g.
+fn backscatter_ln(g: f64) -> f64 {
+    2.0 * (1.0 + g).ln() - (1.0 - g).ln()
 }
 
 /// The nodes around `x` (clamped to the range) and the weight of the upper one; `log`: in ln x.

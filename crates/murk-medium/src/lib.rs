@@ -38,6 +38,24 @@ pub struct Fixed {
     pub g: f64,
 }
 
+impl Fixed {
+    /// Refuses values no medium has: μt ≤ 0 or beyond murk's limit, an albedo outside (0, 1], |g| ≥ 1.
+    pub fn validate(&self) -> Result<()> {
+        murk_core::Limits::extinction(self.mu_t_per_m)
+            .map_err(|e| Error::param(format!("μt {e}")))?;
+        if !(self.mu_t_per_m > 0.0) {
+            return Err(Error::param(format!("μt must be > 0, got {}", self.mu_t_per_m)));
+        }
+        if !(self.albedo > 0.0 && self.albedo <= 1.0) {
+            return Err(Error::param(format!("albedo must be in (0, 1], got {}", self.albedo)));
+        }
+        if !(self.g.abs() < 1.0) {
+            return Err(Error::param(format!("g must be in (−1, 1), got {}", self.g)));
+        }
+        Ok(())
+    }
+}
+
 impl Default for EstimateOptions {
     fn default() -> EstimateOptions {
         EstimateOptions {
@@ -66,13 +84,24 @@ pub fn estimate(
     opt: &EstimateOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Outcome> {
+    Ok(estimate_with(cap, opt, None, progress)?.0)
+}
+
+/// As [`estimate`], with a table built before for captures of the same geometry (plan once, fit
+/// many): `table` is used when it matches `cap`'s geometry and `opt`, else a new one is built. The
+/// table used comes back for the next capture.
+pub fn estimate_with(
+    cap: &Capture,
+    opt: &EstimateOptions,
+    table: Option<ResponseTable>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(Outcome, Option<ResponseTable>)> {
     cap.validate_data()?;
+    opt.fixed.validate()?;
     let signature = Signature::measure(cap);
     if !signature.is_medium() {
-        return Ok(Outcome::NoMedium(signature));
+        return Ok((Outcome::NoMedium(signature), table));
     }
-    let scene_text = scene::medium_only(cap)?;
-    let table = ResponseTable::build(&scene_text, cap, &opt.table, &opt.fit, &opt.fixed, progress)?;
     let until_m = match opt.until_m {
         Some(u) if u > cap.time.start_m => u,
         Some(u) => {
@@ -83,7 +112,11 @@ pub fn estimate(
         }
         None => fit::scene_onset_m(cap)?,
     };
-    Ok(Outcome::Fitted(Box::new(fit::fit(
-        cap, &table, until_m, &opt.fit, &opt.fixed, signature,
-    )?)))
+    let scene_text = scene::medium_only(cap)?;
+    let table = match table.filter(|t| t.serves(&scene_text, cap, opt)) {
+        Some(t) => t,
+        None => ResponseTable::build(&scene_text, cap, opt, progress)?,
+    };
+    let fitted = fit::fit(cap, &table, until_m, &opt.fit, &opt.fixed, signature)?;
+    Ok((Outcome::Fitted(Box::new(fitted)), Some(table)))
 }

@@ -16,11 +16,16 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
         .parse()
         .map_err(|e: toml::de::Error| Error::param(format!("scene_info.scene: {}", e.message())))?;
     table.remove("object");
-    if !table.contains_key("medium") {
+    let Some(toml::Value::Table(medium)) = table.get_mut("medium") else {
         return Err(Error::param(
             "scene_info.scene has no [medium] table: the extent of the medium is unknown",
         ));
-    }
+    };
+    // The medium's own values are the table's to set; placeholders keep captures of one geometry
+    // with different media on one table (and keep the truth out of the estimate).
+    medium.insert("mu_t".into(), toml::Value::Float(1.0));
+    medium.insert("albedo".into(), toml::Value::Float(0.5));
+    medium.insert("g".into(), toml::Value::Float(0.0));
     toml::to_string(&table).map_err(|e| Error::param(format!("scene_info.scene: {e}")))
 }
 

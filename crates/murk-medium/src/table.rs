@@ -1,8 +1,7 @@
 //! The medium-only responses that the fit interpolates: the capture's geometry without objects,
 //! rendered once per (μt, g) of a grid, each render an albedo sweep, reduced to ring means.
 
-use crate::fit::FitParams;
-use crate::Fixed;
+use crate::EstimateOptions;
 use murk_core::{Capture, Error, Result};
 use murk_render::{Overrides, Plan, RenderOptions, Scene};
 use rayon::prelude::*;
@@ -29,7 +28,7 @@ impl Default for TableSpec {
     fn default() -> TableSpec {
         TableSpec {
             grid: 8,
-            spp: 64,
+            spp: 256,
             seed: 0,
             mu_t_per_m: (0..12).map(|i| 0.25 * 1.35f64.powi(i)).collect(),
             g: vec![-0.8, -0.4, 0.0, 0.4, 0.8],
@@ -46,16 +45,19 @@ pub struct Reduction {
     /// Capture bins per coarse bin.
     pub per_bin: usize,
     pub coarse_bins: usize,
+    /// The capture's laser–sensor separation (m) per histogram.
+    separations: Vec<f64>,
 }
 
 /// Rings and coarse bins of at least this path (m).
-const RINGS: usize = 4;
-const COARSE_M: f64 = 0.02;
+const RINGS: usize = 1;
+const COARSE_M: f64 = 0.1;
 
 impl Reduction {
-    /// Rings at the quartiles of `cap`'s separations; coarse bins of at least 2 cm of path.
+    /// Rings at the quartiles of `cap`'s separations; coarse bins of at least 10 cm of path.
     pub fn of(cap: &Capture) -> Reduction {
-        let mut sep = separations(cap);
+        let all = separations(cap);
+        let mut sep = all.clone();
         sep.sort_by(f64::total_cmp);
         let mut edges: Vec<f64> = (1..RINGS).map(|r| sep[r * sep.len() / RINGS]).collect();
         edges.dedup();
@@ -64,7 +66,80 @@ impl Reduction {
             edges,
             per_bin,
             coarse_bins: cap.time.bins / per_bin,
+            separations: all,
         }
+    }
+
+    fn ring_of(&self, d: f64) -> usize {
+        self.edges.iter().take_while(|&&e| d >= e).count()
+    }
+
+    /// The coarse bins of histogram `i` of `cap`, added to `out`.
+    fn add_coarse(&self, cap: &Capture, i: usize, out: &mut [f64]) {
+        let h = cap.histogram(i);
+        for (b, s) in out.iter_mut().enumerate() {
+            *s += h[b * self.per_bin..(b + 1) * self.per_bin]
+                .iter()
+                .map(|&v| v as f64)
+                .sum::<f64>();
+        }
+    }
+
+    /// A render of the same extent on a coarser grid, reduced to the capture's rings: each of the
+    /// capture's histograms takes the render's response at its own separation (linear between the
+    /// render's distinct separations, the nearest beyond them), and a ring averages those. A plain
+    /// ring mean of the render would weigh its few separations, not the capture's, and the response
+    /// changes with the separation.
+    pub fn reduce_model(&self, render: &Capture) -> Vec<f64> {
+        let n = self.coarse_bins;
+        // The render's distinct separations (to a micrometre) with their mean coarse histograms.
+        let mut by_sep: Vec<(f64, usize)> = separations(render)
+            .into_iter()
+            .enumerate()
+            .map(|(i, d)| (d, i))
+            .collect();
+        by_sep.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut distinct: Vec<f64> = Vec::new();
+        let mut curves: Vec<Vec<f64>> = Vec::new();
+        let mut counts: Vec<usize> = Vec::new();
+        for (d, i) in by_sep {
+            if distinct.last().is_none_or(|&last| d - last > 1e-6) {
+                distinct.push(d);
+                curves.push(vec![0.0; n]);
+                counts.push(0);
+            }
+            let k = distinct.len() - 1;
+            self.add_coarse(render, i, &mut curves[k]);
+            counts[k] += 1;
+        }
+        for (c, &k) in curves.iter_mut().zip(&counts) {
+            c.iter_mut().for_each(|v| *v /= k as f64);
+        }
+        let mut weights = vec![vec![0.0f64; distinct.len()]; self.rings()];
+        let mut members = vec![0usize; self.rings()];
+        for &d in &self.separations {
+            let r = self.ring_of(d);
+            members[r] += 1;
+            let k = distinct.partition_point(|&x| x <= d);
+            if k == 0 {
+                weights[r][0] += 1.0;
+            } else if k == distinct.len() {
+                weights[r][k - 1] += 1.0;
+            } else {
+                let w = (d - distinct[k - 1]) / (distinct[k] - distinct[k - 1]);
+                weights[r][k - 1] += 1.0 - w;
+                weights[r][k] += w;
+            }
+        }
+        let mut out = vec![0.0f64; self.rings() * n];
+        for (r, w) in weights.iter().enumerate() {
+            for (c, &wk) in curves.iter().zip(w) {
+                for (o, &v) in out[r * n..(r + 1) * n].iter_mut().zip(c) {
+                    *o += wk * v / members[r].max(1) as f64;
+                }
+            }
+        }
+        out
     }
 
     pub fn rings(&self) -> usize {
@@ -77,15 +152,9 @@ impl Reduction {
         let mut sum = vec![0.0f64; self.rings() * n];
         let mut count = vec![0usize; self.rings()];
         for (i, d) in separations(cap).into_iter().enumerate() {
-            let r = self.edges.iter().take_while(|&&e| d >= e).count();
+            let r = self.ring_of(d);
             count[r] += 1;
-            let h = cap.histogram(i);
-            for (b, s) in sum[r * n..(r + 1) * n].iter_mut().enumerate() {
-                *s += h[b * self.per_bin..(b + 1) * self.per_bin]
-                    .iter()
-                    .map(|&v| v as f64)
-                    .sum::<f64>();
-            }
+            self.add_coarse(cap, i, &mut sum[r * n..(r + 1) * n]);
         }
         for (r, &c) in count.iter().enumerate() {
             for s in &mut sum[r * n..(r + 1) * n] {
@@ -99,7 +168,7 @@ impl Reduction {
     pub fn ring_max_separations(&self, cap: &Capture) -> Vec<f64> {
         let mut max = vec![0.0f64; self.rings()];
         for d in separations(cap) {
-            let r = self.edges.iter().take_while(|&&e| d >= e).count();
+            let r = self.ring_of(d);
             max[r] = max[r].max(d);
         }
         max
@@ -128,6 +197,8 @@ pub struct ResponseTable {
     pub albedos: Vec<f64>,
     pub reduction: Reduction,
     pub spec: TableSpec,
+    /// What it was built for: the medium-only scene, the capture's time axis and the options.
+    built_for: (String, murk_core::TimeAxis, EstimateOptions),
     /// `[mu][g][albedo][ring][bin]` flattened.
     values: Vec<f64>,
 }
@@ -138,11 +209,10 @@ impl ResponseTable {
     pub fn build(
         scene_text: &str,
         cap: &Capture,
-        spec: &TableSpec,
-        fit: &FitParams,
-        fixed: &Fixed,
+        opt: &EstimateOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<ResponseTable> {
+        let (spec, fit, fixed) = (&opt.table, &opt.fit, &opt.fixed);
         let mu_t = if fit.mu_t {
             spec.mu_t_per_m.clone()
         } else {
@@ -175,8 +245,21 @@ impl ResponseTable {
             albedos,
             reduction,
             spec: spec.clone(),
+            built_for: (scene_text.to_string(), cap.time, opt.clone()),
             values: rendered.concat(),
         })
+    }
+
+    /// Whether the table serves `cap` (same medium-only scene, time axis and options; a capture of the
+    /// same scene on the same points).
+    pub fn serves(&self, scene_text: &str, cap: &Capture, opt: &EstimateOptions) -> bool {
+        let (s, t, o) = &self.built_for;
+        s == scene_text
+            && *t == cap.time
+            && o.fit == opt.fit
+            && o.fixed == opt.fixed
+            && o.table == opt.table
+            && self.reduction == Reduction::of(cap)
     }
 
     /// Whether reduced value `i` has signal at nine in ten of the table's nodes or more: where the
@@ -231,5 +314,5 @@ fn render_node(
         checkpoint_every: Duration::from_secs(3600),
     };
     let caps = plan.render_all_until(&opt, &|_, _| {}, &AtomicBool::new(false))?;
-    Ok(caps.iter().flat_map(|c| reduction.reduce(c)).collect())
+    Ok(caps.iter().flat_map(|c| reduction.reduce_model(c)).collect())
 }

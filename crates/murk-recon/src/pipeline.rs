@@ -566,7 +566,25 @@ pub fn search_depth(
         return Ok((*req, None));
     }
     let whole = Plan::new(cap, req, progress)?.run(cap.clone(), progress)?;
-    let Some(found) = medium::search::choose(&whole) else {
+    // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
+    // planes it leaves fully open are searched.
+    let usable = |z_m: f64| -> bool {
+        let Gate::At(open_m) = req.gate else {
+            return true;
+        };
+        let edge_m = req
+            .method
+            .pulse(cap)
+            .ok()
+            .flatten()
+            .map_or(BASELINE_EDGE_BINS as f64 * cap.time.bin_width_m, |p| p.sigma_m);
+        let plane = Volume {
+            z: Axis::new(z_m, z_m, 1),
+            ..whole.volume
+        };
+        shortest_path_m(cap, &plane) >= open_m + GATE_MARGIN_EDGES * edge_m
+    };
+    let Some(found) = medium::search::choose(&whole, &usable) else {
         return Ok((*req, None));
     };
     let line = found.describe(&whole.volume);

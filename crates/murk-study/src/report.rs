@@ -126,8 +126,9 @@ fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
     for m in &METRICS {
         let _ = write!(s, ",{0},{0}_sd", m.column);
     }
-    // The thresholds behind the two IoUs (relative to each image's maximum; mean over seeds).
-    s.push_str(",iou_best_threshold,iou_otsu_threshold\n");
+    // The thresholds behind the two IoUs (relative to each image's maximum; mean over seeds), and the
+    // medium the aware column estimated (mean over the seeds where one was detected).
+    s.push_str(",iou_best_threshold,iou_otsu_threshold,est_mu_t,est_albedo,est_g\n");
     for r in results {
         let c = &r.cell;
         let tail = metrics::mean_std(&r.tail_share).0;
@@ -156,12 +157,19 @@ fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
                 let (mean, sd) = stat(scores, m.get);
                 let _ = write!(s, ",{},{}", num(mean), num(sd));
             }
-            let _ = writeln!(
+            let _ = write!(
                 s,
                 ",{},{}",
                 num(stat(scores, |x| x.iou.best_threshold as f64).0),
                 num(stat(scores, |x| x.iou.otsu_threshold as f64).0)
             );
+            let est: Vec<[f64; 3]> = r.estimated.iter().flatten().copied().collect();
+            for k in 0..3 {
+                let v: Vec<f64> = est.iter().map(|e| e[k]).collect();
+                let cell = if v.is_empty() { String::new() } else { num(metrics::mean_std(&v).0) };
+                let _ = write!(s, ",{cell}");
+            }
+            s.push('\n');
         }
     }
     murk_io::write_atomic(path, |w| w.write_all(s.as_bytes()).map_err(io(path)))

@@ -4,6 +4,7 @@
 use crate::metrics::{self, IouScores};
 use crate::plan::{CaptureJob, Cell, Format, Plan, SceneKind};
 use murk_core::{Capture, Error, GroundTruth, Result, Volume};
+use murk_recon::pipeline::{self, Method, Request, VolumeSpec};
 use murk_recon::{Compensation, NoProgress, PfForm, PfParams, Wavelength};
 use murk_render::{merge, RenderOptions};
 use murk_view::{views, Plane};
@@ -297,7 +298,16 @@ pub struct CellResult {
     /// (median over pairs; None with one seed).
     pub render_rel_err: Option<f64>,
     pub by_compensation: Vec<(&'static str, Vec<Scores>, Plane)>,
+    /// The medium estimated from each seed's capture for the medium-aware column ([`AWARE`]): μt,
+    /// albedo, g; `None` where no medium was detected or the fit failed (the reason in `aware_notes`).
+    pub estimated: Vec<Option<[f64; 3]>>,
+    pub aware_notes: Vec<String>,
 }
+
+/// The medium-aware column's name: the capture's medium estimated from the capture itself
+/// (`murk_medium`), its response removed, the gate and window end as `murk reconstruct` sets them,
+/// and the paper's K with the *estimated* μt and α.
+pub const AWARE: &str = "aware";
 
 /// Reads capture `id`, refusing a file that holds another render than the plan's: one copied or
 /// left there by hand would otherwise be scored as this cell's.
@@ -348,6 +358,8 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
         }
     }
     let mut shared_fields: HashMap<(String, u64), Vec<Complex32>> = HashMap::new();
+    // The medium estimate's renders, one table per capture geometry (a scene and scale).
+    let tables = &mut Vec::new();
     let mut results = Vec::new();
     for (k, cell) in plan.cells.iter().enumerate() {
         let label = format!(
@@ -369,6 +381,9 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
             .iter()
             .map(|c| (*c, Vec::new(), None))
             .collect();
+        by_comp.push((AWARE, Vec::new(), None));
+        let mut estimated = Vec::new();
+        let mut aware_notes = Vec::new();
         let mut tails = Vec::new();
         let mut pair_errors = Vec::new();
         for pair in cell.captures.chunks_exact(2) {
@@ -398,12 +413,20 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
                 references.insert(key.clone(), views(&volume, &i).front);
             }
             let reference = &references[&key];
+            let (aware, estimate, note) = aware_intensity(&cap, &volume, cell.lambda_factor, tables)?;
+            estimated.push(estimate);
+            aware_notes.extend(note);
+            let mut aware = Some(aware);
             for (name, scores, first) in by_comp.iter_mut() {
                 let m = cell.medium;
-                // Only the paper's K reads the albedo.
-                let albedo = (*name == "paper").then_some(m.albedo);
-                let comp = Compensation::named(name, m.mu_t_per_m, albedo)?;
-                let i = murk_recon::intensity(&cap, &volume, &field, comp);
+                let i = if *name == AWARE {
+                    aware.take().expect("one aware column")
+                } else {
+                    // Only the paper's K reads the albedo.
+                    let albedo = (*name == "paper").then_some(m.albedo);
+                    let comp = Compensation::named(name, m.mu_t_per_m, albedo)?;
+                    murk_recon::intensity(&cap, &volume, &field, comp)
+                };
                 let v = views(&volume, &i);
                 scores.push(score(&v.front, &v.depth, reference, &truth, cell.scene));
                 if seed == 0 {
@@ -433,9 +456,60 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
                 .into_iter()
                 .map(|(n, s, p)| (n, s, p.expect("at least one seed")))
                 .collect(),
+            estimated,
+            aware_notes,
         });
     }
     Ok(results)
+}
+
+/// The medium-aware reconstruction of `cap` on `volume`: the medium estimated from the capture (one
+/// table of renders per geometry, kept in `tables`), then `murk reconstruct`'s pipeline with the
+/// medium's response removed, its gate and window end, and the paper's K with the estimate. A capture
+/// without a detected medium, or whose fit fails, is reconstructed without K (the note says why).
+fn aware_intensity(
+    cap: &Capture,
+    volume: &Volume,
+    lambda_factor: f64,
+    tables: &mut Vec<murk_medium::ResponseTable>,
+) -> Result<(Vec<f32>, Option<[f64; 3]>, Option<String>)> {
+    let opt = murk_medium::EstimateOptions::default();
+    let scene_text = murk_medium::scene::medium_only(cap).ok();
+    let known = scene_text.as_ref().and_then(|t| {
+        tables
+            .iter()
+            .position(|tab| tab.serves(t, cap, &opt))
+            .map(|k| tables.swap_remove(k))
+    });
+    let (estimate, note) = match murk_medium::estimate_with(cap, &opt, known, &|_, _| {}) {
+        Ok((murk_medium::Outcome::Fitted(e), table)) => {
+            tables.extend(table);
+            (
+                Some([e.mu_t_per_m.value, e.albedo.value, e.g.value]),
+                None,
+            )
+        }
+        Ok((murk_medium::Outcome::NoMedium(_), table)) => {
+            tables.extend(table);
+            (None, None)
+        }
+        Err(e) => (None, Some(format!("medium estimate failed: {e}"))),
+    };
+    let compensation = match estimate {
+        Some([mu_t_per_m, albedo, _]) => Compensation::Paper { mu_t_per_m, albedo },
+        None => Compensation::None,
+    };
+    let params = PfParams {
+        wavelength: Wavelength::WallFactor(4.0 * lambda_factor),
+        compensation,
+        ..PfParams::default()
+    };
+    let req = Request {
+        volume: VolumeSpec::Given(*volume),
+        ..Request::new(Method::Pf(params))
+    };
+    let rec = pipeline::run(cap.clone(), &req, &NoProgress)?;
+    Ok((rec.intensity, estimate, note))
 }
 
 /// The PF field (λ = factor × 4Δc, 4 cycles: the paper's synthetic settings).

@@ -49,10 +49,13 @@ impl Found {
     }
 }
 
-/// Scores the planes of `rec` and chooses the depth range around the best one.
-pub fn choose(rec: &Reconstruction) -> Option<Found> {
+/// Scores the planes of `rec` for which `usable(z)` holds and chooses the depth range around the best
+/// one.
+pub fn choose(rec: &Reconstruction, usable: &dyn Fn(f64) -> bool) -> Option<Found> {
     let v = &rec.volume;
-    let scores: Vec<Option<f64>> = (0..v.z.n).map(|k| plane_score(rec, k)).collect();
+    let scores: Vec<Option<f64>> = (0..v.z.n)
+        .map(|k| plane_score(rec, k).filter(|_| usable(v.z.at(k))))
+        .collect();
     let (best, score) = scores
         .iter()
         .enumerate()
@@ -147,7 +150,7 @@ mod tests {
         }
         i[v.index(8, 8, 20)] += 1.0;
         let rec = Reconstruction::new(v, i, "test");
-        let found = choose(&rec).unwrap();
+        let found = choose(&rec, &|_| true).unwrap();
         assert_eq!(found.z_m, v.z.at(20));
         let kept = found.volume.unwrap();
         assert!((kept.z.start - (v.z.at(20) - HALF_RANGE_M)).abs() < 1e-12);
@@ -155,6 +158,9 @@ mod tests {
         // Without the spot no plane stands out.
         let mut flat = rec.clone();
         flat.intensity[v.index(8, 8, 20)] -= 1.0;
-        assert_eq!(choose(&flat).unwrap().volume, None);
+        assert_eq!(choose(&flat, &|_| true).unwrap().volume, None);
+        // Planes ruled out are not chosen.
+        let near = choose(&rec, &|z| z < 2.0).unwrap();
+        assert!(near.z_m < 2.0);
     }
 }
