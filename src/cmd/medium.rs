@@ -8,18 +8,21 @@ use murk_recon::Progress;
 use std::path::PathBuf;
 
 #[derive(Args)]
-#[command(after_help = "Examples:\n  \
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  \
 murk medium fog.h5\n  \
 murk medium fog.h5 --json                       # one JSON object: mu_t_per_m, albedo, g, their uncertainties, …\n  \
 murk medium fog.h5 --fit mu_t,albedo --g 0.7    # g known: fit the other two\n  \
 murk medium fog.h5 --until 3.5                  # the medium-only bins end at 3.5 m of path\n\n\
 The forward model is murk's renderer: the capture's own scene (its scene_info, as murk render writes it)\n\
 without objects, rendered on a grid of μt × g nodes, each an albedo sweep, and interpolated. The fit\n\
-compares ring means (rings of equal laser–sensor separation) over 2 cm bins, from the window's start\n\
+compares ring means (rings of equal laser–sensor separation) over 5 cm bins, from the window's start\n\
 to where the scene's own signal begins (the medium-aware depth search of `murk reconstruct`), in\n\
 ln(intensity). Uncertainties: the range where the sum of squares stays within one residual variance\n\
 of its minimum, the other parameters re-fitted. A capture without a medium answers 'no medium\n\
-detected'. docs/medium.md has the accuracy over the paper's sweep.")]
+detected'. docs/medium.md has the accuracy over the paper's sweep."
+)]
 pub struct MediumArgs {
     /// A y-tal HDF5 capture rendered by murk.
     pub file: PathBuf,

@@ -5,7 +5,7 @@ use crate::table::ResponseTable;
 use crate::Fixed;
 use murk_core::{Capture, Error, Result};
 use murk_recon::medium::detect::Signature;
-use murk_recon::pipeline::{self, Method, Options, Request, VolumeSpec};
+use murk_recon::pipeline::{self, Method, Options, Request};
 use rayon::prelude::*;
 
 /// Which parameters are fitted.
@@ -162,19 +162,25 @@ fn num(v: f64) -> String {
     }
 }
 
-/// Where the scene's own signal begins: the shortest path to the depth range that the medium-aware
-/// depth search keeps (half a metre in front of the plane where the signal focuses), but no earlier
-/// than a fifth into the window: in dense media the search can stop at an artefact near the wall, and
-/// a fit needs the bins. Without a search result, 30 % into the window.
+/// Where the scene's own signal begins: the shortest path to the plane where the medium-aware depth
+/// search finds the signal focused, less three pulse widths (as `--gate auto` opens before a volume),
+/// but no earlier than a fifth into the window: in dense media the search can stop at an artefact
+/// near the wall, and a fit needs the bins. Without a plane, 30 % into the window.
 pub fn scene_onset_m(cap: &Capture) -> Result<f64> {
     let method = Method::from_name("pf", cap.kind(), &Options::default())?;
-    let (req, _) = pipeline::search_depth(cap, &Request::new(method), &murk_core::NoProgress)?;
+    let (_, found) = pipeline::search_depth(cap, &Request::new(method), &murk_core::NoProgress)?;
     let (start, span) = (cap.time.start_m, cap.time.end_m() - cap.time.start_m);
-    Ok(match req.volume {
-        VolumeSpec::Given(v) => murk_core::window::shortest_path_m(cap, &v)
-            .max(start + 0.2 * span)
-            .min(cap.time.end_m()),
-        VolumeSpec::Default => start + 0.3 * span,
+    let plane = found.filter(|(f, _)| f.volume.is_some()).map(|(f, _)| {
+        let v = pipeline::default_volume(cap).map(|v| murk_core::Volume {
+            z: murk_core::Axis::new(f.z_m, f.z_m, 1),
+            ..v
+        });
+        let sigma_m = method.pulse(cap).ok().flatten().map_or(0.0, |p| p.sigma_m);
+        v.map(|v| murk_core::window::shortest_path_m(cap, &v) - 3.0 * sigma_m)
+    });
+    Ok(match plane {
+        Some(onset) => onset?.max(start + 0.2 * span).min(cap.time.end_m()),
+        None => start + 0.3 * span,
     })
 }
 
@@ -198,14 +204,14 @@ pub fn fit(
     let red = &table.reduction;
     let data = red.reduce(cap);
     let n = red.coarse_bins;
-    // A ring's mean over the capture's points and over the table's coarser grid agree only where the
-    // response no longer changes fast across the ring's separations: from 1.5 × its largest one.
+    // The table's coarser grid stands in for the capture's separations only where the response no
+    // longer changes fast with the separation: from 10 cm past the ring's largest one.
     let ring_max = red.ring_max_separations(cap);
     let used: Vec<usize> = (0..red.rings())
         .flat_map(|r| (0..n).map(move |b| (r, b)))
         .filter(|&(r, b)| {
             let path_m = red.path_m(cap, b);
-            path_m < until_m && path_m >= 1.5 * ring_max[r]
+            path_m < until_m && path_m >= ring_max[r] + 0.1
         })
         .map(|(r, b)| r * n + b)
         .filter(|&i| data[i] > 0.0 && data[i].is_finite() && table.covers(i))

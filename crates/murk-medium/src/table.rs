@@ -49,12 +49,12 @@ pub struct Reduction {
     separations: Vec<f64>,
 }
 
-/// Rings and coarse bins of at least this path (m).
+/// Rings of separation, and the path (m) a coarse bin spans at least.
 const RINGS: usize = 1;
-const COARSE_M: f64 = 0.1;
+const COARSE_M: f64 = 0.05;
 
 impl Reduction {
-    /// Rings at the quartiles of `cap`'s separations; coarse bins of at least 10 cm of path.
+    /// Rings at the quartiles of `cap`'s separations; coarse bins of at least 5 cm of path.
     pub fn of(cap: &Capture) -> Reduction {
         let all = separations(cap);
         let mut sep = all.clone();

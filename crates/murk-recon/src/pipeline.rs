@@ -546,17 +546,17 @@ impl Plan {
 pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Reconstruction> {
     let (req, searched) = search_depth(&cap, req, progress)?;
     let mut out = Plan::new(&cap, &req, progress)?.run(cap, progress)?;
-    out.rows.extend(searched.map(|line| ("depth search".to_string(), line)));
+    out.rows.extend(searched.map(|(_, line)| ("depth search".to_string(), line)));
     Ok(out)
 }
 
-/// `req` with the volume the depth search chose, and its line for the summary; `req` unchanged where
-/// no search applies.
+/// `req` with the volume the depth search chose, and what it found with its line for the summary;
+/// `req` unchanged where no search applies.
 pub fn search_depth(
     cap: &Capture,
     req: &Request,
     progress: &dyn Progress,
-) -> Result<(Request, Option<String>)> {
+) -> Result<(Request, Option<(medium::search::Found, String)>)> {
     let applies = req.volume == VolumeSpec::Default
         && req.medium.depth_search == DepthSearch::Auto
         && req.medium.removal != MediumRemoval::Off
@@ -592,7 +592,7 @@ pub fn search_depth(
     if let Some(v) = found.volume {
         chosen.volume = VolumeSpec::Given(v);
     }
-    Ok((chosen, Some(line)))
+    Ok((chosen, Some((found, line))))
 }
 
 fn closing_rows(offset_m: f64, gated: &GateReport, end: &EndReport) -> Vec<(String, String)> {
