@@ -222,7 +222,11 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         "{{bar:40}} {{pos}}/{{len}} units ({} laser points)  {{elapsed}} elapsed, ETA {{eta}}",
         plan.shard_points(a.shard)
     );
-    bar.set_style(ProgressStyle::with_template(&template).expect("static template"));
+    bar.set_style(
+        ProgressStyle::with_template(&template)
+            .expect("static template")
+            .with_key("eta", crate::cmd::progress::eta),
+    );
     // The render's first progress call gives the units its checkpoint already held.
     let reused = std::sync::OnceLock::new();
     let say_reused = |done: usize| {

@@ -276,7 +276,7 @@ fn holds_words(label: &str, words: &str) -> bool {
 }
 
 /// A cell's label as progress and `--cell` show it: the figure, its row and column, each once.
-fn cell_label(figure: Figure, row: &str, col: &str) -> String {
+pub(crate) fn cell_label(figure: Figure, row: &str, col: &str) -> String {
     [figure.name(), row, col]
         .iter()
         .filter(|p| !p.is_empty())
