@@ -414,6 +414,11 @@ def reconstruct(
     return Reconstruction(intensity, x, y, z, dict(rows), list(warnings))
 
 
+def __dir__():
+    # What the package offers, not the names its own code imports (Any, np, os, re, ...).
+    return sorted(__all__ + ["__version__", "dask", "experiment"])
+
+
 def __getattr__(name):
     # murk.dask and murk.experiment load on first use: dask is optional, and `python -m
     # murk.experiment` must not find the module already imported by the package.
