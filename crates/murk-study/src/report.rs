@@ -674,8 +674,8 @@ const CHOICES: &[&str] = &[
     "Shelf objects: an object is detected when the median normalised front intensity over its pixels reaches Otsu's threshold of the whole projection.",
 ];
 
-/// The run's provenance, for the top of the report: what ran, where, when and for how long.
-fn provenance(plan: &Plan, results: &[CellResult]) -> Vec<(&'static str, String)> {
+/// What every murk page states first: murk's version, the command, when and on which machine.
+pub(crate) fn run_provenance() -> Vec<(&'static str, String)> {
     let command = std::env::args()
         .map(|a| {
             if a.is_empty() || a.contains(|c: char| c.is_whitespace() || "'\"$\\".contains(c)) {
@@ -686,6 +686,16 @@ fn provenance(plan: &Plan, results: &[CellResult]) -> Vec<(&'static str, String)
         })
         .collect::<Vec<_>>()
         .join(" ");
+    vec![
+        ("murk version", env!("CARGO_PKG_VERSION").to_string()),
+        ("command", command),
+        ("written", utc_now()),
+        ("machine", machine()),
+    ]
+}
+
+/// The run's provenance, for the top of the report: what ran, where, when and for how long.
+fn provenance(plan: &Plan, results: &[CellResult]) -> Vec<(&'static str, String)> {
     let cpu: Vec<f64> = results.iter().filter_map(|r| r.cpu_s).collect();
     let external = results.iter().filter(|r| r.cpu_s.is_none()).count();
     let mut cpu_text = format!(
@@ -700,17 +710,16 @@ fn provenance(plan: &Plan, results: &[CellResult]) -> Vec<(&'static str, String)
             "; {external} cells rendered by an external executor, not counted"
         );
     }
-    vec![
-        ("murk version", env!("CARGO_PKG_VERSION").to_string()),
-        ("command", command),
+    let mut rows = run_provenance();
+    rows.insert(
+        2,
         (
             "scale",
             format!("{} ({} seeds)", plan.scale.name(), plan.seeds),
         ),
-        ("report written", utc_now()),
-        ("CPU time", cpu_text),
-        ("machine", machine()),
-    ]
+    );
+    rows.insert(4, ("CPU time", cpu_text));
+    rows
 }
 
 /// The current time as "YYYY-MM-DD HH:MM UTC" (days to civil date after Howard Hinnant's algorithm).
@@ -769,10 +778,7 @@ murkSwitch();
 </script>
 ";
 
-const STYLE: &str = "<style>body{font-family:sans-serif;max-width:1400px;margin:auto;padding:0 1em;color:#222}\
-table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}\
-#provenance td,#provenance th,#parameters td,#parameters th{text-align:left}\
-#controls{position:sticky;top:0;background:#f4f4f4;border-bottom:1px solid #bbb;padding:.4em .6em;z-index:1}\
+const STYLE: &str = "<style>#controls{position:sticky;top:0;background:#f4f4f4;border-bottom:1px solid #bbb;padding:.4em .6em;z-index:1}\
 figure{margin:.5em 0}.grid img{max-width:100%}\
 .plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(330px,1fr));gap:4px}.plots img{width:100%}\
 li{margin:.3em 0}</style>";
@@ -787,8 +793,9 @@ fn write_html(
     let methods = methods(results);
     let shown = default_method(&methods);
     let mut h = format!(
-        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>murk: the paper's study</title>\n{STYLE}</head><body>\n\
-         <h1>Phasor Fields in scattering media: the study of Luesia et al., rerun by murk</h1>\n<table id=\"provenance\">"
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>murk: the paper's study</title>\n{}{STYLE}</head><body>\n\
+         <h1>Phasor Fields in scattering media: the study of Luesia et al., rerun by murk</h1>\n<table id=\"provenance\">",
+        murk_view::PAGE_STYLE
     );
     for (k, v) in provenance(plan, results) {
         let _ = write!(h, "<tr><th>{k}</th><td>{}</td></tr>", esc(&v));

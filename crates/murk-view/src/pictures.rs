@@ -286,6 +286,12 @@ pub fn write_views(dir: &Path, vol: &Volume, intensity: &[f32]) -> Result<Vec<(P
     Ok(out)
 }
 
+/// The look every murk page shares (the study's report, the demo, reconstruct's pictures): one font,
+/// left-aligned key/value tables, numbers right-aligned.
+pub const PAGE_STYLE: &str = "<style>body{font-family:sans-serif;max-width:1400px;margin:auto;padding:0 1em;color:#222}\
+table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}\
+#provenance td,#provenance th,#parameters td,#parameters th{text-align:left}</style>";
+
 /// A self-contained page: a parameter table and the pictures (relative links).
 pub fn write_index(
     dir: &Path,
@@ -299,7 +305,7 @@ pub fn write_index(
             .replace('>', "&gt;")
     };
     let mut html = format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>{t}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto}}figure{{display:inline-block;margin:.5em;vertical-align:top;max-width:400px}}img{{image-rendering:pixelated;border:1px solid #888}}td{{padding:2px 10px}}</style></head><body><h1>{t}</h1><table>",
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>{t}</title>{PAGE_STYLE}<style>figure{{display:inline-block;margin:.5em;vertical-align:top;max-width:400px}}img{{image-rendering:pixelated;border:1px solid #888}}</style></head><body><h1>{t}</h1><table id=\"provenance\">",
         t = esc(title)
     );
     for (k, v) in params {
