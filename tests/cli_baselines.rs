@@ -402,7 +402,7 @@ fn median_depth(shape: [usize; 3], v: &[f32], z: &[f64]) -> f64 {
 }
 
 #[test]
-#[ignore = "needs ../shared/data/real/cdt_lindell2020 (.ci/run runs these where the folder exists)"]
+#[ignore = "reads the real capture ../shared/data/real/cdt_lindell2020 (slow); .ci/run runs these with --ignored when that folder is there"]
 fn real_letters_ut_two_depths_letter_s_agrees_and_reads_upright() {
     let data = real_data();
     let dir = tmpdir("real");
@@ -455,7 +455,7 @@ fn real_letters_ut_two_depths_letter_s_agrees_and_reads_upright() {
 }
 
 #[test]
-#[ignore = "needs ../shared/data/real/cdt_lindell2020 (.ci/run runs these where the folder exists)"]
+#[ignore = "reads the real capture ../shared/data/real/cdt_lindell2020 (slow); .ci/run runs these with --ignored when that folder is there"]
 fn real_cdt_bad_inputs_fail_cleanly() {
     let data = real_data();
     let dir = tmpdir("realbad");
@@ -486,7 +486,7 @@ fn real_cdt_bad_inputs_fail_cleanly() {
 }
 
 #[test]
-#[ignore = "needs ../shared/data/real/cdt_lindell2020 (.ci/run runs these where the folder exists)"]
+#[ignore = "reads the real capture ../shared/data/real/cdt_lindell2020 (slow); .ci/run runs these with --ignored when that folder is there"]
 fn figure_real_writes_the_grid_and_page() {
     let data = real_data();
     let out = tmpdir("figure");
@@ -553,7 +553,7 @@ fn lct_weighting_is_a_choice() {
     };
     let (sd, pd, vd) = run("diffuse");
     let (sr, pr, vr) = run("retroreflective");
-    assert!(sd.contains("reflectance: Diffuse") && sr.contains("reflectance: Retroreflective"));
+    assert!(sd.contains("reflectance: diffuse") && sr.contains("reflectance: retroreflective"));
     assert_eq!(pd, pr);
     let top = |v: &[f32]| v.iter().cloned().fold(f32::MIN, f32::max);
     let (nd, nr) = (top(&vd), top(&vr));

@@ -1184,13 +1184,22 @@ fn terminated_render_leaves_no_temporaries_and_resumes() {
     );
     {
         assert!(ckpt.exists());
-        let (code, _, err) = murk(
+        // Not quiet, so that it says what it reused.
+        let (code, _, err) = cli::murk(
             &args(&["--out", out.to_str().unwrap(), "--resume"])
                 .iter()
                 .map(|s| s.as_str())
                 .collect::<Vec<_>>(),
         );
         assert_eq!(code, 0, "{err}");
+        // It says how much of the checkpoint it reused: some, not all, of the 64 units.
+        let reused: usize = err
+            .split("murk: --resume: ")
+            .nth(1)
+            .and_then(|s| s.split(" of 64 units reused from ").next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no reuse line: {err}"));
+        assert!((1..64).contains(&reused), "{err}");
     }
     let whole = d.join("whole.h5");
     let (code, _, err) = murk(

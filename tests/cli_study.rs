@@ -36,13 +36,19 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
     assert_eq!(code, 0, "{err}");
     let cmds: Vec<&str> = stdout.lines().collect();
     assert_eq!(cmds.len(), 4, "two captures × two shards:\n{stdout}");
-    assert!(d.join("plan.json").exists());
-    for c in &cmds {
-        // Each line is a shell command for `murk`; run it with this build.
-        let line = c.replacen("murk ", &format!("{} ", env!("CARGO_BIN_EXE_murk")), 1);
+    // Listing writes nothing: not the plan, not the renders' folder, not even the output folder.
+    assert!(!d.exists(), "--list-tasks wrote {}", d.display());
+    let exe = std::fs::canonicalize(env!("CARGO_BIN_EXE_murk")).unwrap();
+    for line in &cmds {
+        // Each line runs this very binary by its absolute path, with an empty PATH.
+        assert!(
+            line.contains(&format!("&& {} render ", exe.display())),
+            "{line}"
+        );
         let st = Command::new("sh")
             .arg("-c")
-            .arg(&line)
+            .arg(line)
+            .env("PATH", "/usr/bin:/bin")
             .current_dir(std::env::temp_dir())
             .status()
             .unwrap();
@@ -66,10 +72,9 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
     let (code, stdout, err) = small_study(&d, &["--list-tasks", "--shards", "2"]);
     assert_eq!((code, stdout.as_str()), (0, ""), "{err}");
     assert!(err.contains("every render of this plan is done"), "{err}");
-    let line = cmds[0].replacen("murk ", &format!("{} ", env!("CARGO_BIN_EXE_murk")), 1);
     assert!(Command::new("sh")
         .arg("-c")
-        .arg(&line)
+        .arg(cmds[0])
         .status()
         .unwrap()
         .success());
@@ -80,6 +85,8 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     assert!(!names.iter().any(|n| n.contains(".part")), "{names:?}");
+    // A finished study leaves no lock file behind.
+    assert!(!d.join(".lock").exists());
     // One run at a time per folder.
     let held = std::fs::File::create(d.join(".lock")).unwrap();
     held.try_lock().unwrap();
@@ -93,8 +100,8 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
     for f in [
         "index.html",
         "metrics.csv",
-        "fig4-paper.png",
-        "fig3a-none.png",
+        "fig4-paper-shared.png",
+        "fig3a-none-cell.png",
     ] {
         assert!(d.join(f).exists(), "{f}");
     }
@@ -115,7 +122,7 @@ fn listed_tasks_run_elsewhere_and_are_picked_up() {
     // A later run of fewer figures leaves only its own pictures and plots.
     let (code, _, err) = experiment(&d, &["--only", "fig3a", "--spp", "4", "--shards", "2"]);
     assert_eq!(code, 0, "{err}");
-    assert!(d.join("fig3a-paper.png").exists() && !d.join("fig4-paper.png").exists());
+    assert!(d.join("fig3a-paper-shared.png").exists() && !d.join("fig4-paper-shared.png").exists());
     let plots: Vec<String> = std::fs::read_dir(d.join("plots"))
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -174,30 +181,10 @@ fn bad_options_fail_on_one_line() {
     }
 }
 
-/// Opens the report in headless Chromium and checks, from inside the page, that every image decoded and
-/// every table has rows beyond its header.
-#[test]
-#[ignore = "needs Debian's chromium (/usr/bin/chromium); .ci/run installs it and runs this with --include-ignored"]
-fn report_loads_in_a_real_browser() {
-    let d = dir("html");
-    let (code, _, err) = small_study(&d, &[]);
-    assert_eq!(code, 0, "{err}");
-    let page = std::fs::read_to_string(d.join("index.html")).unwrap();
-    // The result's markers are split in the script's source so that only its output matches them.
-    let probe = r#"<script>
-window.addEventListener('load', () => {
-  const imgs = [...document.images];
-  const broken = imgs.filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.getAttribute('src'));
-  const tables = [...document.querySelectorAll('table')].map(t => t.id + ':' + t.rows.length);
-  const out = document.createElement('pre');
-  out.id = 'probe';
-  out.textContent = 'PRO' + 'BE images=' + imgs.length + ' broken=' + JSON.stringify(broken) + ' tables=' + tables.join(',') + ' E' + 'ND';
-  document.body.appendChild(out);
-});
-</script></body>"#;
-    std::fs::write(d.join("probe.html"), page.replace("</body>", probe)).unwrap();
+/// Headless Chromium with a fresh profile in `d`, no network, on `page`; `extra` chooses the output.
+fn chromium(d: &Path, page: &Path, extra: &[&str]) -> std::process::Output {
     let profile = d.join("chromium-profile");
-    let out = Command::new("/usr/bin/chromium")
+    Command::new("/usr/bin/chromium")
         .args([
             "--headless",
             "--no-sandbox",
@@ -208,13 +195,50 @@ window.addEventListener('load', () => {
             "--disable-component-update",
             "--disable-sync",
             "--allow-file-access-from-files",
+            "--hide-scrollbars",
             "--virtual-time-budget=10000",
-            "--dump-dom",
         ])
+        .args(extra)
         .arg(format!("--user-data-dir={}", profile.display()))
-        .arg(format!("file://{}", d.join("probe.html").display()))
+        .arg(format!("file://{}", page.display()))
         .output()
-        .expect("run /usr/bin/chromium");
+        .expect("run /usr/bin/chromium")
+}
+
+/// Opens the report in headless Chromium and checks, from inside the page, that every image decoded and
+/// every table has rows beyond its header; then works the switch (compensation "none", per-cell colour
+/// scale) and checks that every image follows it, still decodes, and that the tables show that
+/// method's rows only.
+#[test]
+#[ignore = "needs Debian's chromium (/usr/bin/chromium); .ci/run installs it and runs this with --include-ignored"]
+fn report_loads_in_a_real_browser() {
+    let d = dir("html");
+    let (code, _, err) = small_study(&d, &[]);
+    assert_eq!(code, 0, "{err}");
+    let page = std::fs::read_to_string(d.join("index.html")).unwrap();
+    // The result's markers are split in the script's source so that only its output matches them.
+    let probe = r#"<script>
+window.addEventListener('load', async () => {
+  const imgs = [...document.images];
+  const broken = imgs.filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.getAttribute('src'));
+  const tables = [...document.querySelectorAll('table')].map(t => t.id + ':' + t.rows.length);
+  document.getElementById('method').value = 'none';
+  const cell = document.querySelector('input[name=scale][value=cell]');
+  cell.checked = true;
+  cell.dispatchEvent(new Event('change'));
+  const ok = await Promise.all(imgs.map(i => i.decode().then(() => true, () => false)));
+  const switched = imgs.filter(i => i.getAttribute('src').includes('-none')).length;
+  const percell = imgs.filter(i => i.getAttribute('src').endsWith('-none-cell.png')).length;
+  const after = imgs.filter((i, k) => !ok[k]).map(i => i.getAttribute('src'));
+  const rows = [...document.querySelectorAll('#metrics tbody')].filter(b => !b.hidden).map(b => b.dataset.method + ':' + b.rows.length);
+  const out = document.createElement('pre');
+  out.id = 'probe';
+  out.textContent = 'PRO' + 'BE images=' + imgs.length + ' broken=' + JSON.stringify(broken) + ' tables=' + tables.join(',') + ' switched=' + switched + ' percell=' + percell + ' after=' + JSON.stringify(after) + ' shown=' + rows.join(',') + ' E' + 'ND';
+  document.body.appendChild(out);
+});
+</script></body>"#;
+    std::fs::write(d.join("probe.html"), page.replace("</body>", probe)).unwrap();
+    let out = chromium(&d, &d.join("probe.html"), &["--dump-dom"]);
     let dom = String::from_utf8_lossy(&out.stdout);
     let probe = dom
         .split("PROBE ")
@@ -227,17 +251,65 @@ window.addEventListener('load', () => {
             )
         });
     eprintln!("{probe}");
-    let images: usize = probe["images=".len()..]
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
-    // 2 figures × 3 compensations, and 7 metrics plotted against λ.
-    assert_eq!(images, 6 + 7, "{probe}");
+    // One grid per figure (the switch picks its file), and 7 metrics plotted against λ.
+    assert!(probe.starts_with("images=9 "), "{probe}");
     assert!(probe.contains("broken=[]"), "{probe}");
-    // parameters: 6 rows + the Z's scene (the shelf's is not rendered); metrics: header + 4 cells.
-    assert!(probe.contains("tables=parameters:7,metrics:5"), "{probe}");
+    // provenance: 6 rows; parameters: 6 + the Z's scene (the shelf's is not rendered); metrics:
+    // header + 4 cells × 3 compensations.
+    assert!(
+        probe.contains("tables=provenance:6,parameters:7,metrics:13"),
+        "{probe}"
+    );
+    assert!(
+        probe.contains("switched=9 percell=2 after=[] shown=none:4"),
+        "{probe}"
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// A screenshot of the report (headless Chromium): the size asked for, and not blank — most of it
+/// is the page's white, but the figures' colour maps and the text give thousands of other pixels
+/// in many colours.
+#[test]
+#[ignore = "needs Debian's chromium (/usr/bin/chromium); .ci/run installs it and runs this with --include-ignored"]
+fn report_screenshot_is_not_blank() {
+    let d = dir("shot");
+    let (code, _, err) = small_study(&d, &[]);
+    assert_eq!(code, 0, "{err}");
+    let shot = d.join("report.png");
+    let out = chromium(
+        &d,
+        &d.join("index.html"),
+        &[
+            "--window-size=1400,2000",
+            &format!("--screenshot={}", shot.display()),
+        ],
+    );
+    assert!(
+        shot.exists(),
+        "no screenshot; stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let dec = png::Decoder::new(std::fs::File::open(&shot).unwrap());
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (1400, 2000));
+    let px = info.color_type.samples();
+    let mut colours = std::collections::HashSet::new();
+    let mut ink = 0usize;
+    for p in buf[..info.buffer_size()].chunks(px) {
+        if p[..3] != [255, 255, 255] {
+            ink += 1;
+        }
+        colours.insert([p[0], p[1], p[2]]);
+    }
+    let total = (info.width * info.height) as usize;
+    assert!(
+        ink > total / 20 && colours.len() > 200,
+        "{ink} of {total} pixels not white, {} colours",
+        colours.len()
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -321,8 +393,20 @@ fn shelf_objects_and_seed_spreads_are_reported() {
         .skip(1)
         .filter(|c| c.split("</td>").next().unwrap().contains(" ± "))
         .count();
-    // Every metric but PSNR, which is NaN for the clear scene (its own reference).
-    assert_eq!(cells_with_spread, 6, "the metrics table's mean ± spread");
+    // Every metric but PSNR, which is NaN for the clear scene (its own reference), for each of the
+    // three compensations.
+    assert_eq!(cells_with_spread, 18, "the metrics table's mean ± spread");
+    // Numbers are written one way: no raw NaN, no scientific notation, no Rust debug names.
+    let digits = page.as_bytes();
+    let scientific = (1..digits.len().saturating_sub(2)).any(|i| {
+        digits[i - 1].is_ascii_digit()
+            && digits[i] == b'e'
+            && (digits[i + 1] == b'-' || digits[i + 1].is_ascii_digit())
+    });
+    assert!(!scientific, "a number in scientific notation in the report");
+    for bad in [">nan<", " nan ", "NaN", "Quick", "Paper"] {
+        assert!(!page.contains(bad), "{bad:?} in the report");
+    }
     std::fs::remove_dir_all(&d).unwrap();
     std::fs::remove_dir_all(&d2).unwrap();
 }

@@ -165,7 +165,7 @@ fn cut_synthetic_window_keeps_depth_and_picture() {
 /// last bins still carry most of the peak; with the step kept CDT's depth of the S moves far
 /// (docs/window-ends.md has the figures).
 #[test]
-#[ignore = "needs ../shared/data/real/cdt_lindell2020 (.ci/run runs it where the folder exists)"]
+#[ignore = "reads the real capture ../shared/data/real/cdt_lindell2020 (slow); .ci/run runs it with --ignored when that folder is there"]
 fn cut_real_cdt_letter_s() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real/cdt_lindell2020");
     let d = dir("real");

@@ -448,6 +448,10 @@ def estimate_medium(
     )
     return json.loads(text)
 
+def __dir__():
+    # What the package offers, not the names its own code imports (Any, np, os, re, ...).
+    return sorted(__all__ + ["__version__", "dask", "experiment"])
+
 
 def __getattr__(name):
     # murk.dask and murk.experiment load on first use: dask is optional, and `python -m

@@ -194,8 +194,10 @@ impl Capture {
             self.cap.kind(),
             self.cap.n_hist(),
             t.bins,
-            t.start_m,
-            t.bin_width_m
+            // Six significant digits: a bin width stored as f32 (0.0048) is not shown with its
+            // float noise (0.004800000227987766).
+            murk_core::short(t.start_m),
+            murk_core::short(t.bin_width_m)
         )
     }
 }

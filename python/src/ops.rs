@@ -331,7 +331,8 @@ pub fn study_plan<'py>(
         .detach(|| murk_study::prepare(&out, &opt))
         .map_err(to_py)?;
     let scenes = murk_study::plan::absolute(&plan.scenes_dir);
-    let commands = plan.task_commands(&out, |_, _| true);
+    // The Python package has no murk binary of its own: its commands name the one on PATH.
+    let commands = plan.task_commands(&out, std::path::Path::new("murk"), |_, _| true);
     let tasks = PyList::empty(py);
     let mut k = 0;
     for c in &plan.captures {

@@ -18,7 +18,7 @@ def python_blocks(md):
 
 @needs_cli
 def test_worked_example_runs(capsys):
-    [block] = python_blocks(ROOT / "docs" / "python.md")
+    block = python_blocks(ROOT / "docs" / "python.md")[0]  # the worked example comes first
     cwd = os.getcwd()
     os.chdir(ROOT)
     try:

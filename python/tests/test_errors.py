@@ -35,6 +35,28 @@ def test_bad_volume_string(cap):
     assert "oops" in one_line(e) or "volume" in one_line(e)
 
 
+def test_reversed_volume_bounds_are_refused_naming_the_volume_not_a_flag(cap):
+    with pytest.raises(murk.InputError) as e:
+        murk.reconstruct(cap, volume="1:0:10,-0.9:0.9:5,1.5:2.5:5")
+    msg = one_line(e)
+    assert "runs from 1 down to 0" in msg and "--volume" not in msg, msg
+
+
+def test_dir_lists_the_api_not_the_imports():
+    names = set(dir(murk))
+    assert not names & {"Any", "Dict", "np", "os", "re", "functools", "types"}, names
+    assert {"reconstruct", "render", "Capture", "InputError", "experiment", "dask"} <= names
+
+
+def test_capture_repr_has_no_float_noise(tmp_path, cap):
+    # Files hold the time axis as f32: 0.0048 reads back as 0.004800000227987766.
+    c = murk.synth("z:2.0", kind="laser-grid", wall_size=2, grid=8, bins=256, bin_width=0.0048,
+                   start=3.5)
+    murk.write_capture(tmp_path / "c.h5", c)
+    r = repr(murk.read_capture(tmp_path / "c.h5"))
+    assert "by 0.0048 m" in r and "t from 3.5 m" in r, r
+
+
 def test_missing_file():
     with pytest.raises(murk.FileError) as e:
         murk.read_capture("/nonexistent/capture.h5")

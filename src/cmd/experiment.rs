@@ -129,9 +129,10 @@ pub fn run(a: ExperimentArgs, quiet: bool) -> anyhow::Result<()> {
         scenes_dir: a.scenes.clone(),
     };
     if a.list_tasks {
-        let (plan, _lock) = murk_study::prepare(&a.out, &opt)?;
-        let commands =
-            plan.task_commands(&a.out, |job, t| murk_study::run::pending(&a.out, job, t));
+        // This binary by its absolute path, so that the commands run without murk on PATH.
+        let exe = std::env::current_exe()
+            .map_err(|e| anyhow::anyhow!("cannot find the running murk binary: {e}"))?;
+        let commands = murk_study::list_tasks(&a.out, &opt, &exe)?;
         for c in &commands {
             println!("{c}");
         }

@@ -1,9 +1,19 @@
 //! Progress bars on stderr for long steps; silent with --quiet or when stderr is not a terminal.
 
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{ProgressBar, ProgressState, ProgressStyle};
 use std::io::IsTerminal;
 
 pub struct Bar(ProgressBar);
+
+/// The ETA as `{eta}` prints it, or "…" while it would be a guess: before the first unit, in the first
+/// two seconds and the first 5 % (a bar that starts with a slow unit would promise minutes).
+pub fn eta(state: &ProgressState, w: &mut dyn std::fmt::Write) {
+    if state.pos() == 0 || state.elapsed().as_secs_f64() < 2.0 || state.fraction() < 0.05 {
+        let _ = w.write_str("…");
+    } else {
+        let _ = write!(w, "{:#}", indicatif::HumanDuration(state.eta()));
+    }
+}
 
 impl Bar {
     pub fn new(label: &str, quiet: bool) -> Bar {
@@ -12,12 +22,10 @@ impl Bar {
         } else {
             ProgressBar::new(0)
         };
+        // No bar until a stage says how long it is: an empty one would draw full, "0/0".
         pb.set_style(
-            ProgressStyle::with_template(
-                "{msg:>12} [{bar:40}] {pos}/{len} ({elapsed} elapsed, ETA {eta})",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
+            ProgressStyle::with_template("{msg:>12} {spinner} {elapsed} elapsed")
+                .expect("valid template"),
         );
         pb.set_message(label.to_string());
         Bar(pb)
@@ -35,6 +43,14 @@ impl murk_recon::Progress for Bar {
         self.0.set_position(0);
         self.0.set_length(total);
         self.0.reset_eta();
+        self.0.set_style(
+            ProgressStyle::with_template(
+                "{msg:>12} [{bar:40}] {pos}/{len} ({elapsed} elapsed, ETA {eta})",
+            )
+            .expect("valid template")
+            .with_key("eta", eta)
+            .progress_chars("=> "),
+        );
     }
     fn advance(&self, n: u64) {
         self.0.inc(n);

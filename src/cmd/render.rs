@@ -175,7 +175,8 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         (None, None) => plan.scene.settings.spp,
     };
     let ckpt_path = checkpoint_path(&a.out);
-    if a.resume && !ckpt_path.exists() && !quiet {
+    let had_checkpoint = ckpt_path.exists();
+    if a.resume && !had_checkpoint && !quiet {
         eprintln!(
             "murk: no checkpoint at {}; starting from scratch",
             ckpt_path.display()
@@ -211,21 +212,45 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         checkpoint: ckpt.as_ref().map(|c| c.0.clone()),
         checkpoint_every: ckpt.map_or(Duration::MAX, |c| c.1),
     };
-    let bar = ProgressBar::new(plan.shard_units(a.shard).len() as u64);
+    let units = plan.shard_units(a.shard).len();
+    let bar = ProgressBar::new(units as u64);
     if quiet || !std::io::stderr().is_terminal() {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} points  {elapsed} elapsed, ETA {eta}")
-            .expect("static template"),
+    // The bar counts work units (rows of laser points), the summary points: the bar says which.
+    let template = format!(
+        "{{bar:40}} {{pos}}/{{len}} units ({} laser points)  {{elapsed}} elapsed, ETA {{eta}}",
+        plan.shard_points(a.shard)
     );
+    bar.set_style(
+        ProgressStyle::with_template(&template)
+            .expect("static template")
+            .with_key("eta", crate::cmd::progress::eta),
+    );
+    // The render's first progress call gives the units its checkpoint already held.
+    let reused = std::sync::OnceLock::new();
+    let say_reused = |done: usize| {
+        if a.resume && had_checkpoint && !quiet {
+            bar.suspend(|| {
+                eprintln!(
+                    "murk: --resume: {done} of {units} units reused from {}, {} to render",
+                    ckpt_path.display(),
+                    units - done.min(units)
+                )
+            });
+        }
+        done
+    };
     let t0 = Instant::now();
     crate::cmd::RENDERING.store(true, Ordering::SeqCst);
     let rendered = plan.render_stored(
         &opt,
         outs,
         &|out, cap| murk_io::write_capture(out, cap),
-        &|done, _| bar.set_position(done as u64),
+        &|done, _| {
+            reused.get_or_init(|| say_reused(done));
+            bar.set_position(done as u64)
+        },
         &crate::cmd::STOP,
     );
     crate::cmd::RENDERING.store(false, Ordering::SeqCst);

@@ -259,7 +259,7 @@ impl CdtPlan {
             ),
         )
         .row("snr", p.snr)
-        .row("time grid", format!("{:?}", p.grid)))
+        .row("time grid", p.grid))
     }
 }
 

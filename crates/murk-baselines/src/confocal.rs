@@ -18,6 +18,18 @@ pub enum TimeGrid {
     Resample { max_path_m: f64, bins: usize },
 }
 
+/// As a summary prints it: "the capture's own bins" or "128 bins over 0–2 m of path".
+impl std::fmt::Display for TimeGrid {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            TimeGrid::Native => write!(f, "the capture's own bins"),
+            TimeGrid::Resample { max_path_m, bins } => {
+                write!(f, "{bins} bins over 0–{max_path_m} m of path")
+            }
+        }
+    }
+}
+
 /// The geometry a confocal plan is built for; `run` rejects captures that differ.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ConfocalGeometry {
@@ -183,6 +195,17 @@ fn round_trip_offset(capture: &Capture, i: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Summaries print the grid in words, not as Rust's `Resample { max_path_m: 2.0, bins: 128 }`.
+    #[test]
+    fn time_grids_read_as_words() {
+        let r = TimeGrid::Resample {
+            max_path_m: 2.0,
+            bins: 128,
+        };
+        assert_eq!(r.to_string(), "128 bins over 0–2 m of path");
+        assert_eq!(TimeGrid::Native.to_string(), "the capture's own bins");
+    }
     use crate::testutil::{axis, confocal};
     use murk_core::DVec3;
 

@@ -135,7 +135,10 @@ impl LctPlan {
         Ok(
             g.reconstruction(g.nt, data, "light-cone transform (Wiener)")
                 .row("snr", self.params.snr)
-                .row("reflectance", format!("{:?}", self.params.reflectance)),
+                .row(
+                    "reflectance",
+                    murk_core::Named::name(self.params.reflectance),
+                ),
         )
     }
 }

@@ -64,11 +64,12 @@ impl Volume {
         DVec3::new(self.x.at(ix), self.y.at(iy), self.z.at(iz))
     }
 
-    /// Parses `x0:x1:nx,y0:y1:ny,z0:z1:nz` (metres, inclusive ends, counts ≥ 1).
+    /// Parses `x0:x1:nx,y0:y1:ny,z0:z1:nz` (metres, inclusive ends with start ≤ end, counts ≥ 1).
+    /// The message names the volume, not a flag: the CLI and Python both call this.
     pub fn parse(spec: &str) -> Result<Volume> {
         let bad = |why: &str| {
             Error::param(format!(
-                "--volume '{spec}': {why} (expected x0:x1:nx,y0:y1:ny,z0:z1:nz)"
+                "volume '{spec}': {why} (expected x0:x1:nx,y0:y1:ny,z0:z1:nz)"
             ))
         };
         let parts: Vec<&str> = spec.split(',').collect();
@@ -98,6 +99,13 @@ impl Volume {
             }
             if n == 0 {
                 return Err(bad("voxel counts must be at least 1"));
+            }
+            // Pictures and depths read an axis from its start to its end: a reversed one would
+            // draw the scene mirrored without a word.
+            if start > end {
+                return Err(bad(&format!(
+                    "axis '{part}' runs from {start} down to {end}; give the smaller bound first"
+                )));
             }
             *axis = Axis::new(start, end, n);
         }
@@ -167,10 +175,17 @@ mod tests {
             "0:1:2,0:1:2,0:1:2",
             "0:1e-12:4,0:1:2,1:2:2",
             "0:1:2,0:1:2,0.5:0.5:3",
+            "1:0:10,0:1:2,1:2:2",
+            "0:1:2,0:1:2,2:1:2",
         ] {
             assert!(Volume::parse(s).is_err(), "{s}");
         }
         let e = Volume::parse("0:1:2,0:1:2,-1:2:2").unwrap_err().to_string();
         assert!(e.contains("behind the relay wall"), "{e}");
+        let e = Volume::parse("1:0:10,0:1:2,1:2:2").unwrap_err().to_string();
+        assert!(
+            e.contains("axis '1:0:10' runs from 1 down to 0") && !e.contains("--volume"),
+            "{e}"
+        );
     }
 }

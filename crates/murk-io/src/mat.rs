@@ -239,7 +239,7 @@ mod tests {
 
     /// The real CDT capture matches its lossless `.npy` copy (made with h5py + transpose(2, 1, 0)).
     #[test]
-    #[ignore = "needs ../shared/data/real/cdt_lindell2020 (.ci/run runs it where the folder exists)"]
+    #[ignore = "reads the real capture ../shared/data/real/cdt_lindell2020 (slow); .ci/run runs it with --ignored when that folder is there"]
     fn cdt_letter_s_matches_npy_copy() {
         let mat = Path::new(CDT).join("letter_s.mat");
         let (shape, data) = read_mat_v73_array(&mat, "meas").unwrap();

@@ -6,8 +6,8 @@
 const MAX_VALUE_CHARS: usize = 60;
 
 /// Top-level keys of `yaml` with a short, human-readable value each, in file order. Nested
-/// mappings show their keys (`{a, b}`), sequences their length, numpy arrays `<numpy array>`,
-/// y-tal enums `Name(value)`. Lines that do not look like `key: value` are skipped; this never fails.
+/// mappings show their keys (`{a, b}`), sequences of plain values their values (else their length),
+/// blocks of text their line count, numpy arrays `<numpy array>`, y-tal enums `Name(value)`. Lines that do not look like `key: value` are skipped; this never fails.
 pub fn scene_info_summary(yaml: &str) -> Vec<(String, String)> {
     let lines: Vec<&str> = yaml
         .lines()
@@ -68,6 +68,10 @@ fn describe(inline: &str, block: &[&str]) -> String {
     if let Some(tag) = inline.strip_prefix("!!") {
         return format!("<{}>", tag.split_whitespace().next().unwrap_or(tag));
     }
+    // A literal or folded block of text (murk's own scene, as TOML): its size, not a lone "|".
+    if inline.starts_with(['|', '>']) {
+        return format!("text of {} lines", block.len());
+    }
     if inline.is_empty() {
         if block.is_empty() {
             return String::new();
@@ -75,13 +79,31 @@ fn describe(inline: &str, block: &[&str]) -> String {
         let first = block[0];
         let indent = first.len() - first.trim_start().len();
         if first.trim_start().starts_with("- ") || first.trim_start() == "-" {
-            let n = block
+            let items: Vec<&str> = block
                 .iter()
                 .filter(|l| {
                     l.len() - l.trim_start().len() == indent && l.trim_start().starts_with('-')
                 })
-                .count();
-            return format!("[{n} items]");
+                .map(|l| l.trim_start()[1..].trim())
+                .collect();
+            // Plain values are listed (as far as they fit); nested ones are counted.
+            let plain = block.len() == items.len()
+                && items.iter().all(|i| !i.is_empty() && !i.contains(": "));
+            let list = items
+                .iter()
+                .map(|i| unquote(i))
+                .collect::<Vec<_>>()
+                .join(", ");
+            return if plain && list.chars().count() <= MAX_VALUE_CHARS {
+                format!("[{list}]")
+            } else if plain {
+                let cut: String = list.chars().take(MAX_VALUE_CHARS - 1).collect();
+                format!("[{cut}…] ({} items)", items.len())
+            } else if items.len() == 1 {
+                "1 entry".into()
+            } else {
+                format!("{} entries", items.len())
+            };
         }
         let keys: Vec<&str> = block
             .iter()
@@ -127,9 +149,24 @@ mod tests {
         assert_eq!(get("fmt"), Some("GroundTruthFormat(1)"));
         assert_eq!(get("original_nt"), Some("4096"));
         assert_eq!(get("tal_version"), Some("0.20.0"));
-        assert_eq!(get("list"), Some("[3 items]"));
+        assert_eq!(get("list"), Some("[1, 2, 3]"));
         assert_eq!(get("gt"), Some("<numpy array>"));
         assert_eq!(s.len(), 9);
+    }
+
+    /// murk's own renders: overrides listed, not counted; the scene's TOML block sized, not "|".
+    #[test]
+    fn summarises_murk_scene_info() {
+        let yaml = "generator: murk render\noverrides:\n- 'medium.mu_t=0.0'\n- 'capture.grid=[64, 64]'\nscene: |\n  [medium]\n  mu_t = 0.0\nlong:\n- aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa\n- b\nnested:\n- name: Z\n  mesh: z.obj\n";
+        let s = scene_info_summary(yaml);
+        let get = |k: &str| s.iter().find(|(a, _)| a == k).map(|(_, v)| v.as_str());
+        assert_eq!(
+            get("overrides"),
+            Some("[medium.mu_t=0.0, capture.grid=[64, 64]]")
+        );
+        assert_eq!(get("scene"), Some("text of 2 lines"));
+        assert!(get("long").unwrap().ends_with("…] (2 items)"), "{s:?}");
+        assert_eq!(get("nested"), Some("1 entry"));
     }
 
     #[test]

@@ -98,18 +98,18 @@ pub fn estimate_with(
 ) -> Result<(Outcome, Option<ResponseTable>)> {
     cap.validate_data()?;
     opt.fixed.validate()?;
+    if let Some(u) = opt.until_m.filter(|&u| !(u > cap.time.start_m)) {
+        return Err(Error::param(format!(
+            "the medium-only bins end at {u} m, before the capture's window starts ({} m)",
+            murk_core::short(cap.time.start_m)
+        )));
+    }
     let signature = Signature::measure(cap);
     if !signature.is_medium() {
         return Ok((Outcome::NoMedium(signature), table));
     }
     let until_m = match opt.until_m {
-        Some(u) if u > cap.time.start_m => u,
-        Some(u) => {
-            return Err(Error::param(format!(
-                "the medium-only bins end at {u} m, before the capture's window starts ({} m)",
-                murk_core::short(cap.time.start_m)
-            )))
-        }
+        Some(u) => u,
         None => fit::scene_onset_m(cap)?,
     };
     let scene_text = scene::medium_only(cap)?;

@@ -418,7 +418,7 @@ impl PfPlan {
         if f.info.evaluated_with == "fast" {
             rows.push((
                 "lateral".into(),
-                format!("{:?}", self.params.lateral).to_lowercase(),
+                murk_core::Named::name(self.params.lateral).to_string(),
             ));
             let evaluated = f.info.planes_evaluated();
             if evaluated != f.volume.z.n {

@@ -79,8 +79,12 @@ pub fn demo(dir: &Path, progress: &dyn Progress) -> Result<Demo> {
     let t1 = Instant::now();
     let rec = murk_recon::reconstruct(&cap, &volume, &PfParams::default(), PfForm::Fast, progress)?;
     let recon_s = t1.elapsed().as_secs_f64();
-    let mut table = rec.summary(&capture.display().to_string(), cap.kind(), recon_s);
-    table.insert(0, ("scene".into(), format!("planar Z letter (0.4 m) {LETTER_DEPTH_M} m behind a 1 m × 1 m wall, 64 × 64 laser points, one SPAD point at the centre, 1024 bins of 3 mm")));
+    let mut table: Vec<(String, String)> = crate::report::run_provenance()
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+    table.extend(rec.summary(&capture.display().to_string(), cap.kind(), recon_s));
+    table.insert(4, ("scene".into(), format!("planar Z letter (0.4 m) {LETTER_DEPTH_M} m behind a 1 m × 1 m wall, 64 × 64 laser points, one SPAD point at the centre, 1024 bins of 3 mm")));
     table.push((
         "synthesis + capture write seconds".into(),
         format!("{synth_s:.3}"),

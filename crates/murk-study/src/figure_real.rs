@@ -206,5 +206,6 @@ fn grid_plane(cells: &[Vec<Cell>]) -> Plane {
         height: h,
         values,
         extents: "rows: CDT, PF (λ = 4Δc of depth), PF (λ = 4Δc of path); columns: letter_s, mannequin, letter_t, cones, letters_ut; each a front view (from the wall, +y up, +x left), normalised to its own range".into(),
+        axes_m: None,
     }
 }

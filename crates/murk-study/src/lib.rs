@@ -35,6 +35,15 @@ use std::path::{Path, PathBuf};
 /// however it ends.
 pub struct FolderLock {
     _file: std::fs::File,
+    path: PathBuf,
+}
+
+/// A finished (or failed) study leaves no `.lock` behind; the lock itself went with the process's
+/// handle, so a study started meanwhile holds its own file.
+impl Drop for FolderLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
 }
 
 impl FolderLock {
@@ -53,7 +62,7 @@ impl FolderLock {
             ))),
             // A file system without locks (some network and FUSE mounts) still holds a study: the
             // lock is a guard against a mistake, not a condition for running.
-            Ok(()) | Err(std::fs::TryLockError::Error(_)) => Ok(FolderLock { _file: file }),
+            Ok(()) | Err(std::fs::TryLockError::Error(_)) => Ok(FolderLock { _file: file, path }),
         }
     }
 }
@@ -61,13 +70,7 @@ impl FolderLock {
 /// Plans the study, makes `DIR/renders/` for the tasks' outputs, takes the folder and writes
 /// `DIR/plan.json`; the folder stays taken while the lock lives.
 pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<(Plan, FolderLock)> {
-    let plan = Plan::new(opt)?;
-    if dir.exists() && !dir.is_dir() {
-        return Err(Error::param(format!(
-            "{}: is a file; the study needs a folder",
-            dir.display()
-        )));
-    }
+    let plan = plan_for(dir, opt)?;
     let renders = dir.join("renders");
     murk_io::create_output_dir(&renders)?;
     let lock = FolderLock::take(dir)?;
@@ -86,6 +89,25 @@ pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<(Plan, FolderLock)> {
             .map_err(|e| Error::io(&path, e))
     })?;
     Ok((plan, lock))
+}
+
+/// The study's plan for folder `dir`, which must be a folder or not exist yet.
+fn plan_for(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
+    let plan = Plan::new(opt)?;
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::param(format!(
+            "{}: is a file; the study needs a folder",
+            dir.display()
+        )));
+    }
+    Ok(plan)
+}
+
+/// The render commands still to run for a study in `dir` (`murk experiment --list-tasks`), each
+/// running `program`; writes nothing (each command makes the renders' folder it writes into).
+pub fn list_tasks(dir: &Path, opt: &StudyOptions, program: &Path) -> Result<Vec<String>> {
+    let plan = plan_for(dir, opt)?;
+    Ok(plan.task_commands(dir, program, |job, t| run::pending(dir, job, t)))
 }
 
 /// Plans, renders what is missing, reconstructs and scores every cell, and writes the report; returns

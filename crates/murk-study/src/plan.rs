@@ -27,6 +27,14 @@ impl Scale {
             ))),
         }
     }
+
+    /// The name `parse` reads: `quick` or `paper`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scale::Quick => "quick",
+            Scale::Paper => "paper",
+        }
+    }
 }
 
 /// The paper's figures.
@@ -268,7 +276,7 @@ fn holds_words(label: &str, words: &str) -> bool {
 }
 
 /// A cell's label as progress and `--cell` show it: the figure, its row and column, each once.
-fn cell_label(figure: Figure, row: &str, col: &str) -> String {
+pub(crate) fn cell_label(figure: Figure, row: &str, col: &str) -> String {
     [figure.name(), row, col]
         .iter()
         .filter(|p| !p.is_empty())
@@ -585,14 +593,17 @@ impl Plan {
     }
 
     /// One `murk render` command per task that `keep` (given the job and the task's index) keeps,
-    /// for any executor; a later `murk experiment` picks their outputs up. Paths are absolute, so the
-    /// commands run from any folder.
+    /// for any executor, running `program` (the murk binary); a later `murk experiment` picks their
+    /// outputs up. Paths are absolute, so the commands run from any folder.
     pub fn task_commands(
         &self,
         dir: &Path,
+        program: &Path,
         keep: impl Fn(&CaptureJob, usize) -> bool,
     ) -> Vec<String> {
         let (scenes, dir) = (absolute(&self.scenes_dir), absolute(dir));
+        // Each line makes the renders' folder itself: listing the tasks writes nothing.
+        let mkdir = format!("mkdir -p {} && ", shell(&dir.join("renders")));
         let mut out = Vec::new();
         for c in &self.captures {
             for (k, t) in c.tasks.iter().enumerate() {
@@ -600,7 +611,8 @@ impl Plan {
                     continue;
                 }
                 let mut cmd = format!(
-                    "murk render {} --out {} --spp {} --seed {}",
+                    "{mkdir}{} render {} --out {} --spp {} --seed {}",
+                    shell(program),
                     shell(&scenes.join(c.scene.file())),
                     shell(&dir.join(&t.out)),
                     c.spp,
@@ -812,7 +824,7 @@ mod tests {
         ids.sort();
         ids.dedup();
         assert_eq!(ids.len(), 6);
-        let cmds = plan.task_commands(Path::new("out"), |_, _| true);
+        let cmds = plan.task_commands(Path::new("out"), Path::new("murk"), |_, _| true);
         assert_eq!(cmds.len(), 6);
         // Absolute paths: the commands run from any folder.
         let cwd = std::env::current_dir().unwrap();
@@ -822,7 +834,11 @@ mod tests {
             "{}",
             cmds[0]
         );
-        assert_eq!(plan.task_commands(Path::new("out"), |_, t| t == 1).len(), 2);
+        assert_eq!(
+            plan.task_commands(Path::new("out"), Path::new("murk"), |_, t| t == 1)
+                .len(),
+            2
+        );
         assert!(
             cmds[4].contains("--seed 1") && cmds[4].contains("--shard 1/3"),
             "{}",
@@ -846,7 +862,7 @@ mod tests {
         .unwrap();
         // The sweep and the reference without a medium.
         assert_eq!(row.n_tasks(), 2);
-        let cmd = &row.task_commands(Path::new("out"), |_, _| true)[0];
+        let cmd = &row.task_commands(Path::new("out"), Path::new("murk"), |_, _| true)[0];
         assert!(cmd.contains("--albedos 0.15,0.33,0.5,0.67,0.83"), "{cmd}");
         let id = &row.captures[0].id;
         assert_eq!(row.cells[2].captures, [format!("{id}-albedo0.5")]);
@@ -857,7 +873,10 @@ mod tests {
         })
         .unwrap();
         assert!(one.captures.iter().all(|j| j.albedos.is_empty()));
-        assert!(!one.task_commands(Path::new("out"), |_, _| true)[0].contains("--albedos"));
+        assert!(
+            !one.task_commands(Path::new("out"), Path::new("murk"), |_, _| true)[0]
+                .contains("--albedos")
+        );
         assert_eq!(one.cells[0].captures, [one.captures[0].id.clone()]);
         // Every label that progress prints selects its cell, Fig. 4's and 5's (no row) too.
         let all = Plan::new(&options(&Figure::ALL, 1, 1)).unwrap();

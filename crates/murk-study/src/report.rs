@@ -69,6 +69,41 @@ fn num(v: f64) -> String {
     }
 }
 
+/// A number as the report shows it: three significant digits in plain decimals (0.0498 beside 0.999,
+/// never 4.98e-2), integers from 1000 up, "—" where there is none (NaN), "∞" for an infinite value.
+pub fn show(v: f64) -> String {
+    if v.is_nan() {
+        return "—".into();
+    }
+    if v.is_infinite() {
+        return if v > 0.0 { "∞" } else { "−∞" }.into();
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let digits = 2 - v.abs().log10().floor() as i32;
+    let t = if digits <= 0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.*}", digits as usize)
+    };
+    // A real minus sign, and none on a value that rounds to zero.
+    match t.strip_prefix('-') {
+        Some(rest) if rest.trim_matches(['0', '.']).is_empty() => rest.into(),
+        Some(rest) => format!("−{rest}"),
+        None => t,
+    }
+}
+
+/// Mean ± spread over seeds, as the report shows them (the spread only where there is one).
+fn show_stat((mean, sd): (f64, f64)) -> String {
+    if sd.is_finite() && !mean.is_nan() {
+        format!("{} ± {}", show(mean), show(sd))
+    } else {
+        show(mean)
+    }
+}
+
 fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
     move |e| Error::io(path, e)
 }
@@ -79,41 +114,100 @@ pub fn write(plan: &Plan, results: &[CellResult], dir: &Path) -> Result<PathBuf>
     write_objects_csv(results, &dir.join("objects.csv"))?;
     let figures = write_figures(results, dir)?;
     let plots = write_plots(results, dir)?;
-    remove_earlier_outputs(dir, &figures, &plots)?;
+    let kept: Vec<&PathBuf> = figures
+        .iter()
+        .flat_map(|f| &f.files)
+        .chain(plots.iter().flat_map(|p| &p.files))
+        .collect();
+    remove_earlier_outputs(dir, &kept)?;
     write_html(plan, results, &figures, &plots, dir)
 }
 
-/// Removes the figures and plots that an earlier run in `dir` wrote and this report does not show (a
-/// run with other `--only` figures), so that the folder holds one study. Only the study's own names
-/// (`fig*-<compensation>.png`, `plots/fig*.svg`) are touched.
-fn remove_earlier_outputs(
-    dir: &Path,
-    figures: &[(String, PathBuf)],
-    plots: &[(String, PathBuf)],
-) -> Result<()> {
-    let kept: Vec<&PathBuf> = figures.iter().chain(plots).map(|(_, p)| p).collect();
-    let mut earlier: Vec<PathBuf> = Figure::ALL
-        .iter()
-        .flat_map(|f| {
-            murk_recon::Compensation::NAMES
-                .iter()
-                .map(move |c| PathBuf::from(format!("{}-{c}.png", f.name())))
-        })
-        .collect();
-    let plots_dir = dir.join("plots");
-    for entry in std::fs::read_dir(&plots_dir).map_err(io(&plots_dir))? {
-        let name = entry.map_err(io(&plots_dir))?.file_name();
-        let name = name.to_string_lossy();
-        if name.starts_with("fig") && name.ends_with(".svg") {
-            earlier.push(Path::new("plots").join(&*name));
+/// The methods (compensations, reconstructions) the cells were scored with, in their first cell's
+/// order: the report's switch offers each, so a method added to the scores is one more entry.
+pub fn methods(results: &[CellResult]) -> Vec<&'static str> {
+    let mut out: Vec<&'static str> = Vec::new();
+    for (name, ..) in results.iter().flat_map(|r| &r.by_compensation) {
+        if !out.contains(name) {
+            out.push(name);
         }
     }
-    for p in earlier.iter().filter(|p| !kept.contains(p)) {
-        match std::fs::remove_file(dir.join(p)) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(Error::io(dir.join(p), e))
+    out
+}
+
+/// The method the report opens with: the paper's K where it was scored.
+fn default_method(methods: &[&'static str]) -> &'static str {
+    methods
+        .iter()
+        .copied()
+        .find(|m| *m == "paper")
+        .or(methods.first().copied())
+        .unwrap_or("paper")
+}
+
+/// How the switch names a method.
+fn method_label(name: &str) -> String {
+    match name {
+        "none" => "no compensation".into(),
+        "paper" => "paper's K(x_v)".into(),
+        "ballistic" => "ballistic gain e^{2μt(d_ill + d_cam)}".into(),
+        crate::run::AWARE => "medium-aware (estimated medium removed, K with the estimate)".into(),
+        other => other.into(),
+    }
+}
+
+/// A cell's scores and front view under `method`, if it was scored so.
+fn scored<'a>(r: &'a CellResult, method: &str) -> Option<&'a (&'static str, Vec<Scores>, Plane)> {
+    r.by_compensation.iter().find(|(name, ..)| *name == method)
+}
+
+/// The two colour scales a figure is drawn with: (file tag, shared, what the switch says).
+const COLOUR_SCALES: [(&str, bool, &str); 2] = [
+    ("shared", true, "one for the figure (shows fading)"),
+    (
+        "cell",
+        false,
+        "each cell to its own maximum (shows structure)",
+    ),
+];
+
+/// A figure or plot drawn once per method (and colour scale): the page's `<img>` names its file
+/// with `{method}` and `{scale}` left for the switch to fill.
+struct Switched {
+    figure: Figure,
+    title: String,
+    /// The file name with `{method}` and `{scale}` placeholders.
+    pattern: String,
+    files: Vec<PathBuf>,
+}
+
+fn fill(pattern: &str, method: &str, scale: &str) -> String {
+    pattern
+        .replace("{method}", method)
+        .replace("{scale}", scale)
+}
+
+/// Removes the figures and plots that an earlier run in `dir` wrote and this report does not show (a
+/// run with other `--only` figures or methods), so that the folder holds one study. Only the study's
+/// own names (`fig*.png`, `plots/fig*.svg`) are touched.
+fn remove_earlier_outputs(dir: &Path, kept: &[&PathBuf]) -> Result<()> {
+    for (sub, ext) in [("", ".png"), ("plots", ".svg")] {
+        let d = dir.join(sub);
+        if !d.is_dir() {
+            continue;
+        }
+        for entry in std::fs::read_dir(&d).map_err(io(&d))? {
+            let name = entry.map_err(io(&d))?.file_name();
+            let name = name.to_string_lossy();
+            let rel = Path::new(sub).join(&*name);
+            if name.starts_with("fig") && name.ends_with(ext) && !kept.contains(&&rel) {
+                match std::fs::remove_file(dir.join(&rel)) {
+                    Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                        return Err(Error::io(dir.join(&rel), e))
+                    }
+                    _ => {}
+                }
             }
-            _ => {}
         }
     }
     Ok(())
@@ -197,9 +291,11 @@ fn write_objects_csv(results: &[CellResult], path: &Path) -> Result<()> {
     murk_io::write_atomic(path, |w| w.write_all(s.as_bytes()).map_err(io(path)))
 }
 
-/// One grid per figure and compensation, laid out as the paper's (rows and columns from the cells).
-fn write_figures(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBuf)>> {
+/// One grid per figure, method and colour scale, laid out as the paper's (rows and columns from the
+/// cells), each image with its spatial axes in metres.
+fn write_figures(results: &[CellResult], dir: &Path) -> Result<Vec<Switched>> {
     let mut out = Vec::new();
+    let methods = methods(results);
     for fig in Figure::ALL {
         let cells: Vec<&CellResult> = results.iter().filter(|r| r.cell.figure == fig).collect();
         if cells.is_empty() {
@@ -215,7 +311,9 @@ fn write_figures(results: &[CellResult], dir: &Path) -> Result<Vec<(String, Path
                 cols.push(&r.cell.col);
             }
         }
-        for (k, comp) in murk_recon::Compensation::NAMES.iter().enumerate() {
+        let pattern = format!("{}-{{method}}-{{scale}}.png", fig.name());
+        let mut files = Vec::new();
+        for method in &methods {
             let planes: Vec<Vec<Option<&Plane>>> = rows
                 .iter()
                 .map(|row| {
@@ -224,36 +322,54 @@ fn write_figures(results: &[CellResult], dir: &Path) -> Result<Vec<(String, Path
                             cells
                                 .iter()
                                 .find(|r| r.cell.row == *row && r.cell.col == *col)
-                                .map(|r| &r.by_compensation[k].2)
+                                .and_then(|r| scored(r, method))
+                                .map(|s| &s.2)
                         })
                         .collect()
                 })
                 .collect();
-            let grid = FigureGrid {
-                title: format!("{} — compensation: {comp}", fig.caption()),
-                row_labels: rows.iter().map(|s| s.to_string()).collect(),
-                col_labels: cols.iter().map(|s| s.to_string()).collect(),
-                cells: planes,
-            };
-            let name = format!("{}-{comp}.png", fig.name());
-            write_grid_png(&dir.join(&name), &grid, 160)?;
-            out.push((
-                format!("{} (compensation: {comp})", fig.caption()),
-                PathBuf::from(name),
-            ));
+            for (tag, shared, _) in COLOUR_SCALES {
+                let grid = FigureGrid {
+                    title: format!("{} — {}", fig.caption(), method_label(method)),
+                    row_labels: rows.iter().map(|s| s.to_string()).collect(),
+                    col_labels: cols.iter().map(|s| s.to_string()).collect(),
+                    cells: planes.clone(),
+                    shared_scale: shared,
+                };
+                let name = PathBuf::from(fill(&pattern, method, tag));
+                write_grid_png(&dir.join(&name), &grid, 160)?;
+                files.push(name);
+            }
         }
+        out.push(Switched {
+            figure: fig,
+            title: fig.caption().into(),
+            pattern,
+            files,
+        });
     }
     Ok(out)
 }
 
-/// Plots of every metric against the study's axes (paper compensation, mean ± spread over seeds).
-fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBuf)>> {
+/// The axis a metric is drawn over: [0, 1] for a score bounded so, from 0 for a non-negative one.
+fn metric_range(column: &str) -> Option<(f64, f64)> {
+    match column {
+        "iou_best" | "iou_otsu" | "ssim" | "hf_share" => Some((0.0, 1.0)),
+        "cnr" | "psnr_db" => Some((0.0, 0.0)),
+        _ => None,
+    }
+}
+
+/// Plots of every metric against the study's axes, one per method (mean ± spread over seeds). The
+/// x axes of a quantity that starts at zero (μt, α, λ) start there, so plots side by side compare.
+fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<Switched>> {
     murk_io::create_output_dir(&dir.join("plots"))?;
-    // (figure, file stem, x label, x value, series key)
+    // (figure, file stem, x label, x from zero, x value, series key)
     type Axis = (
         Figure,
         &'static str,
         &'static str,
+        bool,
         fn(&CellResult) -> f64,
         fn(&CellResult) -> String,
     );
@@ -262,6 +378,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             Figure::Fig3b,
             "vs-albedo-by-mu_t",
             "albedo α",
+            true,
             |r| r.cell.medium.albedo,
             |r| r.cell.row.clone(),
         ),
@@ -269,6 +386,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             Figure::Fig3b,
             "vs-mu_t-by-albedo",
             "μt (1/m)",
+            true,
             |r| r.cell.medium.mu_t_per_m,
             |r| r.cell.col.clone(),
         ),
@@ -276,6 +394,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             Figure::Fig3c,
             "vs-albedo-by-g",
             "albedo α",
+            true,
             |r| r.cell.medium.albedo,
             |r| r.cell.row.clone(),
         ),
@@ -283,6 +402,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             Figure::Fig3c,
             "vs-g-by-albedo",
             "anisotropy g",
+            false,
             |r| r.cell.medium.g,
             |r| r.cell.col.clone(),
         ),
@@ -290,6 +410,7 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             Figure::Fig4,
             "vs-lambda",
             "λ / λ0",
+            true,
             |r| r.cell.lambda_factor,
             |_| "μt = 1, α = 0.83".into(),
         ),
@@ -297,41 +418,58 @@ fn write_plots(results: &[CellResult], dir: &Path) -> Result<Vec<(String, PathBu
             Figure::Fig5,
             "vs-mu_t",
             "μt (1/m)",
+            true,
             |r| r.cell.medium.mu_t_per_m,
             |_| "shelf, α = 0.5".into(),
         ),
     ];
+    let methods = methods(results);
     let mut out = Vec::new();
-    for (fig, stem, x_label, x, key) in axes {
+    for (fig, stem, x_label, from_zero, x, key) in axes {
         let cells: Vec<&CellResult> = results.iter().filter(|r| r.cell.figure == fig).collect();
         if cells.is_empty() {
             continue;
         }
         for m in &METRICS {
-            let mut series: Vec<Series> = Vec::new();
-            for r in &cells {
-                let (mean, sd) = stat(&r.by_compensation[1].1, m.get);
-                let k = key(r);
-                match series.iter_mut().find(|s| s.label == k) {
-                    Some(s) => s.points.push((x(r), mean, sd)),
-                    None => series.push(Series {
-                        label: k,
-                        points: vec![(x(r), mean, sd)],
-                    }),
+            let pattern = format!("plots/{}-{}-{stem}-{{method}}.svg", fig.name(), m.column);
+            let mut files = Vec::new();
+            for method in &methods {
+                let mut series: Vec<Series> = Vec::new();
+                for r in &cells {
+                    let Some((_, scores, _)) = scored(r, method) else {
+                        continue;
+                    };
+                    let (mean, sd) = stat(scores, m.get);
+                    let k = key(r);
+                    match series.iter_mut().find(|s| s.label == k) {
+                        Some(s) => s.points.push((x(r), mean, sd)),
+                        None => series.push(Series {
+                            label: k,
+                            points: vec![(x(r), mean, sd)],
+                        }),
+                    }
                 }
+                series
+                    .iter_mut()
+                    .for_each(|s| s.points.sort_by(|a, b| a.0.total_cmp(&b.0)));
+                let plot = LinePlot {
+                    title: m.label.into(),
+                    x_label: x_label.into(),
+                    y_label: m.label.into(),
+                    series,
+                    x_range: from_zero.then_some((0.0, 0.0)),
+                    y_range: metric_range(m.column),
+                };
+                let name = PathBuf::from(fill(&pattern, method, ""));
+                write_plot_svg(&dir.join(&name), &plot)?;
+                files.push(name);
             }
-            series
-                .iter_mut()
-                .for_each(|s| s.points.sort_by(|a, b| a.0.total_cmp(&b.0)));
-            let plot = LinePlot {
-                title: format!("{}: {} vs {x_label}", fig.name(), m.label),
-                x_label: x_label.into(),
-                y_label: m.label.into(),
-                series,
-            };
-            let name = PathBuf::from(format!("plots/{}-{}-{stem}.svg", fig.name(), m.column));
-            write_plot_svg(&dir.join(&name), &plot)?;
-            out.push((plot.title, name));
+            out.push(Switched {
+                figure: fig,
+                title: format!("{} vs {x_label}", m.label),
+                pattern,
+                files,
+            });
         }
     }
     Ok(out)
@@ -341,6 +479,7 @@ fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// A best-threshold IoU from which the Z counts as found (the reduced study's test uses the same).
@@ -368,10 +507,7 @@ pub fn findings(results: &[CellResult]) -> Vec<String> {
         // Three significant digits, so that close values (high-frequency shares of 1e-5 to 0.1)
         // show which is larger.
         rs.iter()
-            .map(|r| match value(r) {
-                v if v.abs() < 0.1 => format!("{v:.2e} ({})", key(r)),
-                v => format!("{v:.3} ({})", key(r)),
-            })
+            .map(|r| format!("{} ({})", show(value(r)), key(r)))
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -432,14 +568,14 @@ pub fn findings(results: &[CellResult]) -> Vec<String> {
             // The projection's high-frequency share also counts the fog's noise, so the loss of the
             // Z's detail is judged by its likeness to the clear scene; the share is given beside it.
             out.push(format!(
-                "Fig. 3b, μt = {m}: the paper says a higher albedo costs coherence and high-frequency detail; SSIM against the clear scene falls from α = 0.15 to α = 0.83: {} ({:.3} → {:.3}; IoU {:.3} → {:.3}). The projection's high-frequency share goes {:.2e} → {:.2e}: {}.",
+                "Fig. 3b, μt = {m}: the paper says a higher albedo costs coherence and high-frequency detail; SSIM against the clear scene falls from α = 0.15 to α = 0.83: {} ({:.3} → {:.3}; IoU {:.3} → {:.3}). The projection's high-frequency share goes {} → {}: {}.",
                 verdict(ssim(b) < ssim(a)),
                 ssim(a),
                 ssim(b),
                 iou(a),
                 iou(b),
-                hf(a),
-                hf(b),
+                show(hf(a)),
+                show(hf(b)),
                 if hf(b) > hf(a) {
                     "it rises, with the fog's noise rather than the Z's detail"
                 } else {
@@ -542,28 +678,205 @@ const CHOICES: &[&str] = &[
     "Albedo sweeps: the five cells of a row of Fig. 3b or 3c are one render whose paths serve every albedo (the renderer's sampling does not depend on the albedo in fog); each capture equals, to float rounding, a render of that albedo alone with the same seed. The CPU column gives each cell a fifth of its row's render.",
     "Fig. 3b: the paper shows one cell twice; we render every μt × α cell.",
     "Fig. 4: the paper's file names suggest 4λ0 for its third column; its caption says 3λ0, which we use.",
-    "Compensation: every cell is scored without compensation, with the paper's K(x_v) as printed (α·d mixes units) and with the physical ballistic gain e^{2μt(d_ill + d_cam)}; figures and plots use the paper's K unless the file name says otherwise.",
+    "Compensation: every cell is scored without compensation, with the paper's K(x_v) as printed (α·d mixes units) and with the physical ballistic gain e^{2μt(d_ill + d_cam)}; the switch above the figures chooses which the figures, plots and tables show (the Findings use the paper's K).",
     "Metrics: IoU of the front maximum projection thresholded at the best and at Otsu's threshold against the renderer's ground-truth mask (the Z; in the room, everything but the room's walls); depth error = median over that mask of the brightest voxel's depth minus the true depth; PSNR and SSIM of the normalised front projection against the same scene without medium at the same λ; CNR of the mask against the rest; high-frequency share = spectral energy above half Nyquist.",
     "Shelf objects: an object is detected when the median normalised front intensity over its pixels reaches Otsu's threshold of the whole projection.",
 ];
 
+/// What every murk page states first: murk's version, the command, when and on which machine.
+pub(crate) fn run_provenance() -> Vec<(&'static str, String)> {
+    let command = std::env::args()
+        .map(|a| {
+            if a.is_empty() || a.contains(|c: char| c.is_whitespace() || "'\"$\\".contains(c)) {
+                format!("'{}'", a.replace('\'', "'\\''"))
+            } else {
+                a
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ");
+    vec![
+        ("murk version", env!("CARGO_PKG_VERSION").to_string()),
+        ("command", command),
+        ("written", utc_now()),
+        ("machine", machine()),
+    ]
+}
+
+/// The run's provenance, for the top of the report: what ran, where, when and for how long.
+fn provenance(plan: &Plan, results: &[CellResult]) -> Vec<(&'static str, String)> {
+    let cpu: Vec<f64> = results.iter().filter_map(|r| r.cpu_s).collect();
+    let external = results.iter().filter(|r| r.cpu_s.is_none()).count();
+    let mut cpu_text = format!(
+        "{} CPU-hours of rendering ({} s) over {} cells",
+        show(cpu.iter().sum::<f64>() / 3600.0),
+        show(cpu.iter().sum::<f64>()),
+        cpu.len()
+    );
+    if external > 0 {
+        let _ = write!(
+            cpu_text,
+            "; {external} cells rendered by an external executor, not counted"
+        );
+    }
+    let mut rows = run_provenance();
+    rows.insert(
+        2,
+        (
+            "scale",
+            format!("{} ({} seeds)", plan.scale.name(), plan.seeds),
+        ),
+    );
+    rows.insert(4, ("CPU time", cpu_text));
+    rows
+}
+
+/// The current time as "YYYY-MM-DD HH:MM UTC" (days to civil date after Howard Hinnant's algorithm).
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs()) as i64;
+    let (days, rest) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02} UTC",
+        rest / 3600,
+        rest % 3600 / 60
+    )
+}
+
+/// Host name, CPU model and the cores this process may use.
+fn machine() -> String {
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|h| h.trim().to_string())
+        .unwrap_or_else(|_| "unknown host".into());
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|c| {
+            c.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.into());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{host}: {cpu}, {cores} cores available")
+}
+
+/// The page's switch: sets every image's file from its pattern and shows the table rows of the chosen
+/// method. No network, no library.
+const SWITCH_JS: &str = "<script>
+function murkSwitch() {
+  const m = document.getElementById('method').value;
+  const s = document.querySelector('input[name=scale]:checked').value;
+  document.querySelectorAll('img[data-pattern]').forEach(i => {
+    i.src = i.dataset.pattern.replace('{method}', m).replace('{scale}', s);
+  });
+  document.querySelectorAll('[data-method]').forEach(e => { e.hidden = e.dataset.method !== m; });
+}
+document.querySelectorAll('#controls select, #controls input').forEach(e => e.addEventListener('change', murkSwitch));
+murkSwitch();
+</script>
+";
+
+const STYLE: &str = "<style>#controls{position:sticky;top:0;background:#f4f4f4;border-bottom:1px solid #bbb;padding:.4em .6em;z-index:1}\
+figure{margin:.5em 0}.grid img{max-width:100%}\
+.plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(330px,1fr));gap:4px}.plots img{width:100%}\
+li{margin:.3em 0}</style>";
+
 fn write_html(
     plan: &Plan,
     results: &[CellResult],
-    figures: &[(String, PathBuf)],
-    plots: &[(String, PathBuf)],
+    figures: &[Switched],
+    plots: &[Switched],
     dir: &Path,
 ) -> Result<PathBuf> {
-    let mut h = String::from(
-        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>murk: the paper's study</title>\n\
-         <style>body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;font-size:12px}\
-         td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}img{max-width:100%}</style></head><body>\n\
-         <h1>Phasor Fields in scattering media: the study of Luesia et al., rerun by murk</h1>\n",
+    let methods = methods(results);
+    let shown = default_method(&methods);
+    let mut h = format!(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>murk: the paper's study</title>\n{}{STYLE}</head><body>\n\
+         <h1>Phasor Fields in scattering media: the study of Luesia et al., rerun by murk</h1>\n<table id=\"provenance\">",
+        murk_view::PAGE_STYLE
     );
-    let _ = writeln!(
+    for (k, v) in provenance(plan, results) {
+        let _ = write!(h, "<tr><th>{k}</th><td>{}</td></tr>", esc(&v));
+    }
+    h.push_str("</table>\n<h2>Findings</h2>\n<p>Each claim of the paper that this run's cells can test, with the numbers it rests on (paper's K, mean over this run's seeds at its spp) and the verdict they give. Few samples make verdicts noisy; docs/study.md in murk's repository says which hold at the scales it reports.</p>\n<ul id=\"findings\">\n");
+    let found = findings(results);
+    if found.is_empty() {
+        h.push_str("<li>No claim of the paper can be tested with this run's cells alone: each needs a figure's no-medium cell, a row or column of cells, or a pair of them.</li>\n");
+    }
+    for f in found {
+        let _ = writeln!(h, "<li>{}</li>", esc(&f));
+    }
+    h.push_str("</ul>\n");
+    // The switch: every figure, plot and table below follows it.
+    h.push_str("<div id=\"controls\"><label>Compensation: <select id=\"method\">");
+    for m in &methods {
+        let _ = write!(
+            h,
+            "<option value=\"{m}\"{}>{}</option>",
+            if *m == shown { " selected" } else { "" },
+            esc(&method_label(m))
+        );
+    }
+    h.push_str("</select></label> &nbsp; Colour scale:");
+    for (k, (tag, _, label)) in COLOUR_SCALES.iter().enumerate() {
+        let _ = write!(
+            h,
+            " <label><input type=\"radio\" name=\"scale\" value=\"{tag}\"{}> {label}</label>",
+            if k == 0 { " checked" } else { "" }
+        );
+    }
+    h.push_str("</div>\n");
+    let img = |pattern: &str, alt: &str| {
+        format!(
+            "<img data-pattern=\"{}\" src=\"{}\" alt=\"{}\">",
+            esc(pattern),
+            esc(&fill(pattern, shown, COLOUR_SCALES[0].0)),
+            esc(alt)
+        )
+    };
+    for fig in Figure::ALL {
+        let grids: Vec<&Switched> = figures.iter().filter(|f| f.figure == fig).collect();
+        let graphs: Vec<&Switched> = plots.iter().filter(|p| p.figure == fig).collect();
+        if grids.is_empty() {
+            continue;
+        }
+        let _ = writeln!(
+            h,
+            "<section id=\"{}\"><h2>{}</h2>",
+            fig.name(),
+            esc(fig.caption())
+        );
+        for g in grids {
+            let _ = writeln!(
+                h,
+                "<figure class=\"grid\">{}</figure>",
+                img(&g.pattern, &g.title)
+            );
+        }
+        if !graphs.is_empty() {
+            h.push_str("<div class=\"plots\">");
+            for g in graphs {
+                h.push_str(&img(&g.pattern, &g.title));
+            }
+            h.push_str("</div>\n");
+        }
+        h.push_str("</section>\n");
+    }
+    let _ = write!(
         h,
-        "<h2>Parameters</h2>\n<table id=\"parameters\"><tr><th>scale</th><td>{:?}</td></tr><tr><th>seeds</th><td>{}</td></tr><tr><th>shards per capture</th><td>{}</td></tr><tr><th>captures</th><td>{}</td></tr><tr><th>renders (albedo sweeps count once)</th><td>{}</td></tr><tr><th>render tasks</th><td>{}</td></tr>",
-        plan.scale,
+        "<h2>Parameters</h2>\n<table id=\"parameters\"><tr><th>scale</th><td>{}</td></tr><tr><th>seeds</th><td>{}</td></tr><tr><th>shards per capture</th><td>{}</td></tr><tr><th>captures</th><td>{}</td></tr><tr><th>renders (albedo sweeps count once)</th><td>{}</td></tr><tr><th>render tasks</th><td>{}</td></tr>",
+        plan.scale.name(),
         plan.seeds,
         plan.shards,
         plan.captures.iter().map(|j| j.capture_ids().len()).sum::<usize>(),
@@ -583,62 +896,43 @@ fn write_html(
             .map_or(f.spp, |c| c.spp);
         let _ = writeln!(
             h,
-            "<tr><th>{}</th><td>{}² laser points, {} bins of {} m from {} m, {spp} spp, volume {}</td></tr>",
-            scene.file(),
+            "<tr><th>{}</th><td>{}² laser points, {} bins of {} m from {} m, {spp} samples per point, volume {}</td></tr>",
+            scene.file().trim_end_matches(".toml"),
             f.grid,
             f.bins,
-            f.bin_width_m,
-            f.start_m,
+            show(f.bin_width_m),
+            show(f.start_m),
             f.volume
         );
     }
-    h.push_str("</table>\n<h2>Findings</h2>\n<p>Each claim of the paper that this run's cells can test, with the numbers it rests on (paper's K, mean over this run's seeds at its spp) and the verdict they give. Few samples make verdicts noisy; docs/study.md in murk's repository says which hold at converged settings.</p>\n<ul id=\"findings\">\n");
-    let found = findings(results);
-    if found.is_empty() {
-        h.push_str("<li>No claim of the paper can be tested with this run's cells alone: each needs a figure's no-medium cell, a row or column of cells, or a pair of them.</li>\n");
-    }
-    for f in found {
-        let _ = writeln!(h, "<li>{}</li>", esc(&f));
-    }
-    h.push_str("</ul>\n<h2>Choices</h2>\n<ul>\n");
-    for c in CHOICES {
-        let _ = writeln!(h, "<li>{}</li>", esc(c));
-    }
-    h.push_str("</ul>\n<h2>Figures</h2>\n");
-    for (caption, path) in figures {
-        let _ = writeln!(
-            h,
-            "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
-            path.display(),
-            esc(caption),
-            esc(caption)
-        );
-    }
-    h.push_str("<h2>Numbers per cell (compensation: paper; mean ± spread over seeds)</h2>\n<table id=\"metrics\"><tr><th>figure</th><th>row</th><th>column</th><th>tail share</th><th>CPU s</th><th>render error</th>");
+    h.push_str("</table>\n<h2>Numbers per cell (mean ± spread over seeds)</h2>\n<table id=\"metrics\"><thead><tr><th>figure</th><th>row</th><th>column</th><th>tail share</th><th>CPU s</th><th>render error</th>");
     for m in &METRICS {
         let _ = write!(h, "<th>{}</th>", esc(m.label));
     }
-    h.push_str("</tr>\n");
-    for r in results {
-        let _ = write!(
-            h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
-            r.cell.figure.name(),
-            esc(&r.cell.row),
-            esc(&r.cell.col),
-            num(metrics::mean_std(&r.tail_share).0),
-            r.cpu_s.map_or("external".into(), |c| format!("{c:.1}")),
-            r.render_rel_err
-                .map_or("—".into(), |e| format!("{:.1} %", 100.0 * e))
-        );
-        for m in &METRICS {
-            let (mean, sd) = stat(&r.by_compensation[1].1, m.get);
-            let _ = match sd.is_nan() {
-                true => write!(h, "<td>{}</td>", num(mean)),
-                false => write!(h, "<td>{} ± {}</td>", num(mean), num(sd)),
+    h.push_str("</tr></thead>\n");
+    for method in &methods {
+        let _ = writeln!(h, "<tbody data-method=\"{method}\">");
+        for r in results {
+            let Some((_, scores, _)) = scored(r, method) else {
+                continue;
             };
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+                r.cell.figure.name(),
+                esc(&r.cell.row),
+                esc(&r.cell.col),
+                show(metrics::mean_std(&r.tail_share).0),
+                r.cpu_s.map_or("external".into(), show),
+                r.render_rel_err
+                    .map_or("—".into(), |e| format!("{} %", show(100.0 * e)))
+            );
+            for m in &METRICS {
+                let _ = write!(h, "<td>{}</td>", show_stat(stat(scores, m.get)));
+            }
+            h.push_str("</tr>\n");
         }
-        h.push_str("</tr>\n");
+        h.push_str("</tbody>\n");
     }
     h.push_str("</table>\n");
     let shelf: Vec<&CellResult> = results
@@ -646,33 +940,35 @@ fn write_html(
         .filter(|r| r.cell.scene == SceneKind::Shelf)
         .collect();
     if !shelf.is_empty() {
-        h.push_str("<h2>Shelf objects (compensation: paper, first seed)</h2>\n<table id=\"objects\"><tr><th>cell</th><th>object</th><th>detected</th><th>depth error (m)</th></tr>\n");
-        for r in shelf {
-            for o in &r.by_compensation[1].1[0].objects {
-                let _ = writeln!(
-                    h,
-                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                    esc(&r.cell.col),
-                    esc(&o.name),
-                    if o.detected { "yes" } else { "no" },
-                    num(o.depth_err_m)
-                );
+        h.push_str("<h2>Shelf objects (first seed)</h2>\n<table id=\"objects\"><thead><tr><th>cell</th><th>object</th><th>detected</th><th>depth error (m)</th></tr></thead>\n");
+        for method in &methods {
+            let _ = writeln!(h, "<tbody data-method=\"{method}\">");
+            for r in &shelf {
+                let Some((_, scores, _)) = scored(r, method) else {
+                    continue;
+                };
+                for o in scores.first().map_or(&[][..], |s| &s.objects) {
+                    let _ = writeln!(
+                        h,
+                        "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                        esc(&r.cell.col),
+                        esc(&o.name),
+                        if o.detected { "yes" } else { "no" },
+                        show(o.depth_err_m)
+                    );
+                }
             }
+            h.push_str("</tbody>\n");
         }
         h.push_str("</table>\n");
     }
-    if !plots.is_empty() {
-        h.push_str("<h2>Plots</h2>\n");
+    h.push_str("<h2>Choices</h2>\n<ul>\n");
+    for c in CHOICES {
+        let _ = writeln!(h, "<li>{}</li>", esc(c));
     }
-    for (title, path) in plots {
-        let _ = writeln!(
-            h,
-            "<figure><img src=\"{}\" alt=\"{}\"></figure>",
-            path.display(),
-            esc(title)
-        );
-    }
-    h.push_str("<p>Raw numbers: <a href=\"metrics.csv\">metrics.csv</a>, <a href=\"objects.csv\">objects.csv</a>; the task list: <a href=\"plan.json\">plan.json</a>.</p>\n</body></html>\n");
+    h.push_str("</ul>\n<p>Raw numbers: <a href=\"metrics.csv\">metrics.csv</a>, <a href=\"objects.csv\">objects.csv</a>; the task list: <a href=\"plan.json\">plan.json</a>.</p>\n");
+    h.push_str(SWITCH_JS);
+    h.push_str("</body></html>\n");
     let path = dir.join("index.html");
     murk_io::write_atomic(&path, |w| w.write_all(h.as_bytes()).map_err(io(&path)))?;
     Ok(path)

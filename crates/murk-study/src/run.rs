@@ -164,17 +164,7 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
         .flat_map(|j| (0..j.tasks.len()).map(move |t| (*j, t)))
         .filter(|(j, t)| !task_done(dir, j, *t))
         .collect();
-    // The first cell that uses a job names it (later inserts win, hence the reversal).
-    let labels: HashMap<&str, String> = plan
-        .cells
-        .iter()
-        .rev()
-        .flat_map(|c| {
-            c.captures
-                .iter()
-                .map(move |id| (plan.job(id).id.as_str(), c.label()))
-        })
-        .collect();
+    let labels = job_labels(plan);
     let started = Instant::now();
     for (k, (job, t)) in todo.iter().enumerate() {
         // A stop that came as the last task was writing its captures starts no other.
@@ -308,6 +298,32 @@ pub struct CellResult {
 /// (`murk_medium`), its response removed, the gate and window end as `murk reconstruct` sets them,
 /// and the paper's K with the *estimated* μt and α.
 pub const AWARE: &str = "aware";
+
+/// What progress calls each job: its first cell's label (later inserts win, hence the reversal),
+/// or for a sweep the row with every albedo it renders, not the first cell's one.
+pub fn job_labels(plan: &Plan) -> HashMap<&str, String> {
+    plan.cells
+        .iter()
+        .rev()
+        .flat_map(|c| {
+            c.captures.iter().map(move |id| {
+                let job = plan.job(id);
+                let label = match job.albedos.as_slice() {
+                    [_, _, ..] => {
+                        let all: Vec<String> = job.albedos.iter().map(|a| a.to_string()).collect();
+                        crate::plan::cell_label(
+                            c.figure,
+                            &c.row,
+                            &format!("α = {}", all.join(", ")),
+                        )
+                    }
+                    _ => c.label(),
+                };
+                (job.id.as_str(), label)
+            })
+        })
+        .collect()
+}
 
 /// Reads capture `id`, refusing a file that holds another render than the plan's: one copied or
 /// left there by hand would otherwise be scored as this cell's.
@@ -615,5 +631,26 @@ mod tests {
             .unwrap();
         assert!((5.0..6.0).contains(&now), "{now}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A row of Fig. 3b renders five albedos at once: its progress names all five, not the first.
+    #[test]
+    fn a_sweeps_label_names_every_albedo() {
+        let plan = Plan::new(&crate::plan::StudyOptions {
+            scale: crate::plan::Scale::Quick,
+            only: vec![crate::plan::Figure::Fig3b],
+            cells: vec!["μt = 2".into()],
+            seeds: 1,
+            shards: 1,
+            spp: Some(8),
+            scenes_dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
+        })
+        .unwrap();
+        let labels = job_labels(&plan);
+        let sweep = plan.captures.iter().find(|j| j.albedos.len() == 5).unwrap();
+        assert_eq!(
+            labels[sweep.id.as_str()],
+            "fig3b μt = 2 α = 0.15, 0.33, 0.5, 0.67, 0.83"
+        );
     }
 }

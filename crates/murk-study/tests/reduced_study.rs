@@ -108,8 +108,8 @@ fn reduced_study_shows_what_the_paper_claims() {
         "metrics.csv",
         "objects.csv",
         "index.html",
-        "fig3b-paper.png",
-        "fig4-none.png",
+        "fig3b-paper-shared.png",
+        "fig4-none-cell.png",
     ] {
         assert!(dir.join(f).exists(), "{f}");
     }

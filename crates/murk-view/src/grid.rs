@@ -17,6 +17,9 @@ pub struct FigureGrid<'a> {
     pub col_labels: Vec<String>,
     /// Rows × columns, every row as long as the first; `None` is an empty cell (drawn dark grey).
     pub cells: Vec<Vec<Option<&'a Plane>>>,
+    /// One colour scale for every cell (0 .. the largest value of the grid), so that a cell fainter than
+    /// another looks fainter; otherwise each cell is normalised to its own maximum.
+    pub shared_scale: bool,
 }
 
 /// Where things go in the picture [`write_grid_png`] draws (pixels, origin top left).
@@ -42,12 +45,45 @@ pub struct GridLayout {
     /// (a grid of one small cell), so that neither is clipped.
     pub bar_labels_span: u32,
     /// Top edge of the colour bar under the cells (from `left`, as wide as the cells, `font_px`
-    /// high), with "0" and [`BAR_TOP_LABEL`] under its ends.
+    /// high), with "0" and [`bar_top_label`] under its ends.
     pub bar_top: u32,
+    /// Whether the cells' planes carry metre axes, drawn as coordinates under the bottom row's cells
+    /// and right of the last column's (the bands for them are reserved only then).
+    pub axes: bool,
 }
 
-/// What the top of the colour bar stands for: every cell is normalised to its own maximum.
-pub const BAR_TOP_LABEL: &str = "max of each cell";
+/// What the top of the colour bar stands for.
+pub fn bar_top_label(shared_scale: bool) -> &'static str {
+    if shared_scale {
+        "max of the whole grid"
+    } else {
+        "max of each cell"
+    }
+}
+
+/// A coordinate in metres as the axes write it: two decimals and a real minus sign.
+fn metres(v: f64) -> String {
+    let t = format!("{v:.2}");
+    match t.strip_prefix('-') {
+        Some(rest) if rest.trim_matches(['0', '.']).is_empty() => rest.into(),
+        Some(rest) => format!("−{rest}"),
+        None => t,
+    }
+}
+
+/// The planes of the grid, row by row.
+fn planes<'a>(grid: &'a FigureGrid) -> impl Iterator<Item = &'a Plane> {
+    grid.cells.iter().flatten().flatten().copied()
+}
+
+/// The y coordinates (top, bottom) written right of the grid, from its first plane with axes.
+fn y_labels(grid: &FigureGrid) -> Option<(String, String)> {
+    let [_, (top, bottom)] = planes(grid).find_map(|p| p.axes_m)?;
+    Some((
+        format!("{} m", metres(top)),
+        format!("{} m", metres(bottom)),
+    ))
+}
 
 impl GridLayout {
     /// Top-left corner of the cell at (`row`, `col`).
@@ -148,10 +184,20 @@ pub fn grid_layout(grid: &FigureGrid, cell_px: u32) -> Result<GridLayout> {
     let (left, top) = (margin + row_band, margin + title_band + col_band);
     let cells_w = cols as u32 * (cell_px + gap) - gap;
     let cells_h = rows as u32 * (cell_px + gap) - gap;
-    let bar_labels_w = text_width(BAR_TOP_LABEL, font_px)? + text_width("0", font_px)? + font_px;
-    let width = (left + cells_w.max(bar_labels_w) + margin)
+    let axes = planes(grid).next().is_some() && planes(grid).all(|p| p.axes_m.is_some());
+    let (x_band, y_band) = match y_labels(grid).filter(|_| axes) {
+        Some((a, b)) => (
+            font_px * 3 / 2,
+            text_width(&a, font_px)?.max(text_width(&b, font_px)?) + font_px / 2,
+        ),
+        None => (0, 0),
+    };
+    let bar_labels_w = text_width(bar_top_label(grid.shared_scale), font_px)?
+        + text_width("0", font_px)?
+        + font_px;
+    let width = (left + (cells_w + y_band).max(bar_labels_w) + margin)
         .max(text_width(&grid.title, title_px)? + 2 * margin);
-    let bar_top = top + cells_h + font_px;
+    let bar_top = top + cells_h + x_band + font_px;
     let height = bar_top + font_px * 5 / 2 + margin;
     if width > MAX_SIDE || height > MAX_SIDE {
         return Err(Error::Limits(format!(
@@ -171,23 +217,45 @@ pub fn grid_layout(grid: &FigureGrid, cell_px: u32) -> Result<GridLayout> {
         font_px,
         bar_labels_span: cells_w.max(bar_labels_w),
         bar_top,
+        axes,
     })
 }
 
-/// Paints `plane` into the `cell_px` square at `origin`, normalised to its own maximum.
-fn paint_plane(buf: &mut [u8], width: u32, origin: (u32, u32), cell_px: u32, plane: &Plane) {
-    let max = plane
+/// The largest finite value of `plane` (0 if none).
+fn plane_max(plane: &Plane) -> f32 {
+    plane
         .values
         .iter()
         .copied()
         .filter(|v| v.is_finite())
-        .fold(0.0, f32::max);
+        .fold(0.0, f32::max)
+}
+
+/// Where `plane` lies in a `cell_px` square at `origin`: (left, top, width, height), centred, its
+/// longer physical side filling the square.
+fn plane_rect(origin: (u32, u32), cell_px: u32, plane: &Plane) -> (u32, u32, u32, u32) {
+    let (sw, sh) = plane.fitted(cell_px);
+    let (sw, sh) = (sw.min(cell_px), sh.min(cell_px));
+    (
+        origin.0 + (cell_px - sw) / 2,
+        origin.1 + (cell_px - sh) / 2,
+        sw,
+        sh,
+    )
+}
+
+/// Paints `plane` into the `cell_px` square at `origin`, values / `max` → colour map.
+fn paint_plane(
+    buf: &mut [u8],
+    width: u32,
+    origin: (u32, u32),
+    cell_px: u32,
+    plane: &Plane,
+    max: f32,
+) {
     // Same mapping as write_png with lo = 0, hi = max.
     let norm = max.max(f32::MIN_POSITIVE);
-    let long = plane.width.max(plane.height) as u64;
-    let scaled = |n: usize| ((n as u64 * u64::from(cell_px) + long / 2) / long).max(1) as u32;
-    let (sw, sh) = (scaled(plane.width), scaled(plane.height));
-    let (ox, oy) = (origin.0 + (cell_px - sw) / 2, origin.1 + (cell_px - sh) / 2);
+    let (ox, oy, sw, sh) = plane_rect(origin, cell_px, plane);
     for y in 0..sh {
         let py = (y as usize * plane.height / sh as usize).min(plane.height - 1);
         for x in 0..sw {
@@ -246,19 +314,29 @@ fn layout_text(grid: &FigureGrid, rows: usize, cols: usize) -> String {
 
 /// Writes `grid` as an RGB PNG: a white page with the title, column labels above the columns, row
 /// labels left of the rows, and each cell a `cell_px` square. Each plane is normalised to its own
-/// maximum (values / max → colour map, as [`crate::write_png`] with lo 0, hi max; NaN is black) and
-/// scaled to `cell_px` on its longer side (nearest neighbour), centred in its cell; empty cells are dark
-/// grey. The PNG carries iTXt chunks `murk:layout` ("rows: …; columns: …", labels separated by " | ")
-/// and `murk:range`. The file is replaced atomically.
+/// maximum, or with `shared_scale` to the grid's (values / max → colour map, as [`crate::write_png`]
+/// with lo 0, hi max; NaN is black) and scaled to `cell_px` on its longer physical side (nearest
+/// neighbour), centred in its cell; empty cells are dark grey. Planes with metre axes get their
+/// coordinates under the bottom row and right of the last column. The PNG carries iTXt chunks
+/// `murk:layout` ("rows: …; columns: …", labels separated by " | ") and `murk:range`. The file is
+/// replaced atomically.
 pub fn write_grid_png(path: &Path, grid: &FigureGrid, cell_px: u32) -> Result<()> {
     let lay = grid_layout(grid, cell_px)?;
     let (w, h) = (lay.width, lay.height);
     let mut buf = BACKGROUND.repeat((w * h) as usize);
+    let shared = planes(grid).map(plane_max).fold(0.0, f32::max);
     for (r, row) in grid.cells.iter().enumerate() {
         for (c, cell) in row.iter().enumerate() {
             let o = lay.cell_origin(r, c);
             match cell {
-                Some(plane) => paint_plane(&mut buf, w, o, cell_px, plane),
+                Some(plane) => {
+                    let max = if grid.shared_scale {
+                        shared
+                    } else {
+                        plane_max(plane)
+                    };
+                    paint_plane(&mut buf, w, o, cell_px, plane, max)
+                }
                 None => fill_square(&mut buf, w, o, cell_px, EMPTY_CELL),
             }
         }
@@ -274,11 +352,15 @@ pub fn write_grid_png(path: &Path, grid: &FigureGrid, cell_px: u32) -> Result<()
         let fail = |e: png::EncodingError| Error::format(path, e.to_string());
         enc.add_itxt_chunk("murk:layout".into(), layout_text(grid, rows, cols))
             .map_err(fail)?;
-        enc.add_itxt_chunk(
-            "murk:range".into(),
-            "each cell: 0 .. its own maximum; NaN black; empty cells dark grey".into(),
-        )
-        .map_err(fail)?;
+        let range = if grid.shared_scale {
+            format!(
+                "every cell: 0 .. {shared} (the grid's maximum); NaN black; empty cells dark grey"
+            )
+        } else {
+            "each cell: 0 .. its own maximum; NaN black; empty cells dark grey".into()
+        };
+        enc.add_itxt_chunk("murk:range".into(), range)
+            .map_err(fail)?;
         let mut wr = enc.write_header().map_err(fail)?;
         wr.write_image_data(&buf).map_err(fail)?;
         wr.finish().map_err(fail)
@@ -324,16 +406,60 @@ fn draw_labels(
         root.draw(&Text::new(text.as_str(), (x, y as i32 + half), style))
             .map_err(err)?;
     }
+    if lay.axes {
+        draw_axes(&root, grid, lay, &label).map_err(err)?;
+    }
     let y = (lay.bar_top + lay.font_px * 2) as i32;
     for (text, x, h) in [
         ("0", lay.left, HPos::Left),
-        (BAR_TOP_LABEL, lay.left + lay.bar_labels_span, HPos::Right),
+        (
+            bar_top_label(grid.shared_scale),
+            lay.left + lay.bar_labels_span,
+            HPos::Right,
+        ),
     ] {
         let style = label.pos(Pos::new(h, VPos::Center));
         root.draw(&Text::new(text, (x as i32, y), style))
             .map_err(err)?;
     }
     root.present().map_err(err)
+}
+
+/// The metre coordinates of the planes' edges: x under each bottom cell's plane, y right of the last
+/// column's planes.
+fn draw_axes<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    grid: &FigureGrid,
+    lay: &GridLayout,
+    label: &TextStyle,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let last_row = lay.rows as usize - 1;
+    let last_col = lay.cols as usize - 1;
+    for (c, plane) in grid.cells[last_row].iter().enumerate() {
+        let Some(p) = plane else { continue };
+        let Some([(x0, x1), _]) = p.axes_m else {
+            continue;
+        };
+        let (ox, oy, sw, sh) = plane_rect(lay.cell_origin(last_row, c), lay.cell_px, p);
+        let y = (oy + sh + lay.font_px * 3 / 4) as i32;
+        for (v, x, h) in [(x0, ox, HPos::Left), (x1, ox + sw, HPos::Right)] {
+            let style = label.pos(Pos::new(h, VPos::Center));
+            root.draw(&Text::new(format!("{} m", metres(v)), (x as i32, y), style))?;
+        }
+    }
+    for (r, row) in grid.cells.iter().enumerate() {
+        let Some(p) = row[last_col] else { continue };
+        let Some([_, (y0, y1)]) = p.axes_m else {
+            continue;
+        };
+        let (ox, oy, sw, sh) = plane_rect(lay.cell_origin(r, last_col), lay.cell_px, p);
+        let x = (ox + sw + lay.font_px / 3) as i32;
+        for (v, y, vp) in [(y0, oy, VPos::Top), (y1, oy + sh, VPos::Bottom)] {
+            let style = label.pos(Pos::new(HPos::Left, vp));
+            root.draw(&Text::new(format!("{} m", metres(v)), (x, y as i32), style))?;
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -360,6 +486,7 @@ mod tests {
             height: h,
             values,
             extents: String::new(),
+            axes_m: None,
         }
     }
 
@@ -431,6 +558,7 @@ mod tests {
                 vec![Some(&a), Some(&b), None],
                 vec![None, Some(&c), Some(&a)],
             ],
+            shared_scale: false,
         };
         let cell = 96;
         let path = dir.join("grid.png");
@@ -526,6 +654,54 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// A shared scale shows a cell of half the brightness as half as bright (the fading the study is
+    /// about); per-cell scales draw both at full brightness. Planes with metre axes get coordinates
+    /// under the bottom row and right of the last column, in the physical aspect ratio.
+    #[test]
+    fn shared_scale_shows_fading_and_axes_are_labelled_in_metres() {
+        let dir = tmp_dir("shared");
+        let mut bright = plane(4, 4, |_, _| 2.0);
+        let mut faint = plane(4, 2, |_, _| 1.0);
+        bright.axes_m = Some([(1.0, -1.0), (1.0, -1.0)]);
+        // 4 × 2 samples 1 m and 2 m apart: 4 m × 4 m, so drawn square despite the counts.
+        faint.axes_m = Some([(1.5, -1.5), (1.0, -1.0)]);
+        let cell = 64;
+        for shared in [false, true] {
+            let grid = FigureGrid {
+                title: "t".into(),
+                row_labels: vec!["r".into()],
+                col_labels: vec!["a".into(), "b".into()],
+                cells: vec![vec![Some(&bright), Some(&faint)]],
+                shared_scale: shared,
+            };
+            let path = dir.join(format!("shared-{shared}.png"));
+            write_grid_png(&path, &grid, cell).unwrap();
+            let lay = grid_layout(&grid, cell).unwrap();
+            let img = decode(&path);
+            assert!(lay.axes);
+            let (x1, y1) = lay.cell_origin(0, 1);
+            let expect = if shared { colour(0.5) } else { colour(1.0) };
+            assert_eq!(
+                img.at(x1 + cell / 2, y1 + cell / 2),
+                expect,
+                "shared {shared}"
+            );
+            // Square, so the corners of the faint cell are painted too.
+            assert_eq!(img.at(x1 + 1, y1 + 1), expect);
+            let (x0, y0) = lay.cell_origin(0, 0);
+            assert_eq!(img.at(x0 + 1, y0 + 1), colour(1.0));
+            // Coordinates under the cells and right of the last one.
+            let below = img.ink(x0, x1 + cell, y0 + cell + 1, lay.bar_top - 1);
+            let right = img.ink(x1 + cell + 1, lay.width, y0, y0 + cell);
+            assert!(below > 40 && right > 40, "axis labels: {below}, {right}");
+            let range = &img.texts.iter().find(|(k, _)| k == "murk:range").unwrap().1;
+            assert_eq!(range.contains("the grid's maximum"), shared, "{range}");
+        }
+        assert_eq!(metres(-0.004), "0.00");
+        assert_eq!(metres(-0.98), "−0.98");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn grid_without_labels_has_no_label_bands() {
         let dir = tmp_dir("bare");
@@ -535,6 +711,7 @@ mod tests {
             row_labels: vec![],
             col_labels: vec![],
             cells: vec![vec![Some(&a), Some(&a)]],
+            shared_scale: false,
         };
         let path = dir.join("bare.png");
         write_grid_png(&path, &grid, 32).unwrap();
@@ -568,6 +745,7 @@ mod tests {
             row_labels: vec!["r".into()],
             col_labels: vec!["c".into()],
             cells: vec![vec![Some(&a)]],
+            shared_scale: false,
         };
         let missing = std::env::temp_dir()
             .join(format!("murk-view-no-such-dir-{}", std::process::id()))
@@ -606,6 +784,7 @@ mod tests {
             height: 3,
             values: vec![1.0; 4],
             extents: String::new(),
+            axes_m: None,
         };
         let mut g = good();
         g.cells[0][0] = Some(&broken);

@@ -30,6 +30,35 @@ pub struct Plane {
     pub values: Vec<f32>,
     /// e.g. "columns: x from +0.98 m (left) to −0.98 m (right); rows: y from +0.98 m (top) to −0.98 m (bottom)".
     pub extents: String,
+    /// Coordinates (m) of the first and last column's samples and of the first and last row's; `None`
+    /// for a plane without one physical scale (a montage), drawn one square per value.
+    pub axes_m: Option<[(f64, f64); 2]>,
+}
+
+impl Plane {
+    /// Physical width over height: each sample covers its axis's spacing, so a 73 × 59 plane over
+    /// equal extents is square. Without axes (or with a degenerate one), one square per value.
+    pub fn aspect(&self) -> f64 {
+        let by_count = self.width as f64 / self.height as f64;
+        let Some([(c0, c1), (r0, r1)]) = self.axes_m else {
+            return by_count;
+        };
+        let pitch = |a: f64, b: f64, n: usize| (n > 1).then(|| (b - a).abs() / (n - 1) as f64);
+        match (pitch(c0, c1, self.width), pitch(r0, r1, self.height)) {
+            (Some(dx), Some(dy)) if dx > 0.0 && dy > 0.0 => {
+                (dx * self.width as f64) / (dy * self.height as f64)
+            }
+            _ => by_count,
+        }
+    }
+
+    /// Pixel size (width, height) of this plane drawn with `long_px` pixels on its longer physical side.
+    pub fn fitted(&self, long_px: u32) -> (u32, u32) {
+        let a = self.aspect();
+        let l = f64::from(long_px);
+        let (w, h) = if a >= 1.0 { (l, l / a) } else { (l * a, l) };
+        ((w.round() as u32).max(1), (h.round() as u32).max(1))
+    }
 }
 
 /// The projections murk draws, in the order they appear on the page.
@@ -86,6 +115,12 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
             side[r * nz + c] = (0..nx).map(|ix| at(ix, ny - 1 - r, c)).fold(0.0, f32::max);
         }
     }
+    // Columns run from +x (left) to −x, rows from +y (top) to −y, depth from near to far.
+    let (xs, ys, zs) = (
+        (vol.x.end, vol.x.start),
+        (vol.y.end, vol.y.start),
+        (vol.z.start, vol.z.end),
+    );
     let cols_x = axis_text("columns: x", &vol.x, true, "left", "right");
     let rows_y = axis_text("rows: y", &vol.y, true, "top", "bottom");
     let rows_z = axis_text("rows: depth z", &vol.z, false, "top", "bottom");
@@ -96,6 +131,7 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
             height: ny,
             values: front,
             extents: format!("{cols_x}; {rows_y}"),
+            axes_m: Some([xs, ys]),
         },
         depth: Plane {
             width: nx,
@@ -105,31 +141,38 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
                 "{cols_x}; {rows_y}; colour: depth z from {:.3} m (dark) to {:.3} m (bright)",
                 vol.z.start, vol.z.end
             ),
+            axes_m: Some([xs, ys]),
         },
         top: Plane {
             width: nx,
             height: nz,
             values: top,
             extents: format!("{cols_x}; {rows_z}"),
+            axes_m: Some([xs, zs]),
         },
         side: Plane {
             width: nz,
             height: ny,
             values: side,
             extents: format!("{cols_z}; {rows_y}"),
+            axes_m: Some([zs, ys]),
         },
     }
 }
 
-/// Writes `plane` as an RGB PNG scaled to roughly 384 px on its longer side (nearest neighbour, so voxels
-/// stay visible). Values map [lo, hi] → colour map; NaN is black.
+/// Writes `plane` as an RGB PNG of roughly 384 px on its longer physical side (at least one pixel per
+/// value; nearest neighbour, so voxels stay visible), its sides in the plane's physical aspect ratio.
+/// Values map [lo, hi] → colour map; NaN is black.
 pub fn write_png(path: &Path, plane: &Plane, lo: f32, hi: f32) -> Result<()> {
-    let scale = (384 / plane.width.max(plane.height)).max(1);
-    let (w, h) = (plane.width * scale, plane.height * scale);
+    let long = (plane.width.max(plane.height) as u32).max(384);
+    let (w, h) = plane.fitted(long);
+    let (w, h) = (w as usize, h as usize);
     let mut rgb = Vec::with_capacity(w * h * 3);
     for y in 0..h {
+        let py = (y * plane.height / h).min(plane.height - 1);
         for x in 0..w {
-            let v = plane.values[(y / scale) * plane.width + x / scale];
+            let px = (x * plane.width / w).min(plane.width - 1);
+            let v = plane.values[py * plane.width + px];
             let c = if v.is_nan() {
                 [0, 0, 0]
             } else {
@@ -243,6 +286,12 @@ pub fn write_views(dir: &Path, vol: &Volume, intensity: &[f32]) -> Result<Vec<(P
     Ok(out)
 }
 
+/// The look every murk page shares (the study's report, the demo, reconstruct's pictures): one font,
+/// left-aligned key/value tables, numbers right-aligned.
+pub const PAGE_STYLE: &str = "<style>body{font-family:sans-serif;max-width:1400px;margin:auto;padding:0 1em;color:#222}\
+table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}\
+#provenance td,#provenance th,#parameters td,#parameters th{text-align:left}</style>";
+
 /// A self-contained page: a parameter table and the pictures (relative links).
 pub fn write_index(
     dir: &Path,
@@ -256,7 +305,7 @@ pub fn write_index(
             .replace('>', "&gt;")
     };
     let mut html = format!(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>{t}</title><style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto}}figure{{display:inline-block;margin:.5em;vertical-align:top;max-width:400px}}img{{image-rendering:pixelated;border:1px solid #888}}td{{padding:2px 10px}}</style></head><body><h1>{t}</h1><table>",
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>{t}</title>{PAGE_STYLE}<style>figure{{display:inline-block;margin:.5em;vertical-align:top;max-width:400px}}img{{image-rendering:pixelated;border:1px solid #888}}</style></head><body><h1>{t}</h1><table id=\"provenance\">",
         t = esc(title)
     );
     for (k, v) in params {
@@ -305,5 +354,44 @@ mod tests {
         assert_eq!(views.side.values[1], 5.0); // row 0 = +y, column = depth index 1
         assert_eq!(colour(0.0), [0, 0, 4]);
         assert_eq!(colour(1.0), [252, 255, 164]);
+    }
+
+    /// The issue's case: 73 × 59 voxels over equal extents drew the Z 24 % too wide at one pixel a
+    /// voxel; the PNG must be square, and a 2:1 box twice as wide as high whatever its voxel counts.
+    #[test]
+    fn pngs_keep_the_physical_aspect_ratio() {
+        let dir = std::env::temp_dir().join(format!("murk-view-aspect-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let size = |vol: &Volume| {
+            let v = views(vol, &vec![1f32; vol.len()]);
+            let p = dir.join("front.png");
+            write_png(&p, &v.front, 0.0, 1.0).unwrap();
+            let info = png::Decoder::new(std::fs::File::open(&p).unwrap())
+                .read_info()
+                .unwrap()
+                .info()
+                .size();
+            info
+        };
+        // Equal extents: 73 samples over 2 m and 59 over 2 m → pitches 2/72 and 2/58; physical sides
+        // 73·2/72 and 59·2/58 m, equal to 1.2 %.
+        let (w, h) = size(&Volume {
+            x: Axis::new(-1.0, 1.0, 73),
+            y: Axis::new(-1.0, 1.0, 59),
+            z: Axis::new(1.0, 2.0, 4),
+        });
+        assert!((w as f64 / h as f64 - 1.0).abs() < 0.02, "{w} × {h}");
+        assert!(w.max(h) >= 384);
+        let (w, h) = size(&Volume {
+            x: Axis::new(-2.0, 2.0, 17),
+            y: Axis::new(-1.0, 1.0, 33),
+            z: Axis::new(1.0, 2.0, 4),
+        });
+        // Sides 17·4/16 = 4.25 m and 33·2/32 = 2.06 m.
+        assert!(
+            (w as f64 / h as f64 - 4.25 / 2.0625).abs() < 0.02,
+            "{w} × {h}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

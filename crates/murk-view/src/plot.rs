@@ -22,6 +22,10 @@ pub struct LinePlot {
     pub x_label: String,
     pub y_label: String,
     pub series: Vec<Series>,
+    /// Ranges the axes span at least (data outside them widens them): a metric bounded to [0, 1]
+    /// drawn over [0, 1] so that noise does not look like a trend, and x axes from a common origin.
+    pub x_range: Option<(f64, f64)>,
+    pub y_range: Option<(f64, f64)>,
 }
 
 /// Size (pixels, or SVG user units) of the plots written here.
@@ -97,18 +101,44 @@ fn draw<DB: DrawingBackend>(
     let series: Vec<_> = plot.series.iter().map(finite_points).collect();
     let range = ranges(&series);
     let ((x0, x1), (y0, y1)) = range.unwrap_or(((0.0, 1.0), (0.0, 1.0)));
-    // Headroom above the data for the legend (upper right), so it never hides a point: about 21 px a
-    // label plus its frame, out of the plotting area's height (the page less margins, title, x axis).
-    let labels = plot.series.iter().filter(|s| !s.label.is_empty()).count();
-    let plot_h = f64::from(root.dim_in_pixel().1.saturating_sub(32 + 40 + 52).max(1));
-    let room = if labels > 0 && range.is_some() {
-        ((21 * labels + 18) as f64 / plot_h).min(0.6)
-    } else {
-        0.0
+    let widen = |(a, b): (f64, f64), fixed: Option<(f64, f64)>| match fixed {
+        Some((lo, hi)) if range.is_some() => (lo.min(a), hi.max(b)),
+        Some(r) => r,
+        None => (a, b),
     };
-    let y1 = y0 + (y1 - y0) / (1.0 - room);
+    // A fixed range is kept exactly where the data lie inside it (no padding beyond [0, 1]).
+    let inside = |(a, b): (f64, f64), fixed: Option<(f64, f64)>, data: Option<(f64, f64)>| match (
+        fixed, data,
+    ) {
+        (Some((lo, hi)), Some((d0, d1))) if d0 >= lo && d1 <= hi => (lo, hi),
+        _ => widen((a, b), fixed),
+    };
+    let data_x = data_span(&series, |p| (p.0, p.0));
+    let data_y = data_span(&series, |p| (p.1 - p.2, p.1 + p.2));
+    let (x0, x1) = inside((x0, x1), plot.x_range, data_x);
+    let (y0, y1) = inside((y0, y1), plot.y_range, data_y);
+    // The legend lies right of the chart, so it never hides a point nor stretches an axis.
+    let labels: Vec<(usize, &str)> = plot
+        .series
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| !s.label.is_empty())
+        .map(|(i, s)| (i, s.label.as_str()))
+        .collect();
+    let legend_w = if labels.is_empty() {
+        0
+    } else {
+        let font = FontDesc::new(FontFamily::Name(FAMILY), 15.0, FontStyle::Normal);
+        let widest = labels
+            .iter()
+            .map(|(_, l)| font.box_size(l).map_or(8 * l.len() as u32, |b| b.0))
+            .max()
+            .unwrap_or(0);
+        (widest + 44).min(root.dim_in_pixel().0 / 3)
+    };
+    let (root, legend) = root.split_horizontally(root.dim_in_pixel().0 - legend_w);
 
-    let mut chart = ChartBuilder::on(root)
+    let mut chart = ChartBuilder::on(&root)
         .caption(&plot.title, (FAMILY, 24))
         .margin(16)
         .x_label_area_size(52)
@@ -142,24 +172,19 @@ fn draw<DB: DrawingBackend>(
             .map_err(err)?;
     }
 
-    for (i, (s, pts)) in plot.series.iter().zip(&series).enumerate() {
+    for (i, pts) in series.iter().enumerate() {
         let c = COLOURS[i % COLOURS.len()];
         let bars = pts
             .iter()
             .filter(|p| p.2 > 0.0)
             .map(|&(x, y, e)| ErrorBar::new_vertical(x, y - e, y, y + e, c.stroke_width(1), 8));
         chart.draw_series(bars).map_err(err)?;
-        let line = chart
+        chart
             .draw_series(LineSeries::new(
                 pts.iter().map(|&(x, y, _)| (x, y)),
                 c.stroke_width(2),
             ))
             .map_err(err)?;
-        if !s.label.is_empty() {
-            line.label(s.label.as_str()).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 22, y)], c.stroke_width(2))
-            });
-        }
         chart
             .draw_series(
                 pts.iter()
@@ -167,17 +192,32 @@ fn draw<DB: DrawingBackend>(
             )
             .map_err(err)?;
     }
-    if labels > 0 {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(160, 160, 160))
-            .label_font((FAMILY, 15))
-            .draw()
+    for (k, (i, label)) in labels.iter().enumerate() {
+        let c = COLOURS[i % COLOURS.len()];
+        let y = 60 + 24 * k as i32;
+        legend
+            .draw(&PathElement::new(vec![(4, y), (26, y)], c.stroke_width(2)))
+            .map_err(err)?;
+        let style = TextStyle::from((FAMILY, 15).into_font())
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Left, VPos::Center));
+        legend
+            .draw(&Text::new(*label, (32, y), style))
             .map_err(err)?;
     }
-    root.present().map_err(err)
+    root.present().map_err(err)?;
+    legend.present().map_err(err)
+}
+
+/// The smallest and largest of `f`'s bounds over every point; None without points.
+fn data_span(
+    series: &[Vec<(f64, f64, f64)>],
+    f: impl Fn(&(f64, f64, f64)) -> (f64, f64),
+) -> Option<(f64, f64)> {
+    series.iter().flatten().map(f).fold(None, |acc, (a, b)| {
+        let (a, b) = (a.min(b), a.max(b));
+        Some(acc.map_or((a, b), |(lo, hi): (f64, f64)| (lo.min(a), hi.max(b))))
+    })
 }
 
 /// Writes `plot` as an SVG of [`PLOT_SIZE`]: axis ranges from the finite data (padded; NaN and infinite
@@ -271,6 +311,9 @@ mod tests {
                     ],
                 },
             ],
+            // Fixed, so that the plot with and without spreads has the same grid lines.
+            x_range: Some((0.0, 2.0)),
+            y_range: Some((0.0, 1.0)),
         }
     }
 
@@ -347,6 +390,62 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// An IoU of 0.68–0.71 over [0, 1] is drawn on [0, 1] (ticks 0.0 … 1.0), not zoomed so that noise
+    /// looks like a trend; data beyond a fixed range widen it rather than leave the chart.
+    #[test]
+    fn fixed_ranges_hold_unless_the_data_leave_them() {
+        let dir = std::env::temp_dir().join(format!("murk-view-fixed-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let svg = |ys: &[f64]| {
+            let plot = LinePlot {
+                title: "IoU".into(),
+                x_label: "μt".into(),
+                y_label: "IoU".into(),
+                series: vec![Series {
+                    label: "a long series label".into(),
+                    points: ys
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &y)| (1.0 + i as f64, y, 0.01))
+                        .collect(),
+                }],
+                x_range: Some((0.0, 1.0)),
+                y_range: Some((0.0, 1.0)),
+            };
+            let p = dir.join("fixed.svg");
+            write_plot_svg(&p, &plot).unwrap();
+            std::fs::read_to_string(&p).unwrap()
+        };
+        let tick_texts = |svg: &str| -> Vec<String> {
+            svg.split("<text")
+                .skip(1)
+                .filter_map(|t| {
+                    Some(
+                        t.split_once('>')?
+                            .1
+                            .split_once("</text>")?
+                            .0
+                            .trim()
+                            .to_string(),
+                    )
+                })
+                .collect()
+        };
+        let zoomed = tick_texts(&svg(&[0.68, 0.71, 0.69]));
+        for t in ["0.0", "0.2", "1.0"] {
+            assert!(zoomed.iter().any(|x| x == t), "no tick {t}: {zoomed:?}");
+        }
+        // x from the common origin 0 even though the data start at 1.
+        assert!(
+            zoomed.iter().filter(|x| *x == "0.0").count() >= 2,
+            "{zoomed:?}"
+        );
+        let wide = tick_texts(&svg(&[0.5, 1.3]));
+        assert!(wide.iter().any(|x| x == "1.3" || x == "1.4"), "{wide:?}");
+        assert!(wide.iter().any(|x| x == "a long series label"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn ranges_cover_the_data_and_survive_degenerate_input() {
         let r = ranges(&[finite_points(&sample().series[0])]).unwrap();
@@ -384,6 +483,7 @@ mod tests {
                 x_label: "x axis".into(),
                 y_label: "y axis".into(),
                 series,
+                ..Default::default()
             };
             let path = dir.join(format!("empty{i}.svg"));
             write_plot_svg(&path, &plot).unwrap();

@@ -1,0 +1,79 @@
+#!/usr/bin/env python3
+"""The quick-scale results table of docs/study.md, from a fresh run of this build's study, so that the
+table cannot go stale: `--check` (CI) fails when the table in the doc differs from what today's code
+computes, `--write` replaces it. Seeded renders give identical bytes on any machine, so the table is
+the same wherever it is computed.
+
+Usage: scripts/study-table.py (--check | --write | --print) [--from STUDY_DIR]
+"""
+
+import csv
+import math
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+DOC = ROOT / "docs" / "study.md"
+BEGIN, END = "<!-- results:quick:begin (scripts/study-table.py --write) -->", "<!-- results:quick:end -->"
+
+
+def show(v: float) -> str:
+    """Three significant digits in plain decimals, as the report writes numbers; — for none."""
+    if math.isnan(v):
+        return "—"
+    if v == 0:
+        return "0"
+    digits = 2 - math.floor(math.log10(abs(v)))
+    t = f"{v:.{max(digits, 0)}f}"
+    return t[1:] if t.startswith("-") and float(t) == 0 else t.replace("-", "−")
+
+
+def table(study: Path) -> str:
+    rows = [r for r in csv.DictReader(open(study / "metrics.csv")) if r["compensation"] == "paper"]
+    objects = list(csv.DictReader(open(study / "objects.csv")))
+    out = ["| figure | cell | IoU (best) | depth error (m) | SSIM | CNR | high-freq. share | objects found |",
+           "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        cell = " ".join(x for x in (r["row"], r["col"]) if x)
+        found = [o for o in objects if o["figure"] == r["figure"] and o["col"] == r["col"]
+                 and o["compensation"] == "paper" and o["seed"] == "0"]
+        n = f"{sum(o['detected'] == 'true' for o in found)} of {len(found)}" if found else ""
+        out.append("| " + " | ".join([r["figure"], cell] + [show(float(r[k] or "nan")) for k in
+                   ("iou_best", "depth_err_m", "ssim", "cnr", "hf_share")] + [n]) + " |")
+    return "\n".join(out) + "\n"
+
+
+def main(argv):
+    mode = argv[0] if argv else "--print"
+    if "--from" in argv:
+        text = table(Path(argv[argv.index("--from") + 1]))
+    else:
+        with tempfile.TemporaryDirectory(prefix="murk-study-table-") as d:
+            subprocess.run([str(ROOT / "target" / "release" / "murk"), "experiment", "paper", "--out", d,
+                            "--scenes", str(ROOT / "scenes"), "--quiet"], check=True)
+            text = table(Path(d))
+    doc = DOC.read_text()
+    m = re.search(re.escape(BEGIN) + r"\n(.*?)" + re.escape(END), doc, flags=re.S)
+    if m is None:
+        sys.exit(f"{DOC}: no {BEGIN} … {END} markers")
+    if mode == "--print":
+        print(text, end="")
+    elif mode == "--write":
+        DOC.write_text(doc[:m.start(1)] + text + doc[m.end(1):])
+        print(f"{DOC}: results table written")
+    elif mode == "--check":
+        if m.group(1) != text:
+            print(f"{DOC}: the quick-scale results table is stale; today's code gives:\n{text}"
+                  "run scripts/study-table.py --write and commit it", file=sys.stderr)
+            return 1
+        print(f"{DOC}: the quick-scale results table matches today's code")
+    else:
+        sys.exit(__doc__)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
