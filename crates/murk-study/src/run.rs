@@ -366,7 +366,7 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
     for c in &plan.cells {
         for id in &c.captures {
             *uses
-                .entry((id.clone(), c.lambda_factor.to_bits()))
+                .entry((id.clone(), c.wall_factor(plan.scale).to_bits()))
                 .or_default() += 1;
         }
     }
@@ -402,21 +402,22 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
         for (seed, (id, ref_id)) in cell.captures.iter().zip(&cell.reference).enumerate() {
             let cap = load(id)?;
             tails.push(cap.end_level());
-            let field_key = (id.clone(), cell.lambda_factor.to_bits());
+            let wall_factor = cell.wall_factor(plan.scale);
+            let field_key = (id.clone(), wall_factor.to_bits());
             let field = match shared_fields.get(&field_key) {
                 Some(f) => f.clone(),
                 None => {
-                    let f = pf_field(&cap, &volume, cell.lambda_factor)?;
+                    let f = pf_field(&cap, &volume, wall_factor)?;
                     if uses[&field_key] > 1 {
                         shared_fields.insert(field_key, f.clone());
                     }
                     f
                 }
             };
-            let key = (ref_id.clone(), cell.lambda_factor.to_bits());
+            let key = (ref_id.clone(), wall_factor.to_bits());
             if !references.contains_key(&key) {
                 let rcap = load(ref_id)?;
-                let r = pf_field(&rcap, &volume, cell.lambda_factor)?;
+                let r = pf_field(&rcap, &volume, wall_factor)?;
                 let i = murk_recon::intensity(&rcap, &volume, &r, Compensation::None);
                 references.insert(key.clone(), views(&volume, &i).front);
             }
@@ -469,10 +470,10 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
     Ok(results)
 }
 
-/// The PF field (λ = factor × 4Δc, 4 cycles: the paper's synthetic settings).
-fn pf_field(cap: &Capture, volume: &Volume, lambda_factor: f64) -> Result<Vec<Complex32>> {
+/// The PF field (λ = `wall_factor` × Δc, 4 cycles: the paper's synthetic settings).
+fn pf_field(cap: &Capture, volume: &Volume, wall_factor: f64) -> Result<Vec<Complex32>> {
     let params = PfParams {
-        wavelength: Wavelength::WallFactor(4.0 * lambda_factor),
+        wavelength: Wavelength::WallFactor(wall_factor),
         ..PfParams::default()
     };
     Ok(murk_recon::field(cap, volume, &params, PfForm::Fast, &NoProgress)?.values)
