@@ -163,7 +163,7 @@ impl Format {
                 bins: 1200,
                 bin_width_m: 0.005,
                 start_m: 2.0,
-                spp: 128,
+                spp: 1024,
                 volume: "-0.984375:0.984375:64,-0.984375:0.984375:64,1.5:2.5:41".into(),
                 object_window_m: SHELF_WINDOW,
             },
