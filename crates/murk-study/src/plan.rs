@@ -136,8 +136,8 @@ impl Format {
     /// The study's choice per scene and scale (see `docs/study.md` for why each window is where it is).
     pub fn of(scene: SceneKind, scale: Scale) -> Format {
         // The window starts 1 m of path before the shortest path of any voxel and ends ≥ 1.4 m after the
-        // longest, so the band-pass's ripple from either cut does not reach the volume: ≥ 4σ and ≥ 5.6σ
-        // of the longest pulse (3λ0; test below). `tail_share` in the report measures what the fog
+        // longest, so the band-pass's ripple from either cut does not reach the volume: ≥ 8σ and ≥ 11σ
+        // of the longest pulse (Fig. 4's 3λ0 = 0.1875 m; the test below holds twice that σ at quick scale). `tail_share` in the report measures what the fog
         // still carries there.
         match (scene, scale) {
             (SceneKind::ZLetter, Scale::Quick) => Format {
@@ -670,9 +670,10 @@ pub fn load_scene(dir: &Path, scene: SceneKind, set: &[String]) -> Result<Scene>
 mod tests {
     use super::*;
 
-    /// Every format's window keeps the longest pulse (3λ0, 4 cycles: σ = 8Δc) at least 4σ before the
-    /// shortest path of any voxel and 5σ after the longest (docs/study.md), with the paths measured
-    /// from the wall grid's points to each voxel and back to the SPAD at the wall's centre.
+    /// Every format's window keeps a pulse of σ = 8Δc (3λ0 at paper scale; twice Fig. 4's 3λ0 at quick
+    /// scale, where its λ0 is 2Δc) at least 4σ before the shortest path of any voxel and 5σ after the
+    /// longest (docs/study.md), with the paths measured from the wall grid's points to each voxel and
+    /// back to the SPAD at the wall's centre.
     #[test]
     fn windows_keep_the_longest_pulse_clear_of_every_voxel() {
         use murk_core::{DVec3, Volume};
