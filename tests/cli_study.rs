@@ -356,7 +356,25 @@ fn shelf_objects_and_seed_spreads_are_reported() {
     );
     for r in &rows {
         assert!(r[5] == "true" || r[5] == "false", "{r:?}");
-        assert!(r[6].parse::<f64>().is_ok(), "{r:?}");
+        let hit_share: f64 = r[6].parse().unwrap();
+        assert!((0.0..=1.0).contains(&hit_share), "{r:?}");
+        assert_eq!(r[5] == "true", hit_share > 0.5, "{r:?}");
+        assert!(r[7].parse::<f64>().is_ok(), "{r:?}");
+    }
+    // metrics.csv counts, per compensation, the objects that objects.csv marks detected.
+    let metrics = std::fs::read_to_string(d.join("metrics.csv")).unwrap();
+    let header: Vec<&str> = metrics.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for row in metrics.lines().skip(1) {
+        let f: Vec<&str> = row.split(',').collect();
+        let comp = f[col("compensation")];
+        let found = rows
+            .iter()
+            .filter(|r| r[2] == comp && r[5] == "true")
+            .count();
+        assert_eq!(f[col("objects")], "7", "{row}");
+        let counted: f64 = f[col("objects_detected")].parse().unwrap();
+        assert_eq!(counted, found as f64, "{row}");
     }
 
     let d2 = dir("seeds");

@@ -41,8 +41,19 @@ fn the_z_in_fog_is_found_without_flags() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml");
     let (cap, truth, vol) = (d.join("z.h5"), d.join("truth.h5"), d.join("v.npy"));
     ok(&[
-        "render", "-q", scene, "--out", s(&cap), "--grid", "64", "--bins", "1200", "--set",
-        "capture.bin_width=0.005", "--truth", s(&truth),
+        "render",
+        "-q",
+        scene,
+        "--out",
+        s(&cap),
+        "--grid",
+        "64",
+        "--bins",
+        "1200",
+        "--set",
+        "capture.bin_width=0.005",
+        "--truth",
+        s(&truth),
     ]);
     let summary = ok(&["reconstruct", s(&cap), "--out", s(&vol)]);
     assert!(row(&summary, "medium").starts_with("detected"), "{summary}");
@@ -56,7 +67,11 @@ fn the_z_in_fog_is_found_without_flags() {
     assert!((peak_z - 2.0).abs() <= 0.05, "{summary}");
     let (shape, v) = murk_io::read_npy_f32(&vol).unwrap();
     let t = murk_io::read_truth_h5(&truth).unwrap();
-    assert_eq!(shape[..2], [t.x_m.len(), t.y_m.len()], "the default volume is the wall grid");
+    assert_eq!(
+        shape[..2],
+        [t.x_m.len(), t.y_m.len()],
+        "the default volume is the wall grid"
+    );
     let front: Vec<f32> = v
         .chunks_exact(shape[2])
         .map(|col| col.iter().copied().fold(0.0, f32::max))
@@ -67,7 +82,14 @@ fn the_z_in_fog_is_found_without_flags() {
 
     // Without the medium-aware path the fog near the wall wins, as before it.
     let plain = ok(&[
-        "reconstruct", s(&cap), "--out", s(&vol), "--medium-removal", "off", "--depth-search", "off",
+        "reconstruct",
+        s(&cap),
+        "--out",
+        s(&vol),
+        "--medium-removal",
+        "off",
+        "--depth-search",
+        "off",
     ]);
     let plain_z: f64 = row(&plain, "peak")
         .rsplit("z ")
@@ -87,20 +109,55 @@ fn captures_without_a_medium_are_unchanged() {
     let d = dir("clear");
     let cap = d.join("z.h5");
     ok(&[
-        "synth", "--out", s(&cap), "--kind", "laser-grid", "--wall-size", "2", "--grid", "32",
-        "--bins", "1024", "--bin-width", "0.004", "--start", "3.0", "--target", "z:2.0",
+        "synth",
+        "--out",
+        s(&cap),
+        "--kind",
+        "laser-grid",
+        "--wall-size",
+        "2",
+        "--grid",
+        "32",
+        "--bins",
+        "1024",
+        "--bin-width",
+        "0.004",
+        "--start",
+        "3.0",
+        "--target",
+        "z:2.0",
     ]);
     let render = d.join("clear.h5");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml");
     ok(&[
-        "render", "-q", scene, "--out", s(&render), "--grid", "16", "--bins", "600", "--set",
-        "capture.bin_width=0.01", "--set", "medium.mu_t=0", "--spp", "16",
+        "render",
+        "-q",
+        scene,
+        "--out",
+        s(&render),
+        "--grid",
+        "16",
+        "--bins",
+        "600",
+        "--set",
+        "capture.bin_width=0.01",
+        "--set",
+        "medium.mu_t=0",
+        "--spp",
+        "16",
     ]);
     for c in [&cap, &render] {
         let (a, b) = (d.join("a.npy"), d.join("b.npy"));
         let with = ok(&["reconstruct", s(c), "--out", s(&a)]);
         let without = ok(&[
-            "reconstruct", s(c), "--out", s(&b), "--medium-removal", "off", "--depth-search", "off",
+            "reconstruct",
+            s(c),
+            "--out",
+            s(&b),
+            "--medium-removal",
+            "off",
+            "--depth-search",
+            "off",
         ]);
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
         let drop_time = |t: &str| -> Vec<String> {
@@ -126,9 +183,19 @@ fn the_medium_of_the_fog_is_estimated() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/t-wall-medium.toml");
     let cap = d.join("fog.h5");
     ok(&["render", "-q", scene, "--out", s(&cap), "--spp", "64"]);
-    let json = ok(&["medium", s(&cap), "--json", "--fit", "mu_t,albedo", "--g", "0"]);
+    let json = ok(&[
+        "medium",
+        s(&cap),
+        "--json",
+        "--fit",
+        "mu_t,albedo",
+        "--g",
+        "0",
+    ]);
     let value = |key: &str| -> f64 {
-        let at = json.find(&format!("\"{key}\": ")).unwrap_or_else(|| panic!("{key}: {json}"));
+        let at = json
+            .find(&format!("\"{key}\": "))
+            .unwrap_or_else(|| panic!("{key}: {json}"));
         json[at + key.len() + 4..]
             .split([',', '}'])
             .next()
@@ -137,7 +204,12 @@ fn the_medium_of_the_fog_is_estimated() {
             .parse()
             .unwrap()
     };
-    for key in ["mu_t_per_m_uncertainty", "albedo_uncertainty", "g_uncertainty", "residual_rms_ln"] {
+    for key in [
+        "mu_t_per_m_uncertainty",
+        "albedo_uncertainty",
+        "g_uncertainty",
+        "residual_rms_ln",
+    ] {
         assert!(value(key).is_finite(), "{key}: {json}");
     }
     assert!((value("mu_t_per_m") - 1.0).abs() <= 0.1, "{json}");
@@ -160,10 +232,23 @@ fn bad_input_is_one_line() {
 
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/t-wall-medium.toml");
     let cap = d.join("fog.h5");
-    ok(&["render", "-q", scene, "--out", s(&cap), "--spp", "4", "--grid", "8"]);
+    ok(&[
+        "render",
+        "-q",
+        scene,
+        "--out",
+        s(&cap),
+        "--spp",
+        "4",
+        "--grid",
+        "8",
+    ]);
     let (code, _, err) = murk(&["medium", s(&cap), "--until", "-1"]);
     assert_ne!(code, 0);
-    assert!(err.contains("fog.h5") && err.contains("before the capture's window starts"), "{err}");
+    assert!(
+        err.contains("fog.h5") && err.contains("before the capture's window starts"),
+        "{err}"
+    );
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     let (code, _, err) = murk(&["medium", s(&cap), "--fit", "mu_s"]);
     assert_ne!(code, 0);

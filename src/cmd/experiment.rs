@@ -53,7 +53,7 @@ pub struct ExperimentArgs {
     /// Render tasks per capture (for spreading one capture over several machines).
     #[arg(long, default_value_t = 1)]
     pub shards: usize,
-    /// Paths per laser point (default: the scale's: quick 256 for the Z, 128 for the shelf).
+    /// Paths per laser point (default: the scale's: quick 256 for the Z, 1024 for the shelf).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=murk_core::Limits::MAX_SPP))]
     pub spp: Option<u64>,
     /// Folder with z-letter.toml and shelf.toml.

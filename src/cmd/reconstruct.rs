@@ -331,7 +331,10 @@ mod tests {
         assert_eq!(names::<LateralArg>(), library_names::<Lateral>());
         assert_eq!(names::<WeightingArg>(), library_names::<Reflectance>());
         assert_eq!(names::<WindowEndArg>(), library_names::<WindowEnd>());
-        assert_eq!(names::<MediumRemovalArg>(), library_names::<MediumRemoval>());
+        assert_eq!(
+            names::<MediumRemovalArg>(),
+            library_names::<MediumRemoval>()
+        );
         assert_eq!(names::<DepthSearchArg>(), library_names::<DepthSearch>());
         let mut with_none = vec!["none".to_string()];
         with_none.extend(names::<CompensateArg>());

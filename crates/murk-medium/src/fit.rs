@@ -293,7 +293,12 @@ pub fn fit(
         .collect();
     let total: f64 = weight.iter().sum();
     let moments = |value: &dyn Fn(usize) -> f64| -> (f64, f64) {
-        let mean = weight.iter().enumerate().map(|(i, w)| w * value(i)).sum::<f64>() / total;
+        let mean = weight
+            .iter()
+            .enumerate()
+            .map(|(i, w)| w * value(i))
+            .sum::<f64>()
+            / total;
         let var = weight
             .iter()
             .enumerate()
@@ -334,7 +339,11 @@ pub fn fit(
             0.0
         };
         let uncertainty = uncertainty.max(step / 2.0);
-        let relative = if log { uncertainty / value } else { uncertainty };
+        let relative = if log {
+            uncertainty / value
+        } else {
+            uncertainty
+        };
         Parameter {
             value,
             uncertainty,
@@ -362,7 +371,13 @@ fn residuals(ln_data: &[f64], model: &[f64], absolute: bool) -> Vec<f64> {
     let diff: Vec<f64> = ln_data
         .iter()
         .zip(model)
-        .map(|(d, &m)| if m > 0.0 { d - m.ln() } else { NO_SIGNAL_RATIO.ln() })
+        .map(|(d, &m)| {
+            if m > 0.0 {
+                d - m.ln()
+            } else {
+                NO_SIGNAL_RATIO.ln()
+            }
+        })
         .collect();
     let offset = if absolute {
         0.0
@@ -432,7 +447,11 @@ fn interpolate(table: &ResponseTable, mu: f64, albedo: f64, g: f64, used: &[usiz
     (0..used.len())
         .map(|k| {
             if corners.iter().all(|(v, _)| v[k] > 0.0) {
-                corners.iter().map(|(v, w)| w * v[k].ln()).sum::<f64>().exp()
+                corners
+                    .iter()
+                    .map(|(v, w)| w * v[k].ln())
+                    .sum::<f64>()
+                    .exp()
             } else {
                 corners.iter().map(|(v, w)| w * v[k]).sum()
             }

@@ -44,13 +44,22 @@ impl Fixed {
         murk_core::Limits::extinction(self.mu_t_per_m)
             .map_err(|e| Error::param(format!("μt {e}")))?;
         if !(self.mu_t_per_m > 0.0) {
-            return Err(Error::param(format!("μt must be > 0, got {}", self.mu_t_per_m)));
+            return Err(Error::param(format!(
+                "μt must be > 0, got {}",
+                self.mu_t_per_m
+            )));
         }
         if !(self.albedo > 0.0 && self.albedo <= 1.0) {
-            return Err(Error::param(format!("albedo must be in (0, 1], got {}", self.albedo)));
+            return Err(Error::param(format!(
+                "albedo must be in (0, 1], got {}",
+                self.albedo
+            )));
         }
         if !(self.g.abs() < 1.0) {
-            return Err(Error::param(format!("g must be in (−1, 1), got {}", self.g)));
+            return Err(Error::param(format!(
+                "g must be in (−1, 1), got {}",
+                self.g
+            )));
         }
         Ok(())
     }

@@ -31,7 +31,9 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
 
 /// The block under `scene: |` in `scene_info` (YAML literal block, indented by two spaces).
 fn stored_scene(scene_info: &str) -> Option<String> {
-    let mut lines = scene_info.lines().skip_while(|l| l.trim_end() != "scene: |");
+    let mut lines = scene_info
+        .lines()
+        .skip_while(|l| l.trim_end() != "scene: |");
     lines.next()?;
     let body: Vec<&str> = lines
         .take_while(|l| l.is_empty() || l.starts_with("  "))

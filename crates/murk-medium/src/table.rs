@@ -267,7 +267,9 @@ impl ResponseTable {
     pub fn covers(&self, i: usize) -> bool {
         let per = self.reduction.rings() * self.reduction.coarse_bins;
         let nodes = self.values.len() / per;
-        let lit = (0..nodes).filter(|k| self.values[k * per + i] > 0.0).count();
+        let lit = (0..nodes)
+            .filter(|k| self.values[k * per + i] > 0.0)
+            .count();
         lit * 10 >= nodes * 9
     }
 
@@ -314,5 +316,8 @@ fn render_node(
         checkpoint_every: Duration::from_secs(3600),
     };
     let caps = plan.render_all_until(&opt, &|_, _| {}, &AtomicBool::new(false))?;
-    Ok(caps.iter().flat_map(|c| reduction.reduce_model(c)).collect())
+    Ok(caps
+        .iter()
+        .flat_map(|c| reduction.reduce_model(c))
+        .collect())
 }

@@ -536,7 +536,8 @@ impl Plan {
         out.warnings.extend(near_face_warning(&out, &gated));
         out.rows.extend(closing_rows(self.offset_m, &gated, &end));
         // Said only where a medium was met, so that captures without one keep their summaries.
-        out.rows.extend(removed.map(|r| ("medium".to_string(), r.describe())));
+        out.rows
+            .extend(removed.map(|r| ("medium".to_string(), r.describe())));
         Ok(out)
     }
 }
@@ -546,7 +547,8 @@ impl Plan {
 pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Reconstruction> {
     let (req, searched) = search_depth(&cap, req, progress)?;
     let mut out = Plan::new(&cap, &req, progress)?.run(cap, progress)?;
-    out.rows.extend(searched.map(|(_, line)| ("depth search".to_string(), line)));
+    out.rows
+        .extend(searched.map(|(_, line)| ("depth search".to_string(), line)));
     Ok(out)
 }
 
@@ -577,7 +579,9 @@ pub fn search_depth(
             .pulse(cap)
             .ok()
             .flatten()
-            .map_or(BASELINE_EDGE_BINS as f64 * cap.time.bin_width_m, |p| p.sigma_m);
+            .map_or(BASELINE_EDGE_BINS as f64 * cap.time.bin_width_m, |p| {
+                p.sigma_m
+            });
         let plane = Volume {
             z: Axis::new(z_m, z_m, 1),
             ..whole.volume

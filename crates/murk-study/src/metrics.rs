@@ -335,6 +335,79 @@ pub fn within_a_voxel(err_m: f64, dz_m: f64) -> bool {
     err_m.abs() <= dz_m * (1.0 + 1e-5)
 }
 
+/// A column's brightest voxel must reach this multiple of the column's mean for it to hold a surface:
+/// a flat column (ratio 1) holds none.
+const SURFACE_CONTRAST: f32 = 2.0;
+/// The nearest surface is the first local maximum reaching this share of the column's brightest.
+const SURFACE_SHARE: f32 = 0.5;
+/// An object is detected when more than this share of its pixels has a surface within tolerance: more
+/// than half, so that the median depth error of a detected object is within tolerance too.
+const DETECTED_SHARE: f64 = 0.5;
+
+/// The index of a column's nearest surface (z ascending away from the relay): its first local maximum
+/// that reaches half of its brightest voxel. None for a column without one that stands out (the
+/// brightest below twice the mean, or not positive). Not the brightest voxel: the virtual aperture
+/// sees around a small object, so a wall behind it can be brighter in the object's own column.
+pub fn nearest_surface(column: &[f32]) -> Option<usize> {
+    let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
+    let max = column.iter().map(|&v| finite(v)).fold(0.0, f32::max);
+    let mean = column.iter().map(|&v| finite(v)).sum::<f32>() / column.len().max(1) as f32;
+    if max <= 0.0 || max < SURFACE_CONTRAST * mean {
+        return None;
+    }
+    let at = |i: usize| finite(column[i]);
+    (0..column.len()).find(|&i| {
+        at(i) >= SURFACE_SHARE * max
+            && (i == 0 || at(i) >= at(i - 1))
+            && (i + 1 == column.len() || at(i) >= at(i + 1))
+    })
+}
+
+/// Whether an object is found at its depth, and how far off its depth is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Detection {
+    /// More than half of the object's pixels have their nearest surface within the tolerance, so its
+    /// median depth error is within it too.
+    pub detected: bool,
+    /// The share of the object's pixels whose nearest surface is within the tolerance.
+    pub hit_share: f64,
+    /// Median over the object's pixels with a surface of (found − true) depth; NaN without any.
+    pub depth_err_m: f64,
+}
+
+/// Detects an object from per-pixel nearest-surface depths (`found_m`, NaN where a column holds none,
+/// from [`nearest_surface`]) against its true depths, over the pixels of `mask`. A pixel counts when its
+/// depth is within `tolerance_m`, so an image without depth structure detects nothing whatever its
+/// brightness.
+pub fn detect_object(
+    found_m: &[f64],
+    true_m: &[f64],
+    mask: &[bool],
+    tolerance_m: f64,
+) -> Detection {
+    let errs: Vec<f64> = (0..mask.len())
+        .filter(|&i| mask[i])
+        .map(|i| found_m[i] - true_m[i])
+        .collect();
+    let pixels = errs.len();
+    let found: Vec<f64> = errs.iter().copied().filter(|e| e.is_finite()).collect();
+    // The same f32 slack as `within_a_voxel`: depths are stored in f32.
+    let hits = found
+        .iter()
+        .filter(|e| e.abs() <= tolerance_m * (1.0 + 1e-5))
+        .count();
+    let hit_share = if pixels == 0 {
+        0.0
+    } else {
+        hits as f64 / pixels as f64
+    };
+    Detection {
+        detected: hit_share > DETECTED_SHARE,
+        hit_share,
+        depth_err_m: median(&found),
+    }
+}
+
 /// Mean and sample standard deviation (n − 1 denominator) of the finite values: `(NaN, NaN)` for
 /// none, and a NaN standard deviation for one (a spread of one value is undefined, not zero).
 pub fn mean_std(values: &[f64]) -> (f64, f64) {
@@ -761,5 +834,70 @@ mod tests {
         assert!(one == 3.5 && spread.is_nan(), "{one} ± {spread}");
         let (mean, std) = mean_std(&[f64::NEG_INFINITY]);
         assert!(mean.is_nan() && std.is_nan());
+    }
+
+    /// A column with a near and a brighter far surface: the near one is the surface; a flat or
+    /// zero column holds none, and one whose near peak is below half the brightest gives the far one.
+    #[test]
+    fn nearest_surface_is_the_first_peak_that_stands_out() {
+        let mut col = vec![0.05f32; 20];
+        col[5] = 0.6;
+        col[12] = 1.0;
+        assert_eq!(nearest_surface(&col), Some(5));
+        col[5] = 0.4;
+        assert_eq!(nearest_surface(&col), Some(12));
+        assert_eq!(nearest_surface(&[0.7; 20]), None);
+        assert_eq!(nearest_surface(&[0.0; 20]), None);
+        // Brightest at 1.9× the mean: not a surface.
+        let weak: Vec<f32> = (0..20).map(|i| if i == 3 { 1.9 } else { 0.95 }).collect();
+        assert_eq!(nearest_surface(&weak), None);
+    }
+
+    /// A constant volume (a flat image at any brightness) detects no object; the same objects placed
+    /// at their true depths are detected with zero error, and 3 voxels off they are not.
+    #[test]
+    fn a_flat_volume_detects_no_object() {
+        let (n, nz, dz) = (16usize, 41usize, 0.025);
+        let z = |iz: usize| 1.5 + iz as f64 * dz;
+        let truth: Vec<f64> = (0..n).map(|i| if i < 8 { 1.85 } else { 2.2 }).collect();
+        let masks = [
+            (0..n).map(|i| i < 8).collect::<Vec<bool>>(),
+            (0..n).map(|i| i >= 8).collect(),
+        ];
+        let found = |vol: &[Vec<f32>]| -> Vec<f64> {
+            vol.iter()
+                .map(|c| nearest_surface(c).map_or(f64::NAN, z))
+                .collect()
+        };
+        let run = |vol: &[Vec<f32>]| {
+            let f = found(vol);
+            masks
+                .iter()
+                .map(|m| detect_object(&f, &truth, m, 2.0 * dz))
+                .collect::<Vec<_>>()
+        };
+        for level in [0.0f32, 1e-6, 1.0, 1e6] {
+            let flat = vec![vec![level; nz]; n];
+            assert!(run(&flat).iter().all(|d| !d.detected && d.hit_share == 0.0));
+        }
+        let peaked = |shift: usize| -> Vec<Vec<f32>> {
+            truth
+                .iter()
+                .map(|&t| {
+                    let at = ((t - 1.5) / dz).round() as usize + shift;
+                    (0..nz)
+                        .map(|iz| if iz == at { 1.0 } else { 0.01 })
+                        .collect()
+                })
+                .collect()
+        };
+        for d in run(&peaked(0)) {
+            assert!(d.detected && d.hit_share == 1.0, "{d:?}");
+            assert_close(d.depth_err_m, 0.0, 1e-9);
+        }
+        for d in run(&peaked(3)) {
+            assert!(!d.detected, "{d:?}");
+            assert_close(d.depth_err_m, 3.0 * dz, 1e-9);
+        }
     }
 }

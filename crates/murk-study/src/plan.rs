@@ -144,8 +144,8 @@ impl Format {
     /// The study's choice per scene and scale (see `docs/study.md` for why each window is where it is).
     pub fn of(scene: SceneKind, scale: Scale) -> Format {
         // The window starts 1 m of path before the shortest path of any voxel and ends ≥ 1.4 m after the
-        // longest, so the band-pass's ripple from either cut does not reach the volume: ≥ 4σ and ≥ 5.6σ
-        // of the longest pulse (3λ0; test below). `tail_share` in the report measures what the fog
+        // longest, so the band-pass's ripple from either cut does not reach the volume: ≥ 8σ and ≥ 11σ
+        // of the longest pulse (Fig. 4's 3λ0 = 0.1875 m; the test below holds twice that σ at quick scale). `tail_share` in the report measures what the fog
         // still carries there.
         match (scene, scale) {
             (SceneKind::ZLetter, Scale::Quick) => Format {
@@ -171,7 +171,7 @@ impl Format {
                 bins: 1200,
                 bin_width_m: 0.005,
                 start_m: 2.0,
-                spp: 128,
+                spp: 1024,
                 volume: "-0.984375:0.984375:64,-0.984375:0.984375:64,1.5:2.5:41".into(),
                 object_window_m: SHELF_WINDOW,
             },
@@ -250,7 +250,7 @@ pub struct Cell {
     pub col: String,
     pub scene: SceneKind,
     pub medium: MediumParams,
-    /// λ as a multiple of the paper's λ0 = 4Δc.
+    /// λ as a multiple of the paper's λ0 = 4Δc ([`Cell::wall_factor`] gives it in Δc).
     pub lambda_factor: f64,
     /// The capture job per seed.
     pub captures: Vec<String>,
@@ -262,6 +262,21 @@ impl Cell {
     /// The figure, row and column, e.g. `fig3b μt = 1 α = 0.5` (empty parts left out).
     pub fn label(&self) -> String {
         cell_label(self.figure, &self.row, &self.col)
+    }
+
+    /// λ in wall spacings Δc at `scale`: `lambda_factor` × 4. Fig. 4 studies λ against the Z's size, so
+    /// there λ0 is the paper scale's 4Δc in metres at every scale (2Δc on the quick scale's 64² grid,
+    /// at the grid's Nyquist limit): with the quick scale's own 4Δc, 3λ0 = 0.375 m is half the letter
+    /// and images it as one round blob, where the paper's 3λ0 = 0.1875 m still draws the Z.
+    pub fn wall_factor(&self, scale: Scale) -> f64 {
+        let lambda0 = match self.figure {
+            Figure::Fig4 => {
+                let grid = |s: Scale| Format::of(self.scene, s).grid as f64;
+                4.0 * grid(scale) / grid(Scale::Paper)
+            }
+            _ => 4.0,
+        };
+        lambda0 * self.lambda_factor
     }
 }
 
@@ -667,9 +682,10 @@ pub fn load_scene(dir: &Path, scene: SceneKind, set: &[String]) -> Result<Scene>
 mod tests {
     use super::*;
 
-    /// Every format's window keeps the longest pulse (3λ0, 4 cycles: σ = 8Δc) at least 4σ before the
-    /// shortest path of any voxel and 5σ after the longest (docs/study.md), with the paths measured
-    /// from the wall grid's points to each voxel and back to the SPAD at the wall's centre.
+    /// Every format's window keeps a pulse of σ = 8Δc (3λ0 at paper scale; twice Fig. 4's 3λ0 at quick
+    /// scale, where its λ0 is 2Δc) at least 4σ before the shortest path of any voxel and 5σ after the
+    /// longest (docs/study.md), with the paths measured from the wall grid's points to each voxel and
+    /// back to the SPAD at the wall's centre.
     #[test]
     fn windows_keep_the_longest_pulse_clear_of_every_voxel() {
         use murk_core::{DVec3, Volume};
@@ -725,6 +741,35 @@ mod tests {
             spp: Some(8),
             scenes_dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
         }
+    }
+
+    /// Fig. 4's λ in metres is the same at both scales, so its ratio to the Z's size is the paper's
+    /// (3λ0 = 0.1875 m against the 0.8 m letter); the other figures keep λ0 = 4Δc of their own grid.
+    #[test]
+    fn fig4_keeps_the_papers_wavelength_in_metres() {
+        let metres = |scale: Scale, figure: Figure| -> Vec<f64> {
+            let mut opt = options(&[figure], 1, 1);
+            opt.scale = scale;
+            let plan = Plan::new(&opt).unwrap();
+            plan.cells
+                .iter()
+                .map(|c| c.wall_factor(scale) * 2.0 / Format::of(c.scene, scale).grid as f64)
+                .collect()
+        };
+        for (q, p) in metres(Scale::Quick, Figure::Fig4)
+            .into_iter()
+            .zip(metres(Scale::Paper, Figure::Fig4))
+        {
+            assert!(
+                (q - p).abs() < 1e-12,
+                "{q} m at quick scale, {p} m at paper scale"
+            );
+        }
+        assert_eq!(metres(Scale::Paper, Figure::Fig4), [0.0625, 0.125, 0.1875]);
+        // The quick grid resolves λ0 = 2Δc (its Nyquist limit), no shorter.
+        let quick_lambda0 = metres(Scale::Quick, Figure::Fig4)[0];
+        assert!(quick_lambda0 >= 2.0 * 2.0 / 64.0 - 1e-12);
+        assert_eq!(metres(Scale::Quick, Figure::Fig3a), [0.125]);
     }
 
     /// A scenes folder needs only the scenes of the chosen figures.

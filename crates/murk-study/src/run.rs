@@ -7,7 +7,7 @@ use murk_core::{Capture, Error, GroundTruth, Result, Volume};
 use murk_recon::pipeline::{self, Method, Request, VolumeSpec};
 use murk_recon::{Compensation, NoProgress, PfForm, PfParams, Wavelength};
 use murk_render::{merge, RenderOptions};
-use murk_view::{views, Plane};
+use murk_view::{views, Plane, Views};
 use rustfft::num_complex::Complex32;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -258,7 +258,11 @@ fn merge_parts(dir: &Path, job: &CaptureJob) -> Result<()> {
 #[derive(Clone, Debug)]
 pub struct ObjectScore {
     pub name: String,
+    /// More than half of its pixels hold their column's nearest surface within two voxels of their depth.
     pub detected: bool,
+    /// The share of its pixels that do.
+    pub hit_share: f64,
+    /// Median over its pixels of (nearest surface − true) depth.
     pub depth_err_m: f64,
 }
 
@@ -273,6 +277,25 @@ pub struct Scores {
     pub cnr: f64,
     pub hf_share: f64,
     pub objects: Vec<ObjectScore>,
+}
+
+impl Scores {
+    /// How many of the scene's objects are detected (NaN for a scene without named objects).
+    pub fn objects_detected(&self) -> f64 {
+        if self.objects.is_empty() {
+            return f64::NAN;
+        }
+        self.objects.iter().filter(|o| o.detected).count() as f64
+    }
+
+    /// The largest |depth error| of the detected objects (NaN when none is detected).
+    pub fn worst_object_depth_err_m(&self) -> f64 {
+        self.objects
+            .iter()
+            .filter(|o| o.detected)
+            .map(|o| o.depth_err_m.abs())
+            .fold(f64::NAN, f64::max)
+    }
 }
 
 /// A cell's result per compensation: scores per seed, and the first seed's front view for figures.
@@ -369,7 +392,7 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
     for c in &plan.cells {
         for id in &c.captures {
             *uses
-                .entry((id.clone(), c.lambda_factor.to_bits()))
+                .entry((id.clone(), c.wall_factor(plan.scale).to_bits()))
                 .or_default() += 1;
         }
     }
@@ -410,26 +433,27 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
         for (seed, (id, ref_id)) in cell.captures.iter().zip(&cell.reference).enumerate() {
             let cap = load(id)?;
             tails.push(cap.end_level());
-            let field_key = (id.clone(), cell.lambda_factor.to_bits());
+            let wall_factor = cell.wall_factor(plan.scale);
+            let field_key = (id.clone(), wall_factor.to_bits());
             let field = match shared_fields.get(&field_key) {
                 Some(f) => f.clone(),
                 None => {
-                    let f = pf_field(&cap, &volume, cell.lambda_factor)?;
+                    let f = pf_field(&cap, &volume, wall_factor)?;
                     if uses[&field_key] > 1 {
                         shared_fields.insert(field_key, f.clone());
                     }
                     f
                 }
             };
-            let key = (ref_id.clone(), cell.lambda_factor.to_bits());
+            let key = (ref_id.clone(), wall_factor.to_bits());
             if !references.contains_key(&key) {
                 let rcap = load(ref_id)?;
-                let r = pf_field(&rcap, &volume, cell.lambda_factor)?;
+                let r = pf_field(&rcap, &volume, wall_factor)?;
                 let i = murk_recon::intensity(&rcap, &volume, &r, Compensation::None);
                 references.insert(key.clone(), views(&volume, &i).front);
             }
             let reference = &references[&key];
-            let (aware, estimate, note) = aware_intensity(&cap, &volume, cell.lambda_factor, tables)?;
+            let (aware, estimate, note) = aware_intensity(&cap, &volume, wall_factor, tables)?;
             estimated.push(estimate);
             aware_notes.extend(note);
             let mut aware = Some(aware);
@@ -444,7 +468,15 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
                     murk_recon::intensity(&cap, &volume, &field, comp)
                 };
                 let v = views(&volume, &i);
-                scores.push(score(&v.front, &v.depth, reference, &truth, cell.scene));
+                let surfaces =
+                    (cell.scene == SceneKind::Shelf).then(|| nearest_surfaces(&volume, &i));
+                scores.push(score(
+                    &v,
+                    surfaces.as_deref(),
+                    reference,
+                    &truth,
+                    volume.z.step(),
+                ));
                 if seed == 0 {
                     *first = Some(v.front);
                 }
@@ -486,7 +518,7 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
 fn aware_intensity(
     cap: &Capture,
     volume: &Volume,
-    lambda_factor: f64,
+    wall_factor: f64,
     tables: &mut Vec<murk_medium::ResponseTable>,
 ) -> Result<(Vec<f32>, Option<[f64; 3]>, Option<String>)> {
     let opt = murk_medium::EstimateOptions::default();
@@ -500,10 +532,7 @@ fn aware_intensity(
     let (estimate, note) = match murk_medium::estimate_with(cap, &opt, known, &|_, _| {}) {
         Ok((murk_medium::Outcome::Fitted(e), table)) => {
             tables.extend(table);
-            (
-                Some([e.mu_t_per_m.value, e.albedo.value, e.g.value]),
-                None,
-            )
+            (Some([e.mu_t_per_m.value, e.albedo.value, e.g.value]), None)
         }
         Ok((murk_medium::Outcome::NoMedium(_), table)) => {
             tables.extend(table);
@@ -516,7 +545,7 @@ fn aware_intensity(
         None => Compensation::None,
     };
     let params = PfParams {
-        wavelength: Wavelength::WallFactor(4.0 * lambda_factor),
+        wavelength: Wavelength::WallFactor(wall_factor),
         compensation,
         ..PfParams::default()
     };
@@ -528,10 +557,10 @@ fn aware_intensity(
     Ok((rec.intensity, estimate, note))
 }
 
-/// The PF field (λ = factor × 4Δc, 4 cycles: the paper's synthetic settings).
-fn pf_field(cap: &Capture, volume: &Volume, lambda_factor: f64) -> Result<Vec<Complex32>> {
+/// The PF field (λ = `wall_factor` × Δc, 4 cycles: the paper's synthetic settings).
+fn pf_field(cap: &Capture, volume: &Volume, wall_factor: f64) -> Result<Vec<Complex32>> {
     let params = PfParams {
-        wavelength: Wavelength::WallFactor(4.0 * lambda_factor),
+        wavelength: Wavelength::WallFactor(wall_factor),
         ..PfParams::default()
     };
     Ok(murk_recon::field(cap, volume, &params, PfForm::Fast, &NoProgress)?.values)
@@ -545,13 +574,36 @@ fn front_layout<T: Copy>(truth: &GroundTruth, values: &[T]) -> Vec<T> {
         .collect()
 }
 
+/// Per pixel of the front view, the depth of its column's nearest surface (NaN for none;
+/// [`metrics::nearest_surface`]).
+fn nearest_surfaces(volume: &Volume, intensity: &[f32]) -> Vec<f64> {
+    let (nx, ny, nz) = (volume.x.n, volume.y.n, volume.z.n);
+    let mut column = vec![0f32; nz];
+    (0..nx * ny)
+        .map(|p| {
+            // The front view's layout: +x on the left, +y up.
+            let (ix, iy) = (nx - 1 - p % nx, ny - 1 - p / nx);
+            for (iz, c) in column.iter_mut().enumerate() {
+                *c = intensity[volume.index(ix, iy, iz)];
+            }
+            metrics::nearest_surface(&column).map_or(f64::NAN, |iz| volume.z.at(iz))
+        })
+        .collect()
+}
+
+/// An object is found within this many voxels of its true depth.
+const OBJECT_DEPTH_VOXELS: f64 = 2.0;
+
+/// Scores one reconstruction's views; `surfaces` (the shelf's) also scores every named object but
+/// the room's walls.
 fn score(
-    front: &Plane,
-    depth: &Plane,
+    v: &Views,
+    surfaces: Option<&[f64]>,
     reference: &Plane,
     truth: &GroundTruth,
-    scene: SceneKind,
+    dz_m: f64,
 ) -> Scores {
+    let (front, depth) = (&v.front, &v.depth);
     let ids = front_layout(truth, &truth.object);
     let true_depth = front_layout(truth, &truth.depth_m);
     // The Z is object 0; in the room, everything but the room's walls.
@@ -566,11 +618,10 @@ fn score(
         metrics::median(&d)
     };
     let (w, h) = (front.width, front.height);
-    let norm = metrics::normalised(&front.values);
-    let objects = match scene {
-        SceneKind::ZLetter => Vec::new(),
-        SceneKind::Shelf => {
-            let otsu = metrics::otsu_threshold(&norm);
+    let objects = match surfaces {
+        None => Vec::new(),
+        Some(found) => {
+            let true_m: Vec<f64> = true_depth.iter().map(|&d| d as f64).collect();
             let mut names: Vec<&String> = truth
                 .object_names
                 .iter()
@@ -584,14 +635,12 @@ fn score(
                         .iter()
                         .map(|&id| id >= 0 && truth.object_names[id as usize] == *name)
                         .collect();
-                    let inside: Vec<f64> = (0..m.len())
-                        .filter(|&i| m[i])
-                        .map(|i| norm[i] as f64)
-                        .collect();
+                    let d = metrics::detect_object(found, &true_m, &m, OBJECT_DEPTH_VOXELS * dz_m);
                     ObjectScore {
                         name: name.clone(),
-                        detected: metrics::median(&inside) >= otsu as f64,
-                        depth_err_m: depth_err(&m),
+                        detected: d.detected,
+                        hit_share: d.hit_share,
+                        depth_err_m: d.depth_err_m,
                     }
                 })
                 .collect()

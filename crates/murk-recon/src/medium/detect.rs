@@ -58,7 +58,11 @@ impl Signature {
         Signature {
             share_with_signal: with_signal as f64 / cap.n_hist().max(1) as f64,
             early_level: if peak > 0.0 { early / peak } else { 0.0 },
-            decay: if late > 0.0 { early / late } else { f64::INFINITY },
+            decay: if late > 0.0 {
+                early / late
+            } else {
+                f64::INFINITY
+            },
             early_m,
         }
     }

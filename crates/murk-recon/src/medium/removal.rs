@@ -33,9 +33,9 @@ pub struct Removed {
 impl Removed {
     /// One line for a summary.
     pub fn describe(&self) -> String {
-        let why = self
-            .signature
-            .map_or("asked for".to_string(), |s| format!("detected: {}", s.describe()));
+        let why = self.signature.map_or("asked for".to_string(), |s| {
+            format!("detected: {}", s.describe())
+        });
         format!(
             "{why}; its response fitted from the capture ({} rings of equal laser–sensor separation, smoothed over {:.0} % of the path) and subtracted: {:.1} % of the signal's energy",
             self.rings,
@@ -61,7 +61,10 @@ pub fn subtract(cap: &mut Capture, signature: Option<Signature>) -> Removed {
     let mut count = vec![0usize; n_rings];
     for (i, &r) in ring.iter().enumerate() {
         count[r] += 1;
-        for (m, &v) in mean[r * bins..(r + 1) * bins].iter_mut().zip(cap.histogram(i)) {
+        for (m, &v) in mean[r * bins..(r + 1) * bins]
+            .iter_mut()
+            .zip(cap.histogram(i))
+        {
             *m += v as f64;
         }
     }
@@ -153,7 +156,10 @@ mod tests {
         for (a, b) in avg.iter().zip(&line) {
             assert!((a - b).abs() < 1e-12, "{a} vs {b}");
         }
-        assert_eq!(moving_average(&[1.0, 5.0, 3.0], &[4; 3]), vec![1.0, 3.0, 3.0]);
+        assert_eq!(
+            moving_average(&[1.0, 5.0, 3.0], &[4; 3]),
+            vec![1.0, 3.0, 3.0]
+        );
     }
 
     #[test]

@@ -104,7 +104,10 @@ fn plane_score(rec: &Reconstruction, k: usize) -> Option<f64> {
     }
     let max = values.iter().copied().fold(0f32, f32::max) as f64;
     let median = median_of(&mut values) as f64;
-    let mut dev: Vec<f32> = values.iter().map(|&x| (x as f64 - median).abs() as f32).collect();
+    let mut dev: Vec<f32> = values
+        .iter()
+        .map(|&x| (x as f64 - median).abs() as f32)
+        .collect();
     let mad = median_of(&mut dev) as f64;
     (mad > 0.0 && max.is_finite()).then(|| (max - median) / mad)
 }
@@ -137,7 +140,9 @@ mod tests {
         let mut i = vec![0f32; v.x.n * v.y.n * v.z.n];
         let mut seed = 1u64;
         let mut noise = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 40) as f32 / (1u64 << 24) as f32
         };
         for ix in 0..16 {
