@@ -313,7 +313,19 @@ fn nonsense_parameters() {
     );
     fails(
         &["reconstruct", g, "--out", out, "--volume", "garbage"],
-        &["--volume"],
+        &["volume 'garbage'", "three comma-separated axes"],
+    );
+    // Reversed bounds would draw the scene mirrored: refused, naming the axis.
+    fails(
+        &[
+            "reconstruct",
+            g,
+            "--out",
+            out,
+            "--volume",
+            "1:0:10,-0.5:0.5:8,0.5:1.5:8",
+        ],
+        &["axis '1:0:10' runs from 1 down to 0"],
     );
     fails(
         &["reconstruct", g, "--out", out, "--wavefactor", "1"],

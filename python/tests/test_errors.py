@@ -57,6 +57,14 @@ def test_capture_repr_has_no_float_noise(tmp_path, cap):
     assert "by 0.0048 m" in r and "t from 3.5 m" in r, r
 
 
+def test_a_bad_override_is_an_input_error_not_a_format_error():
+    # The scene file is fine; the caller's `set` is not.
+    with pytest.raises(murk.InputError) as e:
+        murk.render(os.path.join(SCENES, "z-letter.toml"), grid=4, spp=1, set={"medium.foo": 1})
+    assert not isinstance(e.value, murk.FormatError)
+    assert "medium.foo=1" in one_line(e) and "unknown field `foo`" in one_line(e)
+
+
 def test_missing_file():
     with pytest.raises(murk.FileError) as e:
         murk.read_capture("/nonexistent/capture.h5")

@@ -90,7 +90,10 @@ impl Scene {
         let mut table: toml::Table = text
             .parse()
             .map_err(|e: toml::de::Error| Error::format(path, one_line(e.message())))?;
-        let assignments = ov.assignments().map_err(|m| Error::format(path, m))?;
+        // A bad override is the caller's argument, not the file's content: a parameter error (in
+        // Python a ValueError naming it, not a FormatError about a good file).
+        let bad_override = |m: String| Error::param(format!("{}: {m}", path.display()));
+        let assignments = ov.assignments().map_err(bad_override)?;
         // One override at a time, so that a bad one is named.
         for (key, value, written) in &assignments {
             apply(&mut table, key, value.clone())
@@ -101,7 +104,7 @@ impl Scene {
                         .map_err(|e| one_line(e.message()))
                 })
                 .map(|parsed| f = parsed)
-                .map_err(|m| Error::format(path, format!("{written}: {m}")))?;
+                .map_err(|m| bad_override(format!("{written}: {m}")))?;
         }
         let source = if assignments.is_empty() {
             text.to_string()
