@@ -709,3 +709,74 @@ fn info_numbers_drop_only_what_f32_added() {
     assert_eq!(super::info_num(0.85), "0.85");
     assert_eq!(super::info_num(1.0 / 3.0), "0.3333333333333333");
 }
+
+/// The boundary migration model's `raw_data` (a, b, t): row a top → bottom, column b left → right
+/// (the reference code shows the letter T's bar on top), 55 ps bins, the side by file name and the
+/// foam's constants in `scene_info`; its bad inputs are one line naming the file.
+#[test]
+fn bmm_raw_data_a_b_t() {
+    let dir = tmpdir("imp-bmm");
+    let (n, nt, side, z) = (8, 256, 0.2, 0.4);
+    let (a0, b0) = (
+        nearest(Y0 / 3.0, n, side, false),
+        nearest(X0 / 3.0, n, side, false),
+    );
+    let raw = |f: &dyn Fn(&[usize]) -> f64| col_major(&[n, n, nt], f);
+    let v = raw(&|i| ((i[0], i[1]) == (a0, b0) && i[2] == bin(2.0 * z, 55.0 * PS)) as u8 as f64);
+    let p = dir.join("4cmFoam_LambertianT_7cmFoam.mat");
+    write_v5(&p, &[doubles("raw_data", &[n, n, nt], &v)]);
+    let cap = import(&p, &ImportOptions::preset(Preset::Bmm)).unwrap();
+    // assert_point's target is (X0, Y0); this scan is a third of the size.
+    let k = (0..cap.h.len()).fold(0, |b, k| if cap.h[k] > cap.h[b] { k } else { b });
+    let pt = cap.sensor.points[k / nt];
+    let half = 0.5 * side / (n - 1) as f64 + 1e-9;
+    assert!(
+        (pt.x - X0 / 3.0).abs() <= half && (pt.y - Y0 / 3.0).abs() <= half,
+        "brightest at {pt:?}"
+    );
+    let path = cap.time.start_m + (k % nt) as f64 * cap.time.bin_width_m;
+    assert!((path - 2.0 * z).abs() <= cap.time.bin_width_m, "{path}");
+    assert!((cap.time.bin_width_m - 0.0165).abs() < 1e-12);
+    assert_eq!(Medium::from_info(&cap.scene_info), Some(BMM_MEDIUM));
+    assert!(cap.scene_info.contains("scan_side_m: 0.2\n"));
+
+    let err = |p: &Path| {
+        let e = import(p, &ImportOptions::preset(Preset::Bmm))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            !e.contains('\n') && e.contains(&p.display().to_string()),
+            "{e}"
+        );
+        e
+    };
+    write_v5(&p, &[doubles("raw", &[n, n, nt], &v)]);
+    assert!(err(&p).contains("no variable 'raw_data'"));
+    write_v5(
+        &p,
+        &[doubles(
+            "raw_data",
+            &[n, n + 1, 4],
+            &vec![1.0; n * (n + 1) * 4],
+        )],
+    );
+    assert!(err(&p).contains("bmm scans are square"));
+    write_v5(
+        &p,
+        &[doubles("raw_data", &[n, n * nt], &vec![1.0; n * n * nt])],
+    );
+    assert!(err(&p).contains("should be N × N × T"));
+    write_v5(
+        &p,
+        &[doubles("raw_data", &[n, n, nt], &vec![0.0; n * n * nt])],
+    );
+    assert!(err(&p).contains("only zeros"));
+    let mut nan = v.clone();
+    nan[7] = f64::NAN;
+    write_v5(&p, &[doubles("raw_data", &[n, n, nt], &nan)]);
+    assert!(err(&p).contains("non-finite"));
+    let other = dir.join("foam.mat");
+    write_v5(&other, &[doubles("raw_data", &[n, n, nt], &v)]);
+    assert!(err(&other).contains("give its scan side with --wall-size"));
+    std::fs::remove_dir_all(dir).ok();
+}
