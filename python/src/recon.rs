@@ -95,6 +95,7 @@ impl Args {
                 n,
                 ..Default::default()
             },
+            medium: Default::default(),
         })
     }
 }
