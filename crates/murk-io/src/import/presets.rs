@@ -31,8 +31,9 @@ pub enum Preset {
     /// Ahn et al. 2019 (convolutional approximations): MATLAB v5 struct `NLOSDATA` with
     /// `transient` (Nx, Ny, Nt), `l` and `s` (Nx·Ny, 3) laser and sensor wall points (point
     /// ix·Ny + iy measures transient(ix, iy, :)), `times` (path length, m, per bin), `delta` (bin
-    /// width, m), `is_confocal`, `target_dist`. Times are rectified: the direct component starts
-    /// at 0. murk keeps the file's points (wall at z = 0, scene at z > 0).
+    /// width, m), `is_confocal`, `target_dist`. Times are round-trip paths from the wall. The
+    /// file's wall lies at z = target_dist with the scene on its −z side; murk turns the points
+    /// half a turn about y to put the wall at z = 0 and the scene at z > 0.
     Ahn2019,
     /// Xiao et al. 2024: MATLAB v5 `sig` (a, b, t) 32 × 32 × 512 float64, normalised and
     /// background-subtracted (small negative values), 32 ps bins, confocal over 0.82 m, t = 0 at
@@ -60,7 +61,7 @@ pub enum Preset {
     /// (t = 0 is not marked: the surface return rises over the first bins). The reference code
     /// shows row a from top to bottom (the letter T's bar on top); row a and column b as CDT's.
     /// Scan side by file name ([`BMM_SCENES`]) or `--wall-size`. The medium's constants the
-    /// reference assumes ([`BMM_MEDIUM`]) go into `scene_info`.
+    /// reference assumes go into `scene_info` ([`BMM_MEDIUM`]).
     Bmm,
 }
 
@@ -78,49 +79,9 @@ pub const BMM_SCENES: [(&str, f64); 8] = [
 ];
 
 /// The medium the boundary migration model's reference code assumes for its foam captures
-/// (μs = 313 /m with g = 0, absorption ignored, n = 1.23): written into `scene_info` as
-/// `medium_n`, `medium_mu_s_prime_per_m` and `medium_mu_a_per_m`.
-pub const BMM_MEDIUM: Medium = Medium {
-    n: 1.23,
-    mu_s_prime_per_m: 313.0,
-    mu_a_per_m: 0.0,
-};
-
-/// A diffusive medium's published constants, as `scene_info` carries them.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Medium {
-    /// Refractive index.
-    pub n: f64,
-    /// Reduced scattering coefficient μs′ = (1 − g)μs (1/m).
-    pub mu_s_prime_per_m: f64,
-    /// Absorption coefficient μa (1/m).
-    pub mu_a_per_m: f64,
-}
-
-impl Medium {
-    /// The `scene_info` lines recording it.
-    pub fn info_lines(&self) -> String {
-        format!(
-            "medium_n: {}\nmedium_mu_s_prime_per_m: {}\nmedium_mu_a_per_m: {}\n",
-            self.n, self.mu_s_prime_per_m, self.mu_a_per_m
-        )
-    }
-
-    /// The medium recorded in `scene_info` (all three lines), if it is there.
-    pub fn from_info(scene_info: &str) -> Option<Medium> {
-        let get = |key: &str| {
-            scene_info.lines().find_map(|l| {
-                let (k, v) = l.split_once(':')?;
-                (k.trim() == key).then(|| v.trim().parse::<f64>().ok())?
-            })
-        };
-        Some(Medium {
-            n: get("medium_n")?,
-            mu_s_prime_per_m: get("medium_mu_s_prime_per_m")?,
-            mu_a_per_m: get("medium_mu_a_per_m")?,
-        })
-    }
-}
+/// (μs = 313 /m with g = 0, absorption ignored, n = 1.23), as the `scene_info` lines that
+/// `--method bmm` reads.
+pub const BMM_MEDIUM: &str = "medium_n: 1.23\nmedium_mu_s_prime_per_m: 313\nmedium_mu_a_per_m: 0\n";
 
 /// Published scan sides of the CDT scenes (README: scan_size × size_calibration).
 pub const CDT_SCENES: [(&str, f64, f64); 5] = [
@@ -218,8 +179,8 @@ struct Spec {
     side: Side,
     /// `scene_info`'s `format` line.
     format: &'static str,
-    /// The medium the dataset's reference code assumes.
-    medium: Option<Medium>,
+    /// `scene_info` lines of the medium the dataset's reference code assumes.
+    medium: &'static str,
 }
 
 /// Row a, column b: murk's x is the reversed column, y the reversed row.
@@ -238,7 +199,7 @@ fn spec(p: Preset) -> Option<Spec> {
         gate_bins: 0,
         side,
         format,
-        medium: None,
+        medium: "",
     };
     Some(match p {
         Preset::Cdt => Spec {
@@ -301,7 +262,7 @@ fn spec(p: Preset) -> Option<Spec> {
             ..display_abt("tof_data", 5.0, Side::Fixed(0.8), "abp (t = 0 at the wall)")
         },
         Preset::Bmm => Spec {
-            medium: Some(BMM_MEDIUM),
+            medium: BMM_MEDIUM,
             ..display_abt(
                 "raw_data",
                 55.0,
@@ -507,9 +468,7 @@ pub(super) fn import(path: &Path, p: Preset, o: &ImportOptions) -> Result<Captur
         (None, None) => BinWidth::Ps(s.bin_ps),
     };
     let mut extra = super::flip_line(o.flip);
-    if let Some(m) = s.medium {
-        extra += &m.info_lines();
-    }
+    extra += s.medium;
     if let Some(tof) = &o.tof {
         let BinWidth::Ps(bin_ps) = bin_width else {
             return Err(Error::param(

@@ -317,24 +317,32 @@ fn fk_meas_a_b_t_and_tof() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// Ahn 2019's struct, with wall points whose first index runs along −x: the points, not the
+/// Ahn 2019's struct in the dataset's own frame (`loadNLOSDATA.m`): the wall at z = target_dist,
+/// the scene around the origin on the wall's −z side, `times` the round-trip path of each bin
+/// (their confocal backprojection reads bin (2|p − l| − times(1)) / delta). Seen from the wall,
+/// their +x is murk's −x. The wall points' first index runs along their −x: the points, not the
 /// indices, place the scan.
 #[test]
 fn ahn2019_struct_with_wall_points() {
     let dir = tmpdir("imp-ahn");
-    let (nx, ny, nt, side, z, delta) = (8, 6, 300, 0.8, 0.5, 0.005);
+    let (nx, ny, nt, side, z, delta, tbin1, target_dist) =
+        (8, 6, 300, 0.8, 0.5, 0.0192, 0.0012, 1.08);
     let (sx, sy) = (side / (nx - 1) as f64, side / (ny - 1) as f64);
     let pos = |ix: usize, iy: usize| (side / 2.0 - ix as f64 * sx, -side / 2.0 + iy as f64 * sy);
-    let (ix0, iy0) = (nearest(X0, nx, side, false), nearest(Y0, ny, side, true));
+    // murk's (X0, Y0) is their (−X0, Y0): index ix counts down their x, so up from murk's −X0.
+    let (ix0, iy0) = (nearest(-X0, nx, side, false), nearest(Y0, ny, side, true));
+    let p = DVec3::new(pos(ix0, iy0).0, pos(ix0, iy0).1, target_dist - z);
+    let wall = DVec3::new(p.x, p.y, target_dist);
+    let k = ((2.0 * (p - wall).length() - tbin1) / delta).round() as usize;
     let v = col_major(&[nx, ny, nt], |i| {
-        ((i[0], i[1]) == (ix0, iy0) && i[2] == bin(2.0 * z, delta)) as u8 as f64
+        ((i[0], i[1]) == (ix0, iy0) && i[2] == k) as u8 as f64
     });
     // Point k = ix·Ny + iy (the second coordinate fastest).
     let pts = col_major(&[nx * ny, 3], |i| {
         let (x, y) = pos(i[0] / ny, i[0] % ny);
-        [x, y, 0.0][i[1]]
+        [x, y, target_dist][i[1]]
     });
-    let times = col_major(&[1, nt], |i| i[1] as f64 * delta);
+    let times = col_major(&[1, nt], |i| tbin1 + i[1] as f64 * delta);
     let p = dir.join("ahn.mat");
     write_v5(
         &p,
@@ -347,12 +355,13 @@ fn ahn2019_struct_with_wall_points() {
                 ("times", doubles("", &[1, nt], &times)),
                 ("delta", doubles("", &[1, 1], &[delta])),
                 ("is_confocal", doubles("", &[1, 1], &[1.0])),
-                ("target_dist", doubles("", &[1, 1], &[z])),
+                ("target_dist", doubles("", &[1, 1], &[target_dist])),
             ],
         )],
     );
     let cap = import(&p, &ImportOptions::preset(Preset::Ahn2019)).unwrap();
     assert_eq!(cap.sensor.layout, PointLayout::Grid { nx, ny });
+    assert!(cap.sensor.points.iter().all(|q| q.z == 0.0));
     assert_point(&cap, z, "ahn2019");
     std::fs::remove_dir_all(dir).ok();
 }
@@ -737,7 +746,7 @@ fn bmm_raw_data_a_b_t() {
     let path = cap.time.start_m + (k % nt) as f64 * cap.time.bin_width_m;
     assert!((path - 2.0 * z).abs() <= cap.time.bin_width_m, "{path}");
     assert!((cap.time.bin_width_m - 0.0165).abs() < 1e-12);
-    assert_eq!(Medium::from_info(&cap.scene_info), Some(BMM_MEDIUM));
+    assert!(cap.scene_info.contains(BMM_MEDIUM), "{}", cap.scene_info);
     assert!(cap.scene_info.contains("scan_side_m: 0.2\n"));
 
     let err = |p: &Path| {
