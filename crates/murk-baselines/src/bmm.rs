@@ -18,6 +18,7 @@
 //!    t^{−1/2}), inverted per histogram by Tikhonov-regularised least squares, the weight chosen by
 //!    generalised cross-validation;
 //! 4. f-k (Stolt) migration of the virtual wave, |·|².
+//!
 //! The published code takes t·√h, inverts with a pseudo-inverse and migrates; murk's steps 2–3
 //! differ from it where the analytic half-space test and the foam captures showed why
 //! (docs/reconstruction.md).
@@ -214,7 +215,8 @@ fn window(samples: &[f32], nt: usize) -> Result<(usize, usize)> {
         .iter()
         .rposition(|&v| v >= END_LEVEL as f64 * peak)
         .unwrap_or(start);
-    if !(peak > 0.0) || end - start < 9 {
+    // peak is a sum of finite samples: 0 or more, never NaN.
+    if peak <= 0.0 || end - start < 9 {
         return Err(Error::param(format!(
             "the boundary migration model needs a diffusive tail after the surface return; this capture has {} bins from its peak to where it falls below {} % of it",
             end - start,
@@ -246,28 +248,30 @@ fn smooth_lateral(u: &[f64], nx: usize, ny: usize, m: usize, sigma: f64) -> Vec<
         .collect();
     let pass = |src: &[f64], along_x: bool| -> Vec<f64> {
         let mut out = vec![0f64; src.len()];
-        for ix in 0..nx {
-            for iy in 0..ny {
-                let (mut acc, mut norm) = (vec![0f64; m], 0.0);
-                for (o, wo) in (-r..=r).zip(&w) {
-                    let (jx, jy) = if along_x {
-                        (ix as isize + o, iy as isize)
-                    } else {
-                        (ix as isize, iy as isize + o)
-                    };
-                    if jx < 0 || jy < 0 || jx >= nx as isize || jy >= ny as isize {
-                        continue;
+        out.par_chunks_mut(ny * m)
+            .enumerate()
+            .for_each(|(ix, plane)| {
+                for iy in 0..ny {
+                    let (mut acc, mut norm) = (vec![0f64; m], 0.0);
+                    for (o, wo) in (-r..=r).zip(&w) {
+                        let (jx, jy) = if along_x {
+                            (ix as isize + o, iy as isize)
+                        } else {
+                            (ix as isize, iy as isize + o)
+                        };
+                        if jx < 0 || jy < 0 || jx >= nx as isize || jy >= ny as isize {
+                            continue;
+                        }
+                        let h = &src[(jx as usize * ny + jy as usize) * m..][..m];
+                        acc.iter_mut().zip(h).for_each(|(a, v)| *a += wo * v);
+                        norm += wo;
                     }
-                    let h = &src[(jx as usize * ny + jy as usize) * m..][..m];
-                    acc.iter_mut().zip(h).for_each(|(a, v)| *a += wo * v);
-                    norm += wo;
+                    plane[iy * m..][..m]
+                        .iter_mut()
+                        .zip(&acc)
+                        .for_each(|(d, a)| *d = a / norm);
                 }
-                out[(ix * ny + iy) * m..][..m]
-                    .iter_mut()
-                    .zip(&acc)
-                    .for_each(|(d, a)| *d = a / norm);
-            }
-        }
+            });
         out
     };
     pass(&pass(u, true), false)
@@ -331,14 +335,24 @@ const TAPER_POINTS: usize = 6;
 /// approximations, not by the noise, so the discrepancy principle cannot be used).
 fn regularised_inverse(k: &[f64], u: &[f64], m: usize) -> (f64, Vec<f64>) {
     // U = Σ u·uᵀ, so that Σ‖M·u‖² = tr(M·U·Mᵀ) for any M.
-    let mut cov = vec![0f64; m * m];
-    for h in u.chunks(m) {
-        for r in 0..m {
-            for c in 0..m {
-                cov[r * m + c] += h[r] * h[c];
-            }
-        }
-    }
+    let cov = u
+        .par_chunks(m)
+        .fold(
+            || vec![0f64; m * m],
+            |mut cov, h| {
+                for (r, row) in cov.chunks_mut(m).enumerate() {
+                    row.iter_mut().zip(h).for_each(|(c, v)| *c += h[r] * v);
+                }
+                cov
+            },
+        )
+        .reduce(
+            || vec![0f64; m * m],
+            |mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
+                a
+            },
+        );
     let mut a = vec![0f64; m * m];
     for r in 0..m {
         for c in r..m {

@@ -104,16 +104,18 @@ pub fn run(dir: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
         }
     }
     for (name, secs) in table {
-        say(
-            quiet,
-            format!(
-                "{name:>14}: median over scenes {:.1} ms (worst {:.1} ms)",
-                crate::median(&secs) * 1e3,
-                secs.iter().copied().fold(0.0, f64::max) * 1e3
-            ),
-        );
+        say(quiet, over_captures(name, &secs));
     }
     Ok(())
+}
+
+/// The line summing up one method's medians over the captures.
+fn over_captures(name: &str, secs: &[f64]) -> String {
+    format!(
+        "{name:>14}: median over captures {:.1} ms (worst {:.1} ms)",
+        crate::median(secs) * 1e3,
+        secs.iter().copied().fold(0.0, f64::max) * 1e3
+    )
 }
 
 /// `bmm` on each boundary-migration capture, median of `runs`.
@@ -138,13 +140,6 @@ fn run_bmm(files: &[std::path::PathBuf], runs: usize, quiet: bool) -> anyhow::Re
         );
         secs.push(s);
     }
-    say(
-        quiet,
-        format!(
-            "bmm: median over captures {:.1} ms (worst {:.1} ms)",
-            crate::median(&secs) * 1e3,
-            secs.iter().copied().fold(0.0, f64::max) * 1e3
-        ),
-    );
+    say(quiet, over_captures("bmm", &secs));
     Ok(())
 }
