@@ -363,6 +363,11 @@ fn ahn2019_struct_with_wall_points() {
     assert_eq!(cap.sensor.layout, PointLayout::Grid { nx, ny });
     assert!(cap.sensor.points.iter().all(|q| q.z == 0.0));
     assert_point(&cap, z, "ahn2019");
+    let info = crate::describe(&cap).join("\n");
+    assert!(
+        info.contains("z > +0.000 m (the wall); a return at path p comes from depth p/2, so this window reaches depths 0.001..2.881 m"),
+        "{info}"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -747,6 +752,9 @@ fn bmm_raw_data_a_b_t() {
     assert!((path - 2.0 * z).abs() <= cap.time.bin_width_m, "{path}");
     assert!((cap.time.bin_width_m - 0.0165).abs() < 1e-12);
     assert!(cap.scene_info.contains(BMM_MEDIUM), "{}", cap.scene_info);
+    assert!(crate::describe(&cap)
+        .iter()
+        .any(|l| l.contains("depth is not path/2")));
     assert!(cap.scene_info.contains("scan_side_m: 0.2\n"));
 
     let err = |p: &Path| {
