@@ -102,6 +102,7 @@ impl Args {
                 n,
                 ..Default::default()
             },
+            medium: Default::default(),
         })
     }
 }

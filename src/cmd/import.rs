@@ -12,7 +12,7 @@ use std::path::PathBuf;
 #[derive(Clone, Copy, Debug)]
 pub struct Format(Preset);
 
-const FORMATS: [Format; 9] = {
+const FORMATS: [Format; 10] = {
     let p = Preset::ALL;
     [
         Format(p[0]),
@@ -24,6 +24,7 @@ const FORMATS: [Format; 9] = {
         Format(p[6]),
         Format(p[7]),
         Format(p[8]),
+        Format(p[9]),
     ]
 };
 
@@ -44,10 +45,12 @@ murk import my_scan.mat --format cdt --wall-size 0.5 --out my_scan.h5\n  \
 murk import s_u.mat --format lct --out s_u.h5\n  \
 murk import statue/meas_180min.mat --format fk --tof statue/tof.mat --out statue.h5\n  \
 murk import bunny_confocal.hdf5 --format znlos --out bunny.h5\n  \
+murk import ../shared/data/real/bmm_du2022/4cmFoam_LambertianT_7cmFoam.mat --format bmm --out t4.h5\n  \
 murk import scan.npy --axes x,y,t --bin-width-ps 16 --wall-size 1 --confocal --out scan.h5\n  \
 murk import data.mat --var capture.hist --axes t,y,x --flip x,y --bin-width-m 0.005 --wall-size 0.6 \
 --confocal --t0-bin 40 --out data.h5\n\n\
-Scan sides known by file name (cdt): letter_s 0.636 m, mannequin 0.609 m, letters_ut, letter_t and cones 0.7 m.\n\
+Scan sides known by file name (cdt): letter_s 0.636 m, mannequin 0.609 m, letters_ut, letter_t and cones 0.7 m;\n\
+(bmm): the foam T files 0.2 m (5 cm: 0.1 m, 8 cm: 0.22 m).\n\
 Array scans become a confocal grid at z = 0 from −side/2 to +side/2. The presets' arrays are shown by\n\
 their reference code with row a top → bottom and column b left → right; row a maps to +y → −y and\n\
 column b to +x → −x, so murk's front view (from the wall, +y up, +x left) shows the scene as the\n\
@@ -71,7 +74,7 @@ pub struct ImportArgs {
     #[arg(long, conflicts_with = "format")]
     pub confocal: bool,
     /// Full side of the square scan (m), first point to last. Overrides the preset's
-    /// (cdt: by scene name; lct, wu2021: twice the file's `width`).
+    /// (cdt, bmm: by file name; lct, wu2021: twice the file's `width`).
     #[arg(long = "wall-size", value_name = "M")]
     pub wall_size_m: Option<f64>,
     /// Time bin width in picoseconds (converted with c = 3e8 m/s, as the reference codes do).

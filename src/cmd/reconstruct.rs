@@ -3,7 +3,7 @@
 use crate::cmd::progress::{say, Bar};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use murk_baselines::SlabParams;
+use murk_baselines::{BmmParams, SlabParams};
 use murk_core::{CaptureKind, Named, Volume};
 use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
 use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
@@ -188,6 +188,15 @@ pub struct SlabArgs {
     /// ones (road signs, retroreflective letters) as t².
     #[arg(long, value_enum, default_value = "diffuse")]
     pub weighting: WeightingArg,
+    /// bmm: the medium's refractive index (default: the capture's `medium_n`, else 1.23).
+    #[arg(long)]
+    pub medium_n: Option<f64>,
+    /// bmm: the medium's reduced scattering coefficient μs′ (1/m; default: the capture's, else 313).
+    #[arg(long)]
+    pub medium_musp: Option<f64>,
+    /// bmm: the medium's absorption coefficient μa (1/m; default: the capture's, else 0).
+    #[arg(long)]
+    pub medium_mua: Option<f64>,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -255,6 +264,11 @@ impl ReconstructArgs {
             snr: self.slab.snr,
             reflectance: library(self.slab.weighting)?,
             slab: self.slab.slab(),
+            medium: BmmParams {
+                n: self.slab.medium_n,
+                mu_s_prime_per_m: self.slab.medium_musp,
+                mu_a_per_m: self.slab.medium_mua,
+            },
         })
     }
 }

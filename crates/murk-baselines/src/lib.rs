@@ -10,6 +10,7 @@
 //! Bins: bin n of a histogram holds paths [start + nΔs, start + (n+1)Δs) (floor binning), so its
 //! value is read as belonging to the bin centre; see [`bp`].
 
+pub mod bmm;
 pub mod bp;
 pub mod cdt;
 mod confocal;
@@ -22,6 +23,7 @@ mod progress_tests;
 #[cfg(test)]
 mod testutil;
 
+pub use bmm::{bmm, bmm_with, BmmParams, Medium, FOAM};
 pub use bp::{backproject, backproject_with, BpOptions};
 pub use cdt::{cdt, through_slab, CdtParams, CdtPlan, Pulse, SlabParams};
 pub use confocal::TimeGrid;

@@ -32,6 +32,37 @@ fn side(name: &str, p: &murk_core::PointSet) -> String {
     )
 }
 
+/// How the time axis maps to depth: what a reconstruction's z means for this capture.
+fn depth_axis(cap: &Capture) -> String {
+    let t = cap.time;
+    let wall_z = cap
+        .sensor
+        .points
+        .iter()
+        .map(|p| p.z)
+        .fold(f64::MIN, f64::max);
+    let legs = if cap.t_accounts_first_and_last_bounces {
+        " after the laser→wall and wall→SPAD legs are removed"
+    } else {
+        ""
+    };
+    if cap.scene_info.contains("medium_n:") {
+        format!(
+            "depth axis: the scene lies inside a diffusive medium at z > {wall_z:+.3} m (its surface); light diffuses there, so depth is not path/2: reconstruct with --method bmm"
+        )
+    } else if cap.kind() == murk_core::CaptureKind::Confocal {
+        format!(
+            "depth axis: the scene lies at z > {wall_z:+.3} m (the wall); a return at path p{legs} comes from depth p/2, so this window reaches depths {:.3}..{:.3} m",
+            t.start_m.max(0.0) / 2.0,
+            t.end_m().max(0.0) / 2.0
+        )
+    } else {
+        format!(
+            "depth axis: the scene lies at z > {wall_z:+.3} m (the wall); a return at path p{legs} comes from points v with |l − v| + |v − s| = p"
+        )
+    }
+}
+
 /// What a capture holds, one line per fact: `murk info`'s report.
 pub fn describe(cap: &Capture) -> Vec<String> {
     let t = cap.time;
@@ -60,6 +91,7 @@ pub fn describe(cap: &Capture) -> Vec<String> {
             }
         ),
     ];
+    out.push(depth_axis(cap));
     let (mut sum, mut max, mut arg) = (0f64, f32::MIN, 0usize);
     for (i, &v) in cap.h.iter().enumerate() {
         sum += v as f64;

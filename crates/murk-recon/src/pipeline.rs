@@ -7,8 +7,8 @@
 use crate::medium::{self, detect::Signature, removal, DepthSearch, MediumAware, MediumRemoval};
 use crate::{Compensation, Falloff, Lateral, PfForm, PfParams, PfPlan, Progress, Wavelength};
 use murk_baselines::{
-    BpOptions, CdtParams, CdtPlan, FbpOptions, FkParams, FkPlan, LctParams, LctPlan, Pulse,
-    Reflectance, SlabParams,
+    BmmParams, BpOptions, CdtParams, CdtPlan, FbpOptions, FkParams, FkPlan, LctParams, LctPlan,
+    Pulse, Reflectance, SlabParams,
 };
 use murk_core::window::{
     apply_gate, handle_end, shortest_path_m, EndReport, GateReport, WindowEnd,
@@ -32,6 +32,8 @@ pub enum Method {
     Fk(FkParams),
     /// Confocal diffuse tomography (confocal grid behind a slab; its own volume).
     Cdt(CdtParams),
+    /// The boundary migration model (confocal scan of a diffusive medium's surface; its own volume).
+    Bmm(BmmParams),
 }
 
 /// The knobs the methods read, by name: what `murk reconstruct`'s flags and Python's keywords fill.
@@ -49,6 +51,8 @@ pub struct Options {
     pub reflectance: Reflectance,
     /// The scattering slab in front of the scene (cdt; [`TOffset::Slab`]).
     pub slab: SlabParams,
+    /// The medium the scene is inside (bmm); unset constants come from the capture.
+    pub medium: BmmParams,
 }
 
 impl Default for Options {
@@ -63,6 +67,7 @@ impl Default for Options {
             snr: None,
             reflectance: Reflectance::Diffuse,
             slab: SlabParams::default(),
+            medium: BmmParams::default(),
         }
     }
 }
@@ -83,7 +88,7 @@ impl Options {
 
 impl Method {
     /// Every method's name and a line about it, in the order `--help` lists them.
-    pub const NAMES: [(&'static str, &'static str); 7] = [
+    pub const NAMES: [(&'static str, &'static str); 8] = [
         ("pf", "Phasor Fields, fast planar form (falls back to the exact form when the wall is not a planar grid)"),
         ("pf-exact", "Phasor Fields, exact time-domain form for any geometry (slow on big captures)"),
         ("bp", "Backprojection (any capture kind, on the volume)"),
@@ -91,6 +96,7 @@ impl Method {
         ("lct", "Light-cone transform with Wiener deconvolution (confocal grid; own volume)"),
         ("fk", "f-k (Stolt) migration (confocal grid; own volume)"),
         ("cdt", "Confocal diffuse tomography: slab deconvolution, then f-k (confocal grid behind a slab; own volume)"),
+        ("bmm", "Boundary migration model: diffusion inverted to a virtual wave, then f-k (confocal scan of a medium the scene is inside; own volume)"),
     ];
 
     /// The method called `name`, with its parameters from `o`, for a capture of `kind`. A knob of
@@ -99,7 +105,7 @@ impl Method {
     pub fn from_name(name: &str, kind: CaptureKind, o: &Options) -> Result<Method> {
         let d = Options::default();
         // (what, set, the methods that read it)
-        let knobs: [(&str, bool, &[&str]); 7] = [
+        let knobs: [(&str, bool, &[&str]); 8] = [
             ("a wavelength", o.wavelength.is_some(), &["pf", "pf-exact"]),
             ("cycles", o.cycles != d.cycles, &["pf", "pf-exact"]),
             ("a falloff", o.falloff != d.falloff, &["pf", "pf-exact"]),
@@ -115,6 +121,7 @@ impl Method {
                 o.reflectance != d.reflectance,
                 &["lct"],
             ),
+            ("medium constants", o.medium != d.medium, &["bmm"]),
         ];
         let known = Method::NAMES.iter().any(|(n, _)| *n == name);
         if let Some((what, _, users)) = knobs
@@ -142,6 +149,7 @@ impl Method {
                 snr: o.snr.unwrap_or(CdtParams::default().snr),
                 ..Default::default()
             }),
+            "bmm" => Method::Bmm(o.medium),
             other => {
                 let names: Vec<&str> = Method::NAMES.iter().map(|(n, _)| *n).collect();
                 return Err(Error::param(format!(
@@ -162,13 +170,17 @@ impl Method {
             Method::Lct(_) => 4,
             Method::Fk(_) => 5,
             Method::Cdt(_) => 6,
+            Method::Bmm(_) => 7,
         };
         Method::NAMES[i].0
     }
 
     /// Methods that reconstruct on the confocal scan grid and ignore the requested volume.
     pub fn own_grid(&self) -> bool {
-        matches!(self, Method::Lct(_) | Method::Fk(_) | Method::Cdt(_))
+        matches!(
+            self,
+            Method::Lct(_) | Method::Fk(_) | Method::Cdt(_) | Method::Bmm(_)
+        )
     }
 
     fn pf(&self) -> Option<&PfParams> {
@@ -310,6 +322,7 @@ enum Engine {
     Lct(LctPlan),
     Fk(FkPlan),
     Cdt(CdtPlan),
+    Bmm(BmmParams),
 }
 
 impl Engine {
@@ -338,6 +351,8 @@ impl Engine {
             Method::Lct(p) => Engine::Lct(LctPlan::new(geometry, p, progress)?),
             Method::Fk(p) => Engine::Fk(FkPlan::new(geometry, p)?),
             Method::Cdt(p) => Engine::Cdt(CdtPlan::new(geometry, p, progress)?),
+            // Its window and inversion are measured on each capture: nothing to plan.
+            Method::Bmm(p) => Engine::Bmm(p),
         })
     }
 
@@ -349,6 +364,7 @@ impl Engine {
             Engine::Lct(plan) => plan.run(cap, progress),
             Engine::Fk(plan) => plan.run(cap, progress),
             Engine::Cdt(plan) => plan.run(cap, progress),
+            Engine::Bmm(p) => murk_baselines::bmm_with(cap, *p, progress),
         }
     }
 }

@@ -24,7 +24,7 @@ use crate::mat::ArrayFile;
 use murk_core::{Capture, DVec3, Error, Limits, PointLayout, PointSet, Result, TimeAxis};
 use std::path::{Path, PathBuf};
 
-pub use presets::{Preset, CDT_SCENES};
+pub use presets::{Preset, BMM_MEDIUM, BMM_SCENES, CDT_SCENES};
 
 /// The speed of light the reference codes convert bins with (their depths assume it).
 pub const REFERENCE_C_M_PER_S: f64 = 3e8;

@@ -237,8 +237,17 @@ fn ahn(path: &Path, file: &ArrayFile, o: &ImportOptions) -> Result<Walls> {
     let sensor = points(path, file, "NLOSDATA.s", n)?;
     let confocal = scalar(path, file, "NLOSDATA.is_confocal")?;
     let (illum, sensor, where_from) = match (laser, sensor, o.wall_size_m) {
-        (Some(l), Some(s), _) => (l, s, "l, s"),
+        (Some(l), Some(s), _) => {
+            let z_wall = s.iter().map(|p| p.z).sum::<f64>() / s.len() as f64;
+            (
+                facing_the_scene(&l, z_wall),
+                facing_the_scene(&s, z_wall),
+                "l, s",
+            )
+        }
         (Some(p), None, _) | (None, Some(p), _) if confocal != Some(0.0) => {
+            let z_wall = p.iter().map(|p| p.z).sum::<f64>() / p.len() as f64;
+            let p = facing_the_scene(&p, z_wall);
             (p.clone(), p, "one of l, s (confocal)")
         }
         (None, None, Some(side)) if confocal != Some(0.0) => {
@@ -285,11 +294,23 @@ fn ahn(path: &Path, file: &ArrayFile, o: &ImportOptions) -> Result<Walls> {
         start_m: times.map_or(0.0, |t| t[0] as f64),
         bin_width_m: delta,
         devices: None,
-        format: "ahn2019 (path length, rectified: the direct component at 0)",
+        format: "ahn2019 (path length from the wall; wall turned to z = 0, x reversed)",
         var: VAR,
         extra,
         scan,
     })
+}
+
+/// Ahn et al.'s files put the wall at z = target_dist and the hidden scene around the origin, on
+/// the wall's −z side (their `loadNLOSDATA.m`; the 2019, TX and toy files have l, s at z = 1.08 m
+/// and voxels at z ∈ [−0.5, 0.5] m). murk's wall is at z = 0 with the scene at z > 0, so the points
+/// are turned half a turn about the y axis through the wall: (x, y, z) → (−x, y, z_wall − z), a
+/// rotation, so the scene is not mirrored.
+fn facing_the_scene(points: &[DVec3], z_wall: f64) -> Vec<DVec3> {
+    points
+        .iter()
+        .map(|p| DVec3::new(-p.x, p.y, z_wall - p.z))
+        .collect()
 }
 
 /// A Z-NLOS grid variable, stored (P, Q, 3) or (3, Q, P), as P × Q points (y-tal's reading).

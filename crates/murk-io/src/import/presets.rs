@@ -31,8 +31,9 @@ pub enum Preset {
     /// Ahn et al. 2019 (convolutional approximations): MATLAB v5 struct `NLOSDATA` with
     /// `transient` (Nx, Ny, Nt), `l` and `s` (Nx·Ny, 3) laser and sensor wall points (point
     /// ix·Ny + iy measures transient(ix, iy, :)), `times` (path length, m, per bin), `delta` (bin
-    /// width, m), `is_confocal`, `target_dist`. Times are rectified: the direct component starts
-    /// at 0. murk keeps the file's points (wall at z = 0, scene at z > 0).
+    /// width, m), `is_confocal`, `target_dist`. Times are round-trip paths from the wall. The
+    /// file's wall lies at z = target_dist with the scene on its −z side; murk turns the points
+    /// half a turn about y to put the wall at z = 0 and the scene at z > 0.
     Ahn2019,
     /// Xiao et al. 2024: MATLAB v5 `sig` (a, b, t) 32 × 32 × 512 float64, normalised and
     /// background-subtracted (small negative values), 32 ps bins, confocal over 0.82 m, t = 0 at
@@ -55,7 +56,32 @@ pub enum Preset {
     /// legs, and the file's wall points are kept (wall at z = 0, scene at z > 0). Only confocal
     /// (5-D) renders are read.
     Znlos,
+    /// Du, Jin, Deng et al. 2022 (boundary migration model): MATLAB v5 `raw_data` (a, b, t)
+    /// N × N × 256 photon counts, 55 ps bins, a confocal scan of a scattering medium's surface
+    /// (t = 0 is not marked: the surface return rises over the first bins). The reference code
+    /// shows row a from top to bottom (the letter T's bar on top); row a and column b as CDT's.
+    /// Scan side by file name ([`BMM_SCENES`]) or `--wall-size`. The medium's constants the
+    /// reference assumes go into `scene_info` ([`BMM_MEDIUM`]).
+    Bmm,
 }
+
+/// Published scan sides of the boundary migration model's captures (twice the reference code's
+/// `width`, per file).
+pub const BMM_SCENES: [(&str, f64); 8] = [
+    ("2cmFoam_LambertianT_7cmFoam", 0.2),
+    ("3cmFoam_LambertianT_7cmFoam", 0.2),
+    ("4cmFoam_LambertianT_7cmFoam", 0.2),
+    ("5cmFoam_LambertianT_7cmFoam", 0.1),
+    ("6cmFoam_LambertianT_7cmFoam", 0.2),
+    ("7cmFoam_LambertianT_7cmFoam", 0.2),
+    ("8cmFoam_LambertianT_7cmFoam", 0.22),
+    ("Fog_Bunny", 0.2),
+];
+
+/// The medium the boundary migration model's reference code assumes for its foam captures
+/// (μs = 313 /m with g = 0, absorption ignored, n = 1.23), as the `scene_info` lines that
+/// `--method bmm` reads.
+pub const BMM_MEDIUM: &str = "medium_n: 1.23\nmedium_mu_s_prime_per_m: 313\nmedium_mu_a_per_m: 0\n";
 
 /// Published scan sides of the CDT scenes (README: scan_size × size_calibration).
 pub const CDT_SCENES: [(&str, f64, f64); 5] = [
@@ -68,7 +94,7 @@ pub const CDT_SCENES: [(&str, f64, f64); 5] = [
 ];
 
 impl Preset {
-    pub const ALL: [Preset; 9] = [
+    pub const ALL: [Preset; 10] = [
         Preset::Lct,
         Preset::LctTransient,
         Preset::Cdt,
@@ -78,6 +104,7 @@ impl Preset {
         Preset::Wu2021,
         Preset::Abp,
         Preset::Znlos,
+        Preset::Bmm,
     ];
 
     /// The `--format` name.
@@ -92,6 +119,7 @@ impl Preset {
             Preset::Wu2021 => "wu2021",
             Preset::Abp => "abp",
             Preset::Znlos => "znlos",
+            Preset::Bmm => "bmm",
         }
     }
 
@@ -107,6 +135,7 @@ impl Preset {
             Preset::Wu2021 => "Wu et al. 2021, v5 sig_in (a, b, t) 64×64×512, timeRes (s), width (half side), 32 ps, 0.85 m",
             Preset::Abp => "Zhang et al. 2023, v7.3 tof_data (a, b, t) 64×64×2048, 5 ps, 0.8 m side, first 500 bins gated",
             Preset::Znlos => "Galindo et al. 2019 Z-NLOS HDF5: confocal data + grid positions, deltaT/t0 in m",
+            Preset::Bmm => "Du et al. 2022 (BMM), v5 raw_data (a, b, t) 64×64×256, 55 ps, side by file name, foam constants",
         }
     }
 }
@@ -124,6 +153,8 @@ pub(super) enum Container {
 enum Side {
     /// [`CDT_SCENES`], by file stem.
     CdtScene,
+    /// [`BMM_SCENES`], by file stem.
+    BmmScene,
     /// Twice the scalar variable named (`width`: the half side), or the fallback where absent.
     HalfSideVar(&'static str, Option<f64>),
     /// The x extent of an (N², 3) point list (`lighting`), or the fallback where absent.
@@ -148,6 +179,8 @@ struct Spec {
     side: Side,
     /// `scene_info`'s `format` line.
     format: &'static str,
+    /// `scene_info` lines of the medium the dataset's reference code assumes.
+    medium: &'static str,
 }
 
 /// Row a, column b: murk's x is the reversed column, y the reversed row.
@@ -166,6 +199,7 @@ fn spec(p: Preset) -> Option<Spec> {
         gate_bins: 0,
         side,
         format,
+        medium: "",
     };
     Some(match p {
         Preset::Cdt => Spec {
@@ -226,6 +260,15 @@ fn spec(p: Preset) -> Option<Spec> {
             container: Container::V73,
             gate_bins: 500,
             ..display_abt("tof_data", 5.0, Side::Fixed(0.8), "abp (t = 0 at the wall)")
+        },
+        Preset::Bmm => Spec {
+            medium: BMM_MEDIUM,
+            ..display_abt(
+                "raw_data",
+                55.0,
+                Side::BmmScene,
+                "bmm (confocal scan of the medium's surface; t = 0 not marked)",
+            )
         },
         Preset::Ahn2019 | Preset::Znlos => return None,
     })
@@ -318,23 +361,8 @@ pub(super) fn positive(path: &Path, var: &str, what: &str, v: f64, unit: &str) -
 fn scan_side_m(path: &Path, file: &ArrayFile, side: Side, points: usize) -> Result<f64> {
     match side {
         Side::Fixed(s) => Ok(s),
-        Side::CdtScene => {
-            let stem = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            CDT_SCENES
-                .iter()
-                .find(|s| s.0 == stem)
-                .map(|s| s.1)
-                .ok_or_else(|| {
-                    Error::param(format!(
-                        "{}: unknown scene '{stem}' (known: {}); give its scan side with --wall-size",
-                        path.display(),
-                        CDT_SCENES.map(|s| s.0).join(", ")
-                    ))
-                })
-        }
+        Side::CdtScene => by_stem(path, &CDT_SCENES.map(|s| (s.0, s.1))),
+        Side::BmmScene => by_stem(path, &BMM_SCENES),
         Side::HalfSideVar(var, fallback) => match (scalar(path, file, var)?, fallback) {
             (Some(half), _) => Ok(2.0 * positive(path, var, "half the scan side", half, "m")?),
             (None, Some(s)) => Ok(s),
@@ -365,6 +393,25 @@ fn scan_side_m(path: &Path, file: &ArrayFile, side: Side, points: usize) -> Resu
             )),
         },
     }
+}
+
+/// The scan side of a known file, by its stem.
+fn by_stem(path: &Path, scenes: &[(&str, f64)]) -> Result<f64> {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    scenes
+        .iter()
+        .find(|s| s.0 == stem)
+        .map(|s| s.1)
+        .ok_or_else(|| {
+            Error::param(format!(
+                "{}: unknown scene '{stem}' (known: {}); give its scan side with --wall-size",
+                path.display(),
+                scenes.iter().map(|s| s.0).collect::<Vec<_>>().join(", ")
+            ))
+        })
 }
 
 /// `[N², T]` as `[N, N, T]` (a column-major reshape is, in C order, axes (j, i, t)).
@@ -421,6 +468,7 @@ pub(super) fn import(path: &Path, p: Preset, o: &ImportOptions) -> Result<Captur
         (None, None) => BinWidth::Ps(s.bin_ps),
     };
     let mut extra = super::flip_line(o.flip);
+    extra += s.medium;
     if let Some(tof) = &o.tof {
         let BinWidth::Ps(bin_ps) = bin_width else {
             return Err(Error::param(

@@ -317,24 +317,32 @@ fn fk_meas_a_b_t_and_tof() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// Ahn 2019's struct, with wall points whose first index runs along −x: the points, not the
+/// Ahn 2019's struct in the dataset's own frame (`loadNLOSDATA.m`): the wall at z = target_dist,
+/// the scene around the origin on the wall's −z side, `times` the round-trip path of each bin
+/// (their confocal backprojection reads bin (2|p − l| − times(1)) / delta). Seen from the wall,
+/// their +x is murk's −x. The wall points' first index runs along their −x: the points, not the
 /// indices, place the scan.
 #[test]
 fn ahn2019_struct_with_wall_points() {
     let dir = tmpdir("imp-ahn");
-    let (nx, ny, nt, side, z, delta) = (8, 6, 300, 0.8, 0.5, 0.005);
+    let (nx, ny, nt, side, z, delta, tbin1, target_dist) =
+        (8, 6, 300, 0.8, 0.5, 0.0192, 0.0012, 1.08);
     let (sx, sy) = (side / (nx - 1) as f64, side / (ny - 1) as f64);
     let pos = |ix: usize, iy: usize| (side / 2.0 - ix as f64 * sx, -side / 2.0 + iy as f64 * sy);
-    let (ix0, iy0) = (nearest(X0, nx, side, false), nearest(Y0, ny, side, true));
+    // murk's (X0, Y0) is their (−X0, Y0): index ix counts down their x, so up from murk's −X0.
+    let (ix0, iy0) = (nearest(-X0, nx, side, false), nearest(Y0, ny, side, true));
+    let p = DVec3::new(pos(ix0, iy0).0, pos(ix0, iy0).1, target_dist - z);
+    let wall = DVec3::new(p.x, p.y, target_dist);
+    let k = ((2.0 * (p - wall).length() - tbin1) / delta).round() as usize;
     let v = col_major(&[nx, ny, nt], |i| {
-        ((i[0], i[1]) == (ix0, iy0) && i[2] == bin(2.0 * z, delta)) as u8 as f64
+        ((i[0], i[1]) == (ix0, iy0) && i[2] == k) as u8 as f64
     });
     // Point k = ix·Ny + iy (the second coordinate fastest).
     let pts = col_major(&[nx * ny, 3], |i| {
         let (x, y) = pos(i[0] / ny, i[0] % ny);
-        [x, y, 0.0][i[1]]
+        [x, y, target_dist][i[1]]
     });
-    let times = col_major(&[1, nt], |i| i[1] as f64 * delta);
+    let times = col_major(&[1, nt], |i| tbin1 + i[1] as f64 * delta);
     let p = dir.join("ahn.mat");
     write_v5(
         &p,
@@ -347,13 +355,19 @@ fn ahn2019_struct_with_wall_points() {
                 ("times", doubles("", &[1, nt], &times)),
                 ("delta", doubles("", &[1, 1], &[delta])),
                 ("is_confocal", doubles("", &[1, 1], &[1.0])),
-                ("target_dist", doubles("", &[1, 1], &[z])),
+                ("target_dist", doubles("", &[1, 1], &[target_dist])),
             ],
         )],
     );
     let cap = import(&p, &ImportOptions::preset(Preset::Ahn2019)).unwrap();
     assert_eq!(cap.sensor.layout, PointLayout::Grid { nx, ny });
+    assert!(cap.sensor.points.iter().all(|q| q.z == 0.0));
     assert_point(&cap, z, "ahn2019");
+    let info = crate::describe(&cap).join("\n");
+    assert!(
+        info.contains("z > +0.000 m (the wall); a return at path p comes from depth p/2, so this window reaches depths 0.001..2.881 m"),
+        "{info}"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
 
@@ -708,4 +722,78 @@ fn info_numbers_drop_only_what_f32_added() {
     assert_eq!(super::info_num(0.85f32 as f64), "0.85");
     assert_eq!(super::info_num(0.85), "0.85");
     assert_eq!(super::info_num(1.0 / 3.0), "0.3333333333333333");
+}
+
+/// The boundary migration model's `raw_data` (a, b, t): row a top → bottom, column b left → right
+/// (the reference code shows the letter T's bar on top), 55 ps bins, the side by file name and the
+/// foam's constants in `scene_info`; its bad inputs are one line naming the file.
+#[test]
+fn bmm_raw_data_a_b_t() {
+    let dir = tmpdir("imp-bmm");
+    let (n, nt, side, z) = (8, 256, 0.2, 0.4);
+    let (a0, b0) = (
+        nearest(Y0 / 3.0, n, side, false),
+        nearest(X0 / 3.0, n, side, false),
+    );
+    let raw = |f: &dyn Fn(&[usize]) -> f64| col_major(&[n, n, nt], f);
+    let v = raw(&|i| ((i[0], i[1]) == (a0, b0) && i[2] == bin(2.0 * z, 55.0 * PS)) as u8 as f64);
+    let p = dir.join("4cmFoam_LambertianT_7cmFoam.mat");
+    write_v5(&p, &[doubles("raw_data", &[n, n, nt], &v)]);
+    let cap = import(&p, &ImportOptions::preset(Preset::Bmm)).unwrap();
+    // assert_point's target is (X0, Y0); this scan is a third of the size.
+    let k = (0..cap.h.len()).fold(0, |b, k| if cap.h[k] > cap.h[b] { k } else { b });
+    let pt = cap.sensor.points[k / nt];
+    let half = 0.5 * side / (n - 1) as f64 + 1e-9;
+    assert!(
+        (pt.x - X0 / 3.0).abs() <= half && (pt.y - Y0 / 3.0).abs() <= half,
+        "brightest at {pt:?}"
+    );
+    let path = cap.time.start_m + (k % nt) as f64 * cap.time.bin_width_m;
+    assert!((path - 2.0 * z).abs() <= cap.time.bin_width_m, "{path}");
+    assert!((cap.time.bin_width_m - 0.0165).abs() < 1e-12);
+    assert!(cap.scene_info.contains(BMM_MEDIUM), "{}", cap.scene_info);
+    assert!(crate::describe(&cap)
+        .iter()
+        .any(|l| l.contains("depth is not path/2")));
+    assert!(cap.scene_info.contains("scan_side_m: 0.2\n"));
+
+    let err = |p: &Path| {
+        let e = import(p, &ImportOptions::preset(Preset::Bmm))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            !e.contains('\n') && e.contains(&p.display().to_string()),
+            "{e}"
+        );
+        e
+    };
+    write_v5(&p, &[doubles("raw", &[n, n, nt], &v)]);
+    assert!(err(&p).contains("no variable 'raw_data'"));
+    write_v5(
+        &p,
+        &[doubles(
+            "raw_data",
+            &[n, n + 1, 4],
+            &vec![1.0; n * (n + 1) * 4],
+        )],
+    );
+    assert!(err(&p).contains("bmm scans are square"));
+    write_v5(
+        &p,
+        &[doubles("raw_data", &[n, n * nt], &vec![1.0; n * n * nt])],
+    );
+    assert!(err(&p).contains("should be N × N × T"));
+    write_v5(
+        &p,
+        &[doubles("raw_data", &[n, n, nt], &vec![0.0; n * n * nt])],
+    );
+    assert!(err(&p).contains("only zeros"));
+    let mut nan = v.clone();
+    nan[7] = f64::NAN;
+    write_v5(&p, &[doubles("raw_data", &[n, n, nt], &nan)]);
+    assert!(err(&p).contains("non-finite"));
+    let other = dir.join("foam.mat");
+    write_v5(&other, &[doubles("raw_data", &[n, n, nt], &v)]);
+    assert!(err(&other).contains("give its scan side with --wall-size"));
+    std::fs::remove_dir_all(dir).ok();
 }
