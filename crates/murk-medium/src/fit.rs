@@ -286,7 +286,7 @@ pub fn fit(
     let best_model = interpolate(table, mus[bm], albedos[ba], gs[bg], &used);
     let residual = residuals(&ln_data, &best_model, absolute);
     let rho = posterior::lag_one_correlation(&residual, |k| {
-        used[k] == used[k - 1] + 1 && used[k] % n != 0
+        used[k] == used[k - 1] + 1 && !used[k].is_multiple_of(n)
     });
     // The posterior over the candidate grid (flat in ln μt, α and g): its mean and standard
     // deviation, which follow a valley of equally good fits instead of the noise's choice in it.

@@ -115,7 +115,7 @@ fn read_histogram(path: &Path) -> Result<Histogram> {
 }
 
 impl Calibration {
-    /// Every histogram finite, non-negative, of one length, with a pulse above its background.
+    /// Every histogram finite, non-negative and as long as the direct one.
     pub fn validate(&self) -> Result<()> {
         let len = self.direct.counts.len();
         for h in std::iter::once(&self.direct).chain(self.slabs.iter().map(|s| &s.histogram)) {
@@ -531,7 +531,8 @@ impl Problem {
             .map(|q| slab.transmittance(0.0, t(start + q * r)).max(0.0).ln())
             .collect();
         let k = |v: f64| if v.is_finite() { v.exp() } else { 0.0 };
-        // Below e^-20 of the peak the cubic can overshoot on ln K's steep rise (−z²/4Dvt): linear there.
+        // Below e^-20 of the peak the cubic can overshoot on ln K's steep rise (−z²/4Dvt):
+        // linear there.
         let steep = ln_k.iter().copied().fold(f64::NEG_INFINITY, f64::max) - 20.0;
         for (j, o) in out.iter_mut().enumerate().skip(start as usize) {
             let x = (j as i64 - start) as f64 / r as f64;
@@ -565,7 +566,7 @@ impl Problem {
             dm += w * d * m;
             mm += w * m * m;
         }
-        if !(mm > 0.0) {
+        if mm.is_nan() || mm <= 0.0 {
             let ssr = c.data.iter().zip(&c.weight).map(|(d, w)| w * d * d).sum();
             return (0.0, ssr);
         }
@@ -658,6 +659,13 @@ pub fn fit_slab(
         return Err(Error::param(format!(
             "slab refractive index {} is outside 1–4",
             opt.n
+        )));
+    }
+    let (a, s) = (opt.mu_a_range, opt.mu_s_prime_range);
+    if !(opt.level > 0.0 && opt.level < 1.0 && a.0 >= 0.0 && a.1 > a.0 && s.0 > 0.0 && s.1 > s.0) {
+        return Err(Error::param(format!(
+            "slab fit: level {} must lie in (0, 1), μa range {a:?} in [0, ∞), μs′ range {s:?} in (0, ∞), each increasing",
+            opt.level
         )));
     }
     let problem = Problem::new(cal, opt)?;
@@ -784,8 +792,8 @@ mod tests {
 
     /// ∫∫ K dA dt of the image series (K as murk-baselines writes it: twice the Fick flux)
     /// against the steady-state flux through the far face of the 1-D problem with the same
-    /// extrapolated boundaries, solved in closed form: J = sinh(κs)·cosh(κze)/sinh(κL), κ = √(μa/D),
-    /// s = z0 + ze, L = d + 2ze (s/L without absorption). 1 ps trapezoid steps over 60 ns.
+    /// extrapolated boundaries, solved in closed form: J = sinh(κs)·cosh(κze)/sinh(κL),
+    /// κ = √(μa/D), s = z0 + ze, L = d + 2ze (s/L without absorption). 1 ps steps over 120 ns.
     #[test]
     fn total_transmittance_matches_the_steady_state_solution() {
         for (d, mu_a) in [(0.05, 0.53), (0.05, 20.0), (0.0254, 0.0), (0.1, 2.0)] {
