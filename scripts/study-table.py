@@ -32,17 +32,24 @@ def show(v: float) -> str:
 
 
 def table(study: Path) -> str:
-    rows = [r for r in csv.DictReader(open(study / "metrics.csv")) if r["compensation"] == "paper"]
+    every = list(csv.DictReader(open(study / "metrics.csv")))
+    rows = [r for r in every if r["compensation"] == "paper"]
+    aware = {(r["figure"], r["row"], r["col"]): r for r in every if r["compensation"] == "aware"}
     objects = list(csv.DictReader(open(study / "objects.csv")))
-    out = ["| figure | cell | IoU (best) | depth error (m) | SSIM | CNR | high-freq. share | objects found |",
-           "|---|---|---|---|---|---|---|---|"]
+    out = ["| figure | cell | IoU (best) | depth error (m) | SSIM | CNR | high-freq. share | objects found "
+           "| medium-aware IoU | SSIM | estimated μt, α, g |",
+           "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
+        a = aware.get((r["figure"], r["row"], r["col"]), {})
+        est = ", ".join(show(float(a[k])) for k in ("est_mu_t", "est_albedo", "est_g")) \
+            if a.get("est_mu_t") else "none detected"
         cell = " ".join(x for x in (r["row"], r["col"]) if x)
         found = [o for o in objects if o["figure"] == r["figure"] and o["col"] == r["col"]
                  and o["compensation"] == "paper" and o["seed"] == "0"]
         n = f"{sum(o['detected'] == 'true' for o in found)} of {len(found)}" if found else ""
         out.append("| " + " | ".join([r["figure"], cell] + [show(float(r[k] or "nan")) for k in
-                   ("iou_best", "depth_err_m", "ssim", "cnr", "hf_share")] + [n]) + " |")
+                   ("iou_best", "depth_err_m", "ssim", "cnr", "hf_share")] + [n]
+                   + [show(float(a.get(k) or "nan")) for k in ("iou_best", "ssim")] + [est]) + " |")
     return "\n".join(out) + "\n"
 
 

@@ -14,18 +14,32 @@ use std::path::PathBuf;
 murk medium fog.h5\n  \
 murk medium fog.h5 --json                       # one JSON object: mu_t_per_m, albedo, g, their uncertainties, …\n  \
 murk medium fog.h5 --fit mu_t,albedo --g 0.7    # g known: fit the other two\n  \
-murk medium fog.h5 --until 3.5                  # the medium-only bins end at 3.5 m of path\n\n\
+murk medium fog.h5 --until 3.5                  # the medium-only bins end at 3.5 m of path\n  \
+murk medium --slab-transmission ../shared/data/real/cdt_lindell2020/calibration   # a foam slab's μa, μs′\n\n\
 The forward model is murk's renderer: the capture's own scene (its scene_info, as murk render writes it)\n\
 without objects, rendered on a grid of μt × g nodes, each an albedo sweep, and interpolated. The fit\n\
 compares ring means (rings of equal laser–sensor separation) over 5 cm bins, from the window's start\n\
 to where the scene's own signal begins (the medium-aware depth search of `murk reconstruct`), in\n\
-ln(intensity). Uncertainties: the range where the sum of squares stays within one residual variance\n\
-of its minimum, the other parameters re-fitted. A capture without a medium answers 'no medium\n\
-detected'. docs/medium.md has the accuracy over the paper's sweep."
+ln(intensity). Uncertainties: the posterior's spread over the searched grid (flat priors, the noise\n\
+taken from the residual). A capture without a medium answers 'no medium\n\
+detected'. docs/medium.md has the accuracy over the paper's sweep.\n\n\
+--slab-transmission DIR fits a slab's absorption μa and reduced scattering μs′ instead, from\n\
+time-resolved transmission captures through slabs of several thicknesses (the CDT calibration\n\
+folder: capture_direct.mat, the laser without the slab, and capture_<a>_<b>_inch.mat, each with\n\
+the histogram `out` in 8 ps bins): the diffusion model of the slab's transmittance, convolved with\n\
+the direct capture, fitted to every capture at once (one amplitude each, time zero from the direct\n\
+capture, n given by --slab-n). See docs/medium.md, 'Foam slab'."
 )]
 pub struct MediumArgs {
     /// A y-tal HDF5 capture rendered by murk.
-    pub file: PathBuf,
+    #[arg(required_unless_present = "slab_transmission")]
+    pub file: Option<PathBuf>,
+    /// Fit a slab's μa and μs′ to the transmission captures in this folder (CDT calibration layout).
+    #[arg(long, value_name = "DIR", conflicts_with = "file")]
+    pub slab_transmission: Option<PathBuf>,
+    /// The slab's refractive index, with --slab-transmission.
+    #[arg(long, default_value_t = 1.12, requires = "slab_transmission")]
+    pub slab_n: f64,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     pub json: bool,
@@ -47,7 +61,14 @@ pub struct MediumArgs {
 }
 
 pub fn run(a: MediumArgs, quiet: bool) -> anyhow::Result<()> {
-    let cap = murk_io::read_capture(&a.file)?;
+    if let Some(dir) = &a.slab_transmission {
+        return slab(dir, &a, quiet);
+    }
+    let file = a
+        .file
+        .clone()
+        .context("give a capture, or --slab-transmission DIR")?;
+    let cap = murk_io::read_capture(&file)?;
     let opt = EstimateOptions {
         fit: FitParams::parse(&a.fit).context("--fit")?,
         fixed: Fixed {
@@ -67,7 +88,7 @@ pub fn run(a: MediumArgs, quiet: bool) -> anyhow::Result<()> {
             bar.advance(1);
         }
     })
-    .with_context(|| a.file.display().to_string())?;
+    .with_context(|| file.display().to_string())?;
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
     match outcome {
@@ -83,12 +104,39 @@ pub fn run(a: MediumArgs, quiet: bool) -> anyhow::Result<()> {
         }
         Outcome::Fitted(e) if a.json => println!("{}", e.to_json()),
         Outcome::Fitted(e) => {
-            say(quiet, format!("  capture: {}", a.file.display()));
+            say(quiet, format!("  capture: {}", file.display()));
             for (k, v) in e.rows() {
                 say(quiet, format!("  {k}: {v}"));
             }
             say(quiet, format!("  seconds: {secs:.1}"));
         }
     }
+    Ok(())
+}
+
+/// `--slab-transmission DIR`: the slab's μa and μs′ from its calibration captures.
+fn slab(dir: &std::path::Path, a: &MediumArgs, quiet: bool) -> anyhow::Result<()> {
+    let t0 = std::time::Instant::now();
+    let cal = murk_medium::slab::read_calibration(dir)?;
+    let opt = murk_medium::slab::SlabOptions {
+        n: a.slab_n,
+        ..Default::default()
+    };
+    let bar = Bar::new("slab", quiet || a.json);
+    let e =
+        murk_medium::slab::fit_slab(&cal, &opt, &bar).with_context(|| dir.display().to_string())?;
+    bar.finish();
+    if a.json {
+        println!("{}", e.to_json());
+        return Ok(());
+    }
+    say(quiet, format!("  calibration: {}", dir.display()));
+    for (k, v) in e.rows() {
+        say(quiet, format!("  {k}: {v}"));
+    }
+    say(
+        quiet,
+        format!("  seconds: {:.1}", t0.elapsed().as_secs_f64()),
+    );
     Ok(())
 }

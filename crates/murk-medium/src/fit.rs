@@ -1,6 +1,7 @@
 //! The fit: the capture's ring-averaged medium-only bins against the table, interpolated, by a grid
 //! search over (μt, α, g) that also gives each parameter's profile and so its uncertainty.
 
+use crate::posterior;
 use crate::table::ResponseTable;
 use crate::Fixed;
 use murk_core::{Capture, Error, Result};
@@ -282,31 +283,13 @@ pub fn fit(
     // independent values, N·(1 − ρ)/(1 + ρ) for a lag-one correlation ρ.
     let best_model = interpolate(table, mus[bm], albedos[ba], gs[bg], &used);
     let residual = residuals(&ln_data, &best_model, absolute);
-    let rho = lag_one_correlation(&residual, &used, n).clamp(0.0, 0.95);
-    let n_eff = (used.len() as f64 * (1.0 - rho) / (1.0 + rho)).max(1.0);
-    let spread = min / n_eff;
+    let rho = posterior::lag_one_correlation(&residual, |k| {
+        used[k] == used[k - 1] + 1 && !used[k].is_multiple_of(n)
+    });
     // The posterior over the candidate grid (flat in ln μt, α and g): its mean and standard
     // deviation, which follow a valley of equally good fits instead of the noise's choice in it.
-    let weight: Vec<f64> = ssr
-        .iter()
-        .map(|&x| (-(x - min) / (2.0 * spread.max(f64::MIN_POSITIVE))).exp())
-        .collect();
-    let total: f64 = weight.iter().sum();
-    let moments = |value: &dyn Fn(usize) -> f64| -> (f64, f64) {
-        let mean = weight
-            .iter()
-            .enumerate()
-            .map(|(i, w)| w * value(i))
-            .sum::<f64>()
-            / total;
-        let var = weight
-            .iter()
-            .enumerate()
-            .map(|(i, w)| w * (value(i) - mean).powi(2))
-            .sum::<f64>()
-            / total;
-        (mean, var.sqrt())
-    };
+    let weight = posterior::weights(&ssr, posterior::effective_count(used.len(), rho))?;
+    let moments = |value: &dyn Fn(usize) -> f64| posterior::moments(&weight, value);
     let parameter = |fitted: bool, values: &[f64], axis: usize, log: bool| -> Parameter {
         if !fitted {
             return Parameter {
@@ -385,21 +368,6 @@ fn residuals(ln_data: &[f64], model: &[f64], absolute: bool) -> Vec<f64> {
         diff.iter().sum::<f64>() / diff.len() as f64
     };
     diff.iter().map(|x| x - offset).collect()
-}
-
-/// The correlation of residuals at neighbouring coarse bins of one ring (`used` holds ring·n + bin).
-fn lag_one_correlation(residual: &[f64], used: &[usize], n: usize) -> f64 {
-    let mean = residual.iter().sum::<f64>() / residual.len() as f64;
-    let var: f64 = residual.iter().map(|r| (r - mean).powi(2)).sum();
-    let cov: f64 = (1..used.len())
-        .filter(|&k| used[k] == used[k - 1] + 1 && used[k] % n != 0)
-        .map(|k| (residual[k] - mean) * (residual[k - 1] - mean))
-        .sum();
-    if var > 0.0 {
-        cov / var
-    } else {
-        0.0
-    }
 }
 
 /// Σ (ln data − ln model)², less the best common offset when the scale is free; a model without

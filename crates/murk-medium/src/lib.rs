@@ -9,7 +9,9 @@
 //! captures of it (the study fits every cell from one table).
 
 pub mod fit;
+pub mod posterior;
 pub mod scene;
+pub mod slab;
 pub mod table;
 
 pub use fit::{Estimate, FitParams, Parameter};
