@@ -45,7 +45,7 @@ impl Fixed {
     pub fn validate(&self) -> Result<()> {
         murk_core::Limits::extinction(self.mu_t_per_m)
             .map_err(|e| Error::param(format!("μt {e}")))?;
-        if !(self.mu_t_per_m > 0.0) {
+        if self.mu_t_per_m.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(Error::param(format!(
                 "μt must be > 0, got {}",
                 self.mu_t_per_m
@@ -57,7 +57,7 @@ impl Fixed {
                 self.albedo
             )));
         }
-        if !(self.g.abs() < 1.0) {
+        if self.g.abs().partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
             return Err(Error::param(format!(
                 "g must be in (−1, 1), got {}",
                 self.g
@@ -109,7 +109,7 @@ pub fn estimate_with(
 ) -> Result<(Outcome, Option<ResponseTable>)> {
     cap.validate_data()?;
     opt.fixed.validate()?;
-    if let Some(u) = opt.until_m.filter(|&u| !(u > cap.time.start_m)) {
+    if let Some(u) = opt.until_m.filter(|&u| u.is_nan() || u <= cap.time.start_m) {
         return Err(Error::param(format!(
             "the medium-only bins end at {u} m, before the capture's window starts ({} m)",
             murk_core::short(cap.time.start_m)

@@ -453,10 +453,10 @@ pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellR
                 references.insert(key.clone(), views(&volume, &i).front);
             }
             let reference = &references[&key];
-            let (aware, estimate, note) = aware_intensity(&cap, &volume, wall_factor, tables)?;
-            estimated.push(estimate);
-            aware_notes.extend(note);
-            let mut aware = Some(aware);
+            let a = aware_intensity(&cap, &volume, wall_factor, tables)?;
+            estimated.push(a.estimate);
+            aware_notes.extend(a.note);
+            let mut aware = Some(a.intensity);
             for (name, scores, first) in by_comp.iter_mut() {
                 let m = cell.medium;
                 let i = if *name == AWARE {
@@ -520,7 +520,7 @@ fn aware_intensity(
     volume: &Volume,
     wall_factor: f64,
     tables: &mut Vec<murk_medium::ResponseTable>,
-) -> Result<(Vec<f32>, Option<[f64; 3]>, Option<String>)> {
+) -> Result<Aware> {
     let opt = murk_medium::EstimateOptions::default();
     let scene_text = murk_medium::scene::medium_only(cap).ok();
     let known = scene_text.as_ref().and_then(|t| {
@@ -554,7 +554,20 @@ fn aware_intensity(
         ..Request::new(Method::Pf(params))
     };
     let rec = pipeline::run(cap.clone(), &req, &NoProgress)?;
-    Ok((rec.intensity, estimate, note))
+    Ok(Aware {
+        intensity: rec.intensity,
+        estimate,
+        note,
+    })
+}
+
+/// One capture's medium-aware reconstruction and the estimate behind it.
+struct Aware {
+    intensity: Vec<f32>,
+    /// μt, albedo, g; `None` where no medium was detected or the fit failed.
+    estimate: Option<[f64; 3]>,
+    /// Why the fit failed.
+    note: Option<String>,
 }
 
 /// The PF field (λ = `wall_factor` × Δc, 4 cycles: the paper's synthetic settings).
