@@ -3,25 +3,7 @@
 
 #[path = "common/cli.rs"]
 mod cli;
-use cli::murk;
-use std::path::{Path, PathBuf};
-
-fn ok(args: &[&str]) -> String {
-    let (code, out, err) = murk(args);
-    assert_eq!(code, 0, "{args:?}: {err}");
-    out
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("murk-medium-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use cli::{murk, ok, s, temp_dir};
 
 fn row<'a>(summary: &'a str, key: &str) -> &'a str {
     summary
@@ -37,7 +19,7 @@ fn row<'a>(summary: &'a str, key: &str) -> &'a str {
 /// peak on the fog at 0.44 m).
 #[test]
 fn the_z_in_fog_is_found_without_flags() {
-    let d = dir("z");
+    let d = temp_dir("medium-z");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/z-letter.toml");
     let (cap, truth, vol) = (d.join("z.h5"), d.join("truth.h5"), d.join("v.npy"));
     ok(&[
@@ -106,7 +88,7 @@ fn the_z_in_fog_is_found_without_flags() {
 /// same summary: nothing is detected, so nothing is removed or searched.
 #[test]
 fn captures_without_a_medium_are_unchanged() {
-    let d = dir("clear");
+    let d = temp_dir("medium-clear");
     let cap = d.join("z.h5");
     ok(&[
         "synth",
@@ -179,7 +161,7 @@ fn captures_without_a_medium_are_unchanged() {
 /// 10 % (docs/medium.md has the sweep); `--json` is one object with the documented keys.
 #[test]
 fn the_medium_of_the_fog_is_estimated() {
-    let d = dir("estimate");
+    let d = temp_dir("medium-estimate");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/t-wall-medium.toml");
     let cap = d.join("fog.h5");
     ok(&["render", "-q", scene, "--out", s(&cap), "--spp", "64"]);
@@ -222,7 +204,7 @@ fn the_medium_of_the_fog_is_estimated() {
 /// span of medium-only bins: one line naming the file, exit ≠ 0.
 #[test]
 fn bad_input_is_one_line() {
-    let d = dir("bad");
+    let d = temp_dir("medium-bad");
     let junk = d.join("junk.h5");
     std::fs::write(&junk, b"not hdf5").unwrap();
     let (code, _, err) = murk(&["medium", s(&junk)]);

@@ -4,25 +4,8 @@
 
 #[path = "common/cli.rs"]
 mod cli;
-use cli::murk;
-use std::path::{Path, PathBuf};
-
-fn ok(args: &[&str]) -> String {
-    let (code, out, err) = murk(args);
-    assert_eq!(code, 0, "{args:?}: {err}");
-    out
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("murk-window-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use cli::{murk, ok, s, temp_dir};
+use std::path::Path;
 
 /// Writes `src` cut after `bins` bins to `dst`.
 fn cut(src: &Path, dst: &Path, bins: usize) {
@@ -85,7 +68,7 @@ fn compare(full: &Path, cut: &Path) -> (f64, f64) {
 /// below).
 #[test]
 fn cut_synthetic_window_keeps_depth_and_picture() {
-    let d = dir("synth");
+    let d = temp_dir("window-synth");
     let full = d.join("full.h5");
     ok(&[
         "synth",
@@ -168,7 +151,7 @@ fn cut_synthetic_window_keeps_depth_and_picture() {
 #[ignore = "reads the real capture ../shared/data/real/cdt_lindell2020 (slow); .ci/run runs it with --ignored when that folder is there"]
 fn cut_real_cdt_letter_s() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real/cdt_lindell2020");
-    let d = dir("real");
+    let d = temp_dir("window-real");
     let full = d.join("s.h5");
     ok(&[
         "import",
@@ -226,7 +209,7 @@ fn cut_real_cdt_letter_s() {
 /// below 1.5 m also puts it there.
 #[test]
 fn gate_removes_the_fog_near_the_relay() {
-    let d = dir("gate");
+    let d = temp_dir("window-gate");
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/t-wall-medium.toml");
     let cap = d.join("fog.h5");
     ok(&["render", "-q", scene, "--out", s(&cap)]);
