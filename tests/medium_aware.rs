@@ -151,9 +151,25 @@ fn captures_without_a_medium_are_unchanged() {
         assert_eq!(drop_time(&with), drop_time(&without));
         assert!(!with.contains("medium:") && !with.contains("depth search"));
     }
-    // murk medium answers that it sees none, not a fit to noise.
+    // murk medium answers that it sees none, not a fit to noise; a compensation without μt cannot
+    // be estimated then.
     let out = ok(&["medium", s(&render)]);
     assert!(out.starts_with("no medium detected"), "{out}");
+    let v = d.join("v.npy");
+    let (code, _, err) = murk(&[
+        "reconstruct",
+        s(&render),
+        "--out",
+        s(&v),
+        "--compensate",
+        "ballistic",
+    ]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("no medium detected") && err.contains("--mu-t") && err.contains("clear.h5"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
     std::fs::remove_dir_all(&d).ok();
 }
 
@@ -197,6 +213,30 @@ fn the_medium_of_the_fog_is_estimated() {
     assert!((value("mu_t_per_m") - 1.0).abs() <= 0.1, "{json}");
     assert!((value("albedo") - 0.5).abs() <= 0.05, "{json}");
     assert_eq!(value("g"), 0.0);
+    // --compensate without --mu-t takes the estimate (every parameter free) and says so.
+    let v = d.join("v.npy");
+    let summary = ok(&[
+        "reconstruct",
+        s(&cap),
+        "--out",
+        s(&v),
+        "--compensate",
+        "paper",
+    ]);
+    let line = summary
+        .lines()
+        .find(|l| l.contains("compensated with: μt"))
+        .unwrap_or_else(|| panic!("{summary}"));
+    let mu: f64 = line
+        .split("μt ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((mu - 1.0).abs() <= 0.2, "{line}");
     std::fs::remove_dir_all(&d).ok();
 }
 

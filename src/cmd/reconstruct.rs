@@ -88,8 +88,10 @@ pub struct ReconstructArgs {
     /// Also write front/top/side maximum projections, a depth map and index.html into this folder.
     #[arg(long)]
     pub png: Option<PathBuf>,
-    /// Medium compensation of the intensity (needs --mu-t; paper also --albedo).
-    #[arg(long, value_enum, requires = "mu_t_per_m")]
+    /// Medium compensation of the intensity, with --mu-t (paper also --albedo); without --mu-t the
+    /// medium is estimated from the capture as `murk medium` does (the summary's `compensated with`
+    /// row says the values used).
+    #[arg(long, value_enum)]
     pub compensate: Option<CompensateArg>,
     /// Extinction coefficient μt of the medium (1/m), for --compensate.
     #[arg(long = "mu-t", value_name = "PER_M", requires = "compensate")]
@@ -273,7 +275,7 @@ impl ReconstructArgs {
     }
 }
 
-pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
+pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     murk_io::check_output(&a.out, &[&a.file])?;
     murk_io::check_volume_path(&a.out)?;
     if let Some(png) = &a.png {
@@ -282,10 +284,16 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     }
     let cap = murk_io::read_capture(&a.file)?;
     let kind = cap.kind();
+    let estimated = match (a.compensate, a.mu_t_per_m) {
+        (Some(_), None) => Some(estimate_medium(&mut a, &cap, quiet)?),
+        _ => None,
+    };
     let req = a.request(kind)?;
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
-    let out = pipeline::run(cap, &req, &bar).with_context(|| a.file.display().to_string())?;
+    let mut out = pipeline::run(cap, &req, &bar).with_context(|| a.file.display().to_string())?;
+    out.rows
+        .extend(estimated.map(|line| ("compensated with".to_string(), line)));
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
     for w in out.warnings.iter().filter(|_| !quiet) {
@@ -318,6 +326,49 @@ pub fn run(a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         say(quiet, format!("  {k}: {v}"));
     }
     Ok(())
+}
+
+/// Fills `a`'s --mu-t (and, for --compensate paper, an --albedo not given) with the medium estimated
+/// from `cap` (`murk medium`, every parameter free); returns the summary line saying so.
+fn estimate_medium(
+    a: &mut ReconstructArgs,
+    cap: &murk_core::Capture,
+    quiet: bool,
+) -> anyhow::Result<String> {
+    let bar = Bar::new("medium", quiet);
+    let outcome = murk_medium::estimate(cap, &murk_medium::EstimateOptions::default(), &|d, n| {
+        if d == 0 {
+            murk_recon::Progress::start(&bar, n as u64);
+        } else {
+            murk_recon::Progress::advance(&bar, 1);
+        }
+    })
+    .with_context(|| format!("{}: --compensate without --mu-t", a.file.display()))?;
+    bar.finish();
+    let e = match outcome {
+        murk_medium::Outcome::Fitted(e) => e,
+        murk_medium::Outcome::NoMedium(s) => anyhow::bail!(
+            "{}: --compensate without --mu-t: no medium detected to estimate it from ({}); give --mu-t",
+            a.file.display(),
+            s.describe()
+        ),
+    };
+    a.mu_t_per_m = Some(e.mu_t_per_m.value);
+    let paper = matches!(a.compensate, Some(CompensateArg::Paper));
+    if paper && a.albedo.is_none() {
+        a.albedo = Some(e.albedo.value);
+    }
+    let short = murk_core::short;
+    Ok(format!(
+        "μt {} ± {} /m{} estimated from the capture (murk medium; --mu-t and --albedo set them)",
+        short(e.mu_t_per_m.value),
+        short(e.mu_t_per_m.uncertainty),
+        if paper {
+            format!(", albedo {}", short(a.albedo.unwrap_or_default()))
+        } else {
+            String::new()
+        }
+    ))
 }
 
 #[cfg(test)]
