@@ -47,15 +47,8 @@ impl Removed {
 
 /// Subtracts the fitted medium response from every histogram of `cap`.
 pub fn subtract(cap: &mut Capture, signature: Option<Signature>) -> Removed {
-    let n = cap.n_hist();
     let bins = cap.time.bins;
-    let separation: Vec<f64> = (0..n)
-        .map(|i| {
-            let (l, s) = cap.hist_pair(i);
-            cap.illum.points[l].distance(cap.sensor.points[s])
-        })
-        .collect();
-    let ring = rings(&separation);
+    let ring = rings(&separations(cap));
     let n_rings = ring.iter().copied().max().map_or(0, |r| r + 1);
     let mut mean = vec![0.0f64; n_rings * bins];
     let mut count = vec![0usize; n_rings];
@@ -103,9 +96,19 @@ pub fn subtract(cap: &mut Capture, signature: Option<Signature>) -> Removed {
     }
 }
 
+/// Each histogram's laser–sensor separation (m).
+pub(super) fn separations(cap: &Capture) -> Vec<f64> {
+    (0..cap.n_hist())
+        .map(|i| {
+            let (l, s) = cap.hist_pair(i);
+            cap.illum.points[l].distance(cap.sensor.points[s])
+        })
+        .collect()
+}
+
 /// Each histogram's ring: quantiles of the separation, so that rings hold equal numbers of histograms;
 /// histograms of equal separation always share a ring.
-fn rings(separation: &[f64]) -> Vec<usize> {
+pub(super) fn rings(separation: &[f64]) -> Vec<usize> {
     let n = separation.len();
     let n_rings = (n / MIN_RING).clamp(1, MAX_RINGS);
     let mut order: Vec<usize> = (0..n).collect();
