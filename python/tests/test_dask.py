@@ -189,7 +189,7 @@ def test_a_render_the_tasks_would_refuse_is_refused_before_any_task():
     # raised before a cluster starts.
     with pytest.raises(murk.InputError, match=r"1 work units .* so at most 1 shards"):
         murk.dask.render(Z, shards=4, grid=4, spp=8)
-    with pytest.raises(murk.FormatError, match=r"medium\.nope"):
+    with pytest.raises(murk.InputError, match=r"medium\.nope"):
         murk.dask.render(Z, shards=2, grid=16, spp=8, set={"medium.nope": 1})
     # An output that cannot be written: before, found only after every shard had rendered.
     with pytest.raises(murk.InputError, match="the folder /nonexistent does not exist"):

@@ -26,7 +26,7 @@ def test_unknown_method(cap):
     with pytest.raises(murk.InputError) as e:
         murk.reconstruct(cap, "pff", volume=VOL)
     assert isinstance(e.value, ValueError)
-    assert one_line(e) == "unknown method 'pff'; expected one of pf, pf-exact, bp, fbp, lct, fk, cdt"
+    assert one_line(e) == "unknown method 'pff'; expected one of pf, pf-exact, bp, fbp, lct, fk, cdt, bmm"
 
 
 def test_bad_volume_string(cap):
