@@ -12,6 +12,17 @@ fn row<'a>(summary: &'a str, key: &str) -> &'a str {
         .unwrap_or_else(|| panic!("no {key} in {summary}"))
 }
 
+/// The depth of the summary's peak (m).
+fn peak_z(summary: &str) -> f64 {
+    row(summary, "peak")
+        .rsplit("z ")
+        .next()
+        .unwrap()
+        .trim_end_matches(" m")
+        .parse()
+        .unwrap()
+}
+
 /// The Z of the paper 2 m behind the diffuser in fog (μt = 1, α = 0.5; 64² laser points, 1 200 bins
 /// of 5 mm from 1 m): with no flags the medium is detected, its response removed and the depth range
 /// found, so the peak is on the Z (2.0 m ± 5 cm) and the front view's best-threshold IoU against the
@@ -39,14 +50,8 @@ fn the_z_in_fog_is_found_without_flags() {
     ]);
     let summary = ok(&["reconstruct", s(&cap), "--out", s(&vol)]);
     assert!(row(&summary, "medium").starts_with("detected"), "{summary}");
-    let peak_z: f64 = row(&summary, "peak")
-        .rsplit("z ")
-        .next()
-        .unwrap()
-        .trim_end_matches(" m")
-        .parse()
-        .unwrap();
-    assert!((peak_z - 2.0).abs() <= 0.05, "{summary}");
+    let z = peak_z(&summary);
+    assert!((z - 2.0).abs() <= 0.05, "{summary}");
     let (shape, v) = murk_io::read_npy_f32(&vol).unwrap();
     let t = murk_io::read_truth_h5(&truth).unwrap();
     assert_eq!(
@@ -73,13 +78,7 @@ fn the_z_in_fog_is_found_without_flags() {
         "--depth-search",
         "off",
     ]);
-    let plain_z: f64 = row(&plain, "peak")
-        .rsplit("z ")
-        .next()
-        .unwrap()
-        .trim_end_matches(" m")
-        .parse()
-        .unwrap();
+    let plain_z = peak_z(&plain);
     assert!(plain_z < 1.0, "{plain}");
     std::fs::remove_dir_all(&d).ok();
 }

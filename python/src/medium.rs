@@ -2,7 +2,7 @@
 
 use crate::capture::Source;
 use crate::compute;
-use murk_medium::{EstimateOptions, FitParams, Fixed, Outcome};
+use murk_medium::{EstimateOptions, FitParams, Fixed};
 use pyo3::prelude::*;
 
 /// Estimates the medium; returns the JSON object `murk medium --json` prints.
@@ -36,12 +36,6 @@ pub fn estimate_medium<'py>(
         let outcome = murk_medium::estimate(&cap, &opt, &|done, total| {
             t.count(done as u64, total as u64)
         })?;
-        Ok(match outcome {
-            Outcome::NoMedium(s) => format!(
-                "{{\"medium\": false, \"reason\": \"no medium detected: {}\"}}",
-                s.describe()
-            ),
-            Outcome::Fitted(e) => e.to_json(),
-        })
+        Ok(outcome.to_json())
     })
 }

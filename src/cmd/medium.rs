@@ -92,17 +92,8 @@ pub fn run(a: MediumArgs, quiet: bool) -> anyhow::Result<()> {
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
     match outcome {
-        Outcome::NoMedium(s) => {
-            if a.json {
-                println!(
-                    "{{\"medium\": false, \"reason\": \"no medium detected: {}\"}}",
-                    s.describe()
-                );
-            } else {
-                say(quiet, format!("no medium detected: {}", s.describe()));
-            }
-        }
-        Outcome::Fitted(e) if a.json => println!("{}", e.to_json()),
+        outcome if a.json => println!("{}", outcome.to_json()),
+        Outcome::NoMedium(s) => say(quiet, format!("no medium detected: {}", s.describe())),
         Outcome::Fitted(e) => {
             say(quiet, format!("  capture: {}", file.display()));
             for (k, v) in e.rows() {

@@ -89,6 +89,19 @@ pub enum Outcome {
     Fitted(Box<Estimate>),
 }
 
+impl Outcome {
+    /// One JSON object: `murk medium --json` and `murk.estimate_medium`.
+    pub fn to_json(&self) -> String {
+        match self {
+            Outcome::NoMedium(s) => format!(
+                "{{\"medium\": false, \"reason\": \"no medium detected: {}\"}}",
+                s.describe()
+            ),
+            Outcome::Fitted(e) => e.to_json(),
+        }
+    }
+}
+
 /// Estimates the medium of `cap`. `progress(done, total)` follows the table's renders.
 pub fn estimate(
     cap: &Capture,

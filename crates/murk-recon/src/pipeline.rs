@@ -208,6 +208,13 @@ impl Method {
 /// real capture (docs/window-ends.md).
 const BASELINE_EDGE_BINS: usize = 20;
 
+/// The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.
+fn edge_m(pulse: Option<Pulse>, cap: &Capture) -> f64 {
+    pulse.map_or(BASELINE_EDGE_BINS as f64 * cap.time.bin_width_m, |p| {
+        p.sigma_m
+    })
+}
+
 /// How many edges before the volume's shortest path [`Gate::Auto`] opens.
 const GATE_MARGIN_EDGES: f64 = 3.0;
 
@@ -407,9 +414,7 @@ impl Plan {
         };
         geometry.time.start_m -= offset_m;
         // The ramp at either end of the window: PF's pulse σ, or a fixed number of bins.
-        let edge_m = pulse.map_or(BASELINE_EDGE_BINS as f64 * geometry.time.bin_width_m, |p| {
-            p.sigma_m
-        });
+        let edge_m = edge_m(pulse, &geometry);
         let volume = match (req.volume, m.own_grid()) {
             // The methods on their own grid have no volume to check against the window.
             (_, true) if deepest_reach_m(&geometry) <= 0.0 => {
@@ -586,23 +591,18 @@ pub fn search_depth(
     let whole = Plan::new(cap, req, progress)?.run(cap.clone(), progress)?;
     // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
     // planes it leaves fully open are searched.
+    // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
+    // planes it leaves fully open are searched.
+    let open_m = match req.gate {
+        Gate::At(open_m) => Some(open_m + GATE_MARGIN_EDGES * edge_m(req.method.pulse(cap)?, cap)),
+        _ => None,
+    };
     let usable = |z_m: f64| -> bool {
-        let Gate::At(open_m) = req.gate else {
-            return true;
-        };
-        let edge_m = req
-            .method
-            .pulse(cap)
-            .ok()
-            .flatten()
-            .map_or(BASELINE_EDGE_BINS as f64 * cap.time.bin_width_m, |p| {
-                p.sigma_m
-            });
         let plane = Volume {
             z: Axis::new(z_m, z_m, 1),
             ..whole.volume
         };
-        shortest_path_m(cap, &plane) >= open_m + GATE_MARGIN_EDGES * edge_m
+        open_m.is_none_or(|open_m| shortest_path_m(cap, &plane) >= open_m)
     };
     let Some(found) = medium::search::choose(&whole, &usable) else {
         return Ok((*req, None));
