@@ -1,10 +1,11 @@
-//! `murk.reconstruct`: `murk_recon::pipeline::run`, the call behind `murk reconstruct`.
+//! `murk.reconstruct`: `murk_recon::pipeline::run_with`, the call behind `murk reconstruct`.
 
 use crate::capture::Source;
 use crate::compute;
 use murk_baselines::{Reflectance, SlabParams};
 use murk_core::window::WindowEnd;
 use murk_core::{Error, Named, Result, Volume};
+use murk_recon::medium::removal::Predicted;
 use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
 use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
 use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
@@ -62,6 +63,31 @@ impl Args {
         })
     }
 
+    fn model(&self) -> Result<bool> {
+        Ok(MediumRemoval::named(&self.medium_removal)? == MediumRemoval::Model)
+    }
+
+    /// The medium response that medium_removal='model' subtracts: for mu_t and albedo as given, what
+    /// is not given estimated from `cap` as `murk.estimate_medium` does.
+    fn predicted(&self, cap: &murk_core::Capture) -> Result<Option<Predicted>> {
+        if !self.model()? {
+            return Ok(None);
+        }
+        let estimate = match (self.mu_t, self.albedo) {
+            (Some(_), Some(_)) => None,
+            _ => match murk_medium::estimate(cap, &Default::default(), &|_, _| {})? {
+                murk_medium::Outcome::Fitted(e) => Some(e),
+                murk_medium::Outcome::NoMedium(s) => {
+                    return Err(Error::param(format!(
+                        "medium_removal='model': no medium detected to estimate it from ({}); give mu_t and albedo",
+                        s.describe()
+                    )))
+                }
+            },
+        };
+        murk_medium::model::for_removal(cap, self.mu_t, self.albedo, estimate.as_deref()).map(Some)
+    }
+
     fn options(&self) -> Result<Options> {
         let wavelength = match (self.wavelength, self.wavefactor) {
             (Some(_), Some(_)) => {
@@ -71,12 +97,13 @@ impl Args {
             (None, Some(f)) => Some(Wavelength::WallFactor(f)),
             (None, None) => None,
         };
-        // As the CLI's --mu-t and --albedo require --compensate: alone they would be ignored.
+        // As the CLI's --mu-t and --albedo: read by a compensation or the model removal, else ignored.
         let compensation = match (self.compensate.as_deref().unwrap_or("none"), self.mu_t) {
             ("none", None) if self.albedo.is_none() => Compensation::None,
+            ("none", _) if self.model()? => Compensation::None,
             ("none", _) => {
                 return Err(Error::param(
-                    "mu_t and albedo are read by a compensation (paper or ballistic) only; they would be ignored",
+                    "mu_t and albedo are read by a compensation (paper or ballistic) or medium_removal='model' only; they would be ignored",
                 ))
             }
             (c, None) => {
@@ -122,7 +149,8 @@ pub fn reconstruct<'py>(
     let out = compute(py, progress, threads, |t| {
         let cap = source.owned()?;
         let req = args.request(cap.kind())?;
-        pipeline::run(cap, &req, t)
+        let predicted = args.predicted(&cap)?;
+        pipeline::run_with(cap, &req, predicted, t)
     })?;
     let v = out.volume;
     let intensity = PyArray1::from_vec(py, out.intensity).reshape(v.shape().to_vec())?;

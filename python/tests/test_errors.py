@@ -63,6 +63,17 @@ def test_a_bad_override_is_an_input_error_not_a_format_error():
         murk.render(os.path.join(SCENES, "z-letter.toml"), grid=4, spp=1, set={"medium.foo": 1})
     assert not isinstance(e.value, murk.FormatError)
     assert "medium.foo=1" in one_line(e) and "unknown field `foo`" in one_line(e)
+    # Errors quote the keywords as Python spells them, never the command line's flags.
+    assert 'set item "medium.foo=1"' in one_line(e) and "--set" not in one_line(e)
+    with pytest.raises(murk.InputError) as e:
+        murk.render(os.path.join(SCENES, "z-letter.toml"), grid=0, spp=1)
+    assert "--grid" not in one_line(e)
+    with pytest.raises(murk.InputError) as e:
+        murk.render(os.path.join(SCENES, "z-letter.toml"), bins=1 << 40, spp=1)
+    assert "(from bins=1099511627776)" in one_line(e) and "--bins" not in one_line(e)
+    with pytest.raises(murk.InputError) as e:
+        murk.render(os.path.join(SCENES, "z-letter.toml"), grid=4, spp=1, set=["medium.albedo"])
+    assert one_line(e).endswith('set item "medium.albedo": expected KEY=VALUE, e.g. medium.albedo=0.83')
 
 
 def test_missing_file():
@@ -267,9 +278,9 @@ def test_an_extinction_beyond_radiative_transfer_is_refused(cap):
     with pytest.raises(murk.InputError) as e:
         murk.reconstruct(cap, volume=VOL, compensate="ballistic", mu_t=1e300)
     assert one_line(e).startswith("μt is 1e300 /m, " + past)
-    with pytest.raises(murk.FormatError) as e:
+    with pytest.raises(murk.InputError) as e:
         murk.render(SCENES / "z-letter.toml", grid=2, spp=1, set={"medium.mu_t": 2e6})
-    assert "medium.mu_t (from --set medium.mu_t=2000000.0): is 2e6 /m, " + past in one_line(e)
+    assert 'medium.mu_t (from set item "medium.mu_t=2000000.0"): is 2e6 /m, ' + past in one_line(e)
     with pytest.raises(murk.InputError) as e:
         murk.synth("z:2.0", mu_t=1e7)
     assert past in one_line(e)

@@ -93,11 +93,12 @@ pub struct ReconstructArgs {
     /// row says the values used).
     #[arg(long, value_enum)]
     pub compensate: Option<CompensateArg>,
-    /// Extinction coefficient μt of the medium (1/m), for --compensate.
-    #[arg(long = "mu-t", value_name = "PER_M", requires = "compensate")]
+    /// Extinction coefficient μt of the medium (1/m), for --compensate and --medium-removal model.
+    #[arg(long = "mu-t", value_name = "PER_M")]
     pub mu_t_per_m: Option<f64>,
-    /// Single-scattering albedo α of the medium, for --compensate paper (default 0).
-    #[arg(long, requires = "compensate")]
+    /// Single-scattering albedo α of the medium, for --compensate paper (default 0) and
+    /// --medium-removal model.
+    #[arg(long)]
     pub albedo: Option<f64>,
     /// Amplitude factor per leg.
     #[arg(long, value_enum, default_value = "none")]
@@ -124,9 +125,11 @@ pub struct ReconstructArgs {
     pub gate: String,
     /// The medium's response: `auto` detects a medium in the early bins (signal right after every
     /// histogram's earliest path, decaying) and, for pf, pf-exact, bp and fbp, subtracts its response
-    /// fitted from the capture (rings of equal laser–sensor separation, smoothed over 0.5 m of path);
-    /// `fit` always subtracts it, for any method; `off` never. The summary's `medium` row says what was
-    /// found and the share of signal removed.
+    /// fitted from the capture (rings of equal laser–sensor separation, smoothed over 25 % of the
+    /// path); `model` subtracts the response murk's renderer predicts for the medium (--mu-t and
+    /// --albedo, else estimated as `murk medium` does; needs a capture that murk rendered); `fit`
+    /// always subtracts the fitted one, for any method; `off` never. The summary's `medium` row says
+    /// what was found and the share of signal removed.
     #[arg(long, value_enum, default_value = "auto")]
     pub medium_removal: MediumRemovalArg,
     /// With the default volume and a detected medium, `auto` first reconstructs the whole reach and
@@ -141,6 +144,7 @@ pub struct ReconstructArgs {
 #[derive(Clone, Copy, ValueEnum)]
 pub enum MediumRemovalArg {
     Auto,
+    Model,
     Fit,
     Off,
 }
@@ -282,18 +286,44 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         // Before the reconstruction, so that a bad --png leaves no volume behind either.
         pictures::check_pictures_dir(png, &[&a.file], &a.out)?;
     }
+    let model = matches!(a.medium_removal, MediumRemovalArg::Model);
+    if a.compensate.is_none() && !model {
+        for (given, flag) in [
+            (a.mu_t_per_m.is_some(), "--mu-t"),
+            (a.albedo.is_some(), "--albedo"),
+        ] {
+            anyhow::ensure!(
+                !given,
+                "{flag} sets the medium for --compensate or --medium-removal model; give one of them"
+            );
+        }
+    }
     let cap = murk_io::read_capture(&a.file)?;
     let kind = cap.kind();
-    let estimated = match (a.compensate, a.mu_t_per_m) {
-        (Some(_), None) => Some(estimate_medium(&mut a, &cap, quiet)?),
+    let needs_estimate = (a.compensate.is_some() && a.mu_t_per_m.is_none())
+        || (model && (a.mu_t_per_m.is_none() || a.albedo.is_none()));
+    let estimate = match needs_estimate {
+        true => Some(estimate_medium(&a, &cap, quiet)?),
+        false => None,
+    };
+    let compensated_with = match (&estimate, a.compensate, a.mu_t_per_m) {
+        (Some(e), Some(_), None) => Some(fill_compensation(&mut a, e)),
         _ => None,
+    };
+    let predicted = match model {
+        true => Some(
+            murk_medium::model::for_removal(&cap, a.mu_t_per_m, a.albedo, estimate.as_deref())
+                .with_context(|| format!("{}: --medium-removal model", a.file.display()))?,
+        ),
+        false => None,
     };
     let req = a.request(kind)?;
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
-    let mut out = pipeline::run(cap, &req, &bar).with_context(|| a.file.display().to_string())?;
+    let mut out = pipeline::run_with(cap, &req, predicted, &bar)
+        .with_context(|| a.file.display().to_string())?;
     out.rows
-        .extend(estimated.map(|line| ("compensated with".to_string(), line)));
+        .extend(compensated_with.map(|line| ("compensated with".to_string(), line)));
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
     for w in out.warnings.iter().filter(|_| !quiet) {
@@ -328,13 +358,17 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Fills `a`'s --mu-t (and, for --compensate paper, an --albedo not given) with the medium estimated
-/// from `cap` (`murk medium`, every parameter free); returns the summary line saying so.
+/// The medium estimated from `cap` (`murk medium`, every parameter free), for --compensate or
+/// --medium-removal model without the flags that give it.
 fn estimate_medium(
-    a: &mut ReconstructArgs,
+    a: &ReconstructArgs,
     cap: &murk_core::Capture,
     quiet: bool,
-) -> anyhow::Result<String> {
+) -> anyhow::Result<Box<murk_medium::Estimate>> {
+    let (why, give) = match a.compensate {
+        Some(_) => ("--compensate without --mu-t", "--mu-t"),
+        None => ("--medium-removal model", "--mu-t and --albedo"),
+    };
     let bar = Bar::new("medium", quiet);
     let outcome = murk_medium::estimate(cap, &murk_medium::EstimateOptions::default(), &|d, n| {
         if d == 0 {
@@ -343,23 +377,28 @@ fn estimate_medium(
             murk_recon::Progress::advance(&bar, 1);
         }
     })
-    .with_context(|| format!("{}: --compensate without --mu-t", a.file.display()))?;
+    .with_context(|| format!("{}: {why}", a.file.display()))?;
     bar.finish();
-    let e = match outcome {
-        murk_medium::Outcome::Fitted(e) => e,
+    match outcome {
+        murk_medium::Outcome::Fitted(e) => Ok(e),
         murk_medium::Outcome::NoMedium(s) => anyhow::bail!(
-            "{}: --compensate without --mu-t: no medium detected to estimate it from ({}); give --mu-t",
+            "{}: {why}: no medium detected to estimate it from ({}); give {give}",
             a.file.display(),
             s.describe()
         ),
-    };
+    }
+}
+
+/// Fills `a`'s --mu-t (and, for --compensate paper, an --albedo not given) with the estimate `e`;
+/// returns the summary line saying so.
+fn fill_compensation(a: &mut ReconstructArgs, e: &murk_medium::Estimate) -> String {
     a.mu_t_per_m = Some(e.mu_t_per_m.value);
     let paper = matches!(a.compensate, Some(CompensateArg::Paper));
     if paper && a.albedo.is_none() {
         a.albedo = Some(e.albedo.value);
     }
     let short = murk_core::short;
-    Ok(format!(
+    format!(
         "μt {} ± {} /m{} estimated from the capture (murk medium; --mu-t and --albedo set them)",
         short(e.mu_t_per_m.value),
         short(e.mu_t_per_m.uncertainty),
@@ -368,7 +407,7 @@ fn estimate_medium(
         } else {
             String::new()
         }
-    ))
+    )
 }
 
 #[cfg(test)]

@@ -125,6 +125,7 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         grid: a.grid,
         bins: a.bins,
         set: a.set.clone(),
+        ..Overrides::default()
     };
     let scene = Scene::load(&a.scene, &ov)?;
     // The scene file and the meshes it reads are inputs that no output may replace.

@@ -9,6 +9,7 @@
 //! captures of it (the study fits every cell from one table).
 
 pub mod fit;
+pub mod model;
 pub mod posterior;
 pub mod scene;
 pub mod slab;

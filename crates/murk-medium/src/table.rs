@@ -92,29 +92,7 @@ impl Reduction {
     /// changes with the separation.
     pub fn reduce_model(&self, render: &Capture) -> Vec<f64> {
         let n = self.coarse_bins;
-        // The render's distinct separations (to a micrometre) with their mean coarse histograms.
-        let mut by_sep: Vec<(f64, usize)> = separations(render)
-            .into_iter()
-            .enumerate()
-            .map(|(i, d)| (d, i))
-            .collect();
-        by_sep.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut distinct: Vec<f64> = Vec::new();
-        let mut curves: Vec<Vec<f64>> = Vec::new();
-        let mut counts: Vec<usize> = Vec::new();
-        for (d, i) in by_sep {
-            if distinct.last().is_none_or(|&last| d - last > 1e-6) {
-                distinct.push(d);
-                curves.push(vec![0.0; n]);
-                counts.push(0);
-            }
-            let k = distinct.len() - 1;
-            self.add_coarse(render, i, &mut curves[k]);
-            counts[k] += 1;
-        }
-        for (c, &k) in curves.iter_mut().zip(&counts) {
-            c.iter_mut().for_each(|v| *v /= k as f64);
-        }
+        let (distinct, curves) = by_separation(render, n, |i, out| self.add_coarse(render, i, out));
         let mut weights = vec![vec![0.0f64; distinct.len()]; self.rings()];
         let mut members = vec![0usize; self.rings()];
         for &d in &self.separations {
@@ -178,6 +156,38 @@ impl Reduction {
     pub fn path_m(&self, cap: &Capture, b: usize) -> f64 {
         cap.time.start_m + (b as f64 + 0.5) * self.per_bin as f64 * cap.time.bin_width_m
     }
+}
+
+/// The distinct laser–sensor separations of `render` (to a micrometre), ascending, each with the
+/// mean of its histograms as `add(histogram, curve)` accumulates them into curves of `n` values.
+pub(crate) fn by_separation(
+    render: &Capture,
+    n: usize,
+    add: impl Fn(usize, &mut [f64]),
+) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let mut by_sep: Vec<(f64, usize)> = separations(render)
+        .into_iter()
+        .enumerate()
+        .map(|(i, d)| (d, i))
+        .collect();
+    by_sep.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut distinct: Vec<f64> = Vec::new();
+    let mut curves: Vec<Vec<f64>> = Vec::new();
+    let mut counts: Vec<usize> = Vec::new();
+    for (d, i) in by_sep {
+        if distinct.last().is_none_or(|&last| d - last > 1e-6) {
+            distinct.push(d);
+            curves.push(vec![0.0; n]);
+            counts.push(0);
+        }
+        let k = distinct.len() - 1;
+        add(i, &mut curves[k]);
+        counts[k] += 1;
+    }
+    for (c, &k) in curves.iter_mut().zip(&counts) {
+        c.iter_mut().for_each(|v| *v /= k as f64);
+    }
+    (distinct, curves)
 }
 
 fn separations(cap: &Capture) -> Vec<f64> {
@@ -291,6 +301,23 @@ fn render_node(
     g: f64,
     reduction: &Reduction,
 ) -> Result<Vec<f64>> {
+    let caps = render_medium_only(scene_text, cap, spec, albedos, mu_t, g)?;
+    Ok(caps
+        .iter()
+        .flat_map(|c| reduction.reduce_model(c))
+        .collect())
+}
+
+/// `scene_text` (a medium-only scene of `cap`'s geometry) rendered on `spec`'s grid for μt and g, one
+/// capture per albedo (an albedo sweep: one set of paths).
+pub(crate) fn render_medium_only(
+    scene_text: &str,
+    cap: &Capture,
+    spec: &TableSpec,
+    albedos: &[f64],
+    mu_t: f64,
+    g: f64,
+) -> Result<Vec<Capture>> {
     let top = albedos.iter().copied().fold(0.0, f64::max);
     let ov = Overrides {
         grid: Some(spec.grid),
@@ -300,6 +327,7 @@ fn render_node(
             format!("medium.g={g}"),
             format!("medium.albedo={top}"),
         ],
+        ..Overrides::default()
     };
     let scene = Scene::from_str(scene_text, Path::new("scene_info.scene"), &ov)?;
     if !scene.capture.time.same_as_stored(&cap.time) {
@@ -315,9 +343,5 @@ fn render_node(
         checkpoint: None,
         checkpoint_every: Duration::from_secs(3600),
     };
-    let caps = plan.render_all_until(&opt, &|_, _| {}, &AtomicBool::new(false))?;
-    Ok(caps
-        .iter()
-        .flat_map(|c| reduction.reduce_model(c))
-        .collect())
+    plan.render_all_until(&opt, &|_, _| {}, &AtomicBool::new(false))
 }

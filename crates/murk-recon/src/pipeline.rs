@@ -394,6 +394,8 @@ pub struct Plan {
     engine: Engine,
     /// The warning for a volume that the method's own grid replaces.
     ignored_volume: Option<String>,
+    /// The medium response that [`MediumRemoval::Model`] subtracts.
+    predicted: Option<removal::Predicted>,
 }
 
 impl Plan {
@@ -467,7 +469,13 @@ impl Plan {
             on_volume: !m.own_grid(),
             geometry,
             engine,
+            predicted: None,
         })
+    }
+
+    /// The plan with the medium response that [`MediumRemoval::Model`] subtracts.
+    pub fn with_predicted(self, predicted: Option<removal::Predicted>) -> Plan {
+        Plan { predicted, ..self }
     }
 
     /// Reconstructs `cap`, which must have the geometry the plan was made for.
@@ -476,6 +484,15 @@ impl Plan {
         let removed = match (self.removal, self.on_volume) {
             (MediumRemoval::Off, _) | (MediumRemoval::Auto, false) => None,
             (MediumRemoval::Fit, _) => Some(removal::subtract(&mut cap, None)),
+            (MediumRemoval::Model, _) => {
+                let predicted = self.predicted.as_ref().ok_or_else(|| {
+                    Error::param(
+                        "model removal needs the medium's predicted response (murk_medium::model::predict makes it)",
+                    )
+                })?;
+                let signature = Some(Signature::measure(&cap));
+                Some(removal::subtract_predicted(&mut cap, predicted, signature)?)
+            }
             (MediumRemoval::Auto, true) => {
                 let signature = Signature::measure(&cap);
                 signature
@@ -566,8 +583,20 @@ impl Plan {
 /// Runs `req` on `cap` (plans and runs). With the default volume, a method on a volume and a capture
 /// whose early bins are a medium's response, the depth range is first searched ([`medium::search`]).
 pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Reconstruction> {
-    let (req, searched) = search_depth(&cap, req, progress)?;
-    let mut out = Plan::new(&cap, &req, progress)?.run(cap, progress)?;
+    run_with(cap, req, None, progress)
+}
+
+/// As [`run`], with the medium response that [`MediumRemoval::Model`] subtracts.
+pub fn run_with(
+    cap: Capture,
+    req: &Request,
+    predicted: Option<removal::Predicted>,
+    progress: &dyn Progress,
+) -> Result<Reconstruction> {
+    let (req, searched) = search_depth(&cap, req, predicted.as_ref(), progress)?;
+    let mut out = Plan::new(&cap, &req, progress)?
+        .with_predicted(predicted)
+        .run(cap, progress)?;
     out.rows
         .extend(searched.map(|(_, line)| ("depth search".to_string(), line)));
     Ok(out)
@@ -578,6 +607,7 @@ pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Recon
 pub fn search_depth(
     cap: &Capture,
     req: &Request,
+    predicted: Option<&removal::Predicted>,
     progress: &dyn Progress,
 ) -> Result<(Request, Option<(medium::search::Found, String)>)> {
     let applies = req.volume == VolumeSpec::Default
@@ -588,9 +618,9 @@ pub fn search_depth(
     if !applies {
         return Ok((*req, None));
     }
-    let whole = Plan::new(cap, req, progress)?.run(cap.clone(), progress)?;
-    // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
-    // planes it leaves fully open are searched.
+    let whole = Plan::new(cap, req, progress)?
+        .with_predicted(predicted.cloned())
+        .run(cap.clone(), progress)?;
     // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
     // planes it leaves fully open are searched.
     let open_m = match req.gate {

@@ -23,7 +23,7 @@ mod truth;
 pub use geometry::{Aabb, Geometry, Object, Shape};
 pub use integrator::{Endpoint, Sampler, Tracer};
 pub use medium::{Medium, Phase};
-pub use overrides::Overrides;
+pub use overrides::{Overrides, Spelling};
 pub use render::{
     check_shard, checkpoint_interval, checkpoint_path, fingerprint, merge, output_checkpoint,
     render_key, render_outputs, scene_info, sweep_output, time_budget, Plan, RenderOptions,

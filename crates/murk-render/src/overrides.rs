@@ -1,4 +1,4 @@
-//! Command-line overrides of a scene file (`--set key=value`, `--grid`, `--bins`), applied to its TOML
+//! Overrides of a scene file (`--set key=value`, `--grid`, `--bins`, or Python's keywords), applied to its TOML
 //! before validation, and the resolved scene's canonical key list, which `scene_info` records and a
 //! checkpoint compares.
 
@@ -14,49 +14,83 @@ pub struct Overrides {
     /// `key=value` pairs: a dotted key (`medium.albedo`, `object[1].center`) and a TOML value; a value
     /// that is not TOML is taken as a string (`relay.kind=wall`).
     pub set: Vec<String>,
+    /// How the user wrote them, so that an error quotes the user's own words.
+    pub spelling: Spelling,
+}
+
+/// Where overrides come from: the command line's flags or the Python package's keywords.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Spelling {
+    #[default]
+    Cli,
+    Python,
+}
+
+impl Spelling {
+    /// One override as the user wrote it: `--grid 64` or `grid=64`.
+    fn quote(self, name: &str, value: &str) -> String {
+        match self {
+            Spelling::Cli => format!("--{name} {value}"),
+            Spelling::Python if name == "set" => format!("set item {value:?}"),
+            Spelling::Python => format!("{name}={value}"),
+        }
+    }
+
+    /// How to give one more `set` entry.
+    fn one_set(self) -> &'static str {
+        match self {
+            Spelling::Cli => "give one KEY=VALUE per --set",
+            Spelling::Python => "give one KEY=VALUE per item of set",
+        }
+    }
 }
 
 impl Overrides {
-    /// Every override as (dotted key, value, how the user wrote it), `--grid` and `--bins` included.
+    /// Every override as (dotted key, value, how the user wrote it), the grid and bins included.
     pub(crate) fn assignments(&self) -> Result<Vec<(String, Value, String)>, String> {
         let mut out = Vec::new();
+        let quote = |name: &str, value: &dyn std::fmt::Display| {
+            self.spelling.quote(name, &value.to_string())
+        };
         // TOML integers are i64: a larger count is refused, not wrapped to a negative one.
-        let int = |n: usize, flag: &str| {
+        let int = |n: usize, name: &str| {
             i64::try_from(n)
                 .map(Value::Integer)
-                .map_err(|_| format!("{flag} {n}: too large"))
+                .map_err(|_| format!("{}: too large", quote(name, &n)))
         };
         if let Some(n) = self.grid {
-            let v = Value::Array(vec![int(n, "--grid")?, int(n, "--grid")?]);
-            out.push(("capture.grid".into(), v, format!("--grid {n}")));
+            let v = Value::Array(vec![int(n, "grid")?, int(n, "grid")?]);
+            out.push(("capture.grid".into(), v, quote("grid", &n)));
         }
         if let Some(b) = self.bins {
-            out.push((
-                "capture.bins".into(),
-                int(b, "--bins")?,
-                format!("--bins {b}"),
-            ));
+            out.push(("capture.bins".into(), int(b, "bins")?, quote("bins", &b)));
         }
         for s in &self.set {
+            let written = quote("set", s);
             let (k, v) = s
                 .split_once('=')
-                .ok_or_else(|| format!("--set {s}: expected KEY=VALUE, e.g. medium.albedo=0.83"))?;
+                .ok_or_else(|| format!("{written}: expected KEY=VALUE, e.g. medium.albedo=0.83"))?;
             let (k, v) = (k.trim(), v.trim());
             if k.is_empty() {
-                return Err(format!("--set {s}: the key is empty"));
+                return Err(format!("{written}: the key is empty"));
             }
             if v.contains('\n') {
                 // A second line would be read as a second assignment and dropped.
+                // Python's quoting already escapes the line break.
+                let shown = match self.spelling {
+                    Spelling::Cli => quote("set", &s.escape_debug()),
+                    Spelling::Python => written,
+                };
                 return Err(format!(
-                    "--set {}: the value spans lines; give one KEY=VALUE per --set",
-                    s.escape_debug()
+                    "{shown}: the value spans lines; {}",
+                    self.spelling.one_set()
                 ));
             }
             // One setting from two places: whichever came last would win unseen.
             if let Some((_, _, first)) = out.iter().find(|(key, ..)| key == k) {
-                return Err(format!("--set {s}: {k} is also set by {first}"));
+                return Err(format!("{written}: {k} is also set by {first}"));
             }
-            out.push((k.to_string(), parse_value(v), format!("--set {s}")));
+            out.push((k.to_string(), parse_value(v), written));
         }
         Ok(out)
     }

@@ -21,15 +21,22 @@ pub enum MediumRemoval {
     /// pf-exact, bp, fbp); captures without a medium are left as they are.
     #[default]
     Auto,
-    /// Always subtract the model-free fit ([`removal::Fit`]), for any method.
+    /// Always subtract the model-free fit ([`removal::subtract`]), for any method.
     Fit,
+    /// Subtract the response a forward model predicts for the medium ([`removal::Predicted`], which
+    /// the caller supplies: murk-medium renders it for the estimated or given medium).
+    Model,
     Off,
 }
 
 impl Named for MediumRemoval {
     const WHAT: &'static str = "medium removal";
-    const CHOICES: &'static [(&'static str, Self)] =
-        &[("auto", Self::Auto), ("fit", Self::Fit), ("off", Self::Off)];
+    const CHOICES: &'static [(&'static str, Self)] = &[
+        ("auto", Self::Auto),
+        ("model", Self::Model),
+        ("fit", Self::Fit),
+        ("off", Self::Off),
+    ];
 }
 
 /// Whether the default volume's depth range is chosen from the data when a medium is detected.

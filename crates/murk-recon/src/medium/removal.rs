@@ -1,5 +1,6 @@
 //! The medium's response estimated from the capture itself and subtracted (model-free, in the spirit
-//! of Satat et al.'s per-pixel fog fit for line-of-sight imaging).
+//! of Satat et al.'s per-pixel fog fit for line-of-sight imaging), or predicted by a forward model
+//! elsewhere ([`Predicted`], which murk-medium renders) and subtracted as it is.
 //!
 //! In a homogeneous medium filling the hidden side, the medium's response to a histogram depends on
 //! the distance between its laser spot and its sensor point, not on where they are on the wall. So the
@@ -9,7 +10,7 @@
 //! on a scale that grows with the path (it is sharp near its earliest path and slow later).
 
 use super::detect::Signature;
-use murk_core::Capture;
+use murk_core::{Capture, Error, Result};
 
 /// The width over which a ring's mean histogram is smoothed, as a share of the bin's optical path:
 /// much longer than an object's return at one point, shorter than the medium's decay. On the 64² Z in
@@ -25,7 +26,8 @@ const MIN_RING: usize = 16;
 pub struct Removed {
     /// The detector's measurement (`None` when removal was asked for without detection).
     pub signature: Option<Signature>,
-    pub rings: usize,
+    /// Where the subtracted response came from, in words.
+    pub source: String,
     /// The share of the capture's energy (sum of squares) that the subtraction removed.
     pub share: f64,
 }
@@ -37,11 +39,80 @@ impl Removed {
             format!("detected: {}", s.describe())
         });
         format!(
-            "{why}; its response fitted from the capture ({} rings of equal laser–sensor separation, smoothed over {:.0} % of the path) and subtracted: {:.1} % of the signal's energy",
-            self.rings,
-            100.0 * SMOOTH_SHARE,
+            "{why}; its response {} and subtracted: {:.1} % of the signal's energy",
+            self.source,
             100.0 * self.share
         )
+    }
+}
+
+/// A medium's response predicted per laser–sensor separation at a capture's own bins.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Predicted {
+    /// The separations (m) the curves were predicted at, ascending.
+    pub separations_m: Vec<f64>,
+    /// One response per separation, each as long as the capture's time axis.
+    pub curves: Vec<Vec<f32>>,
+    /// How it was predicted, for the summary ("rendered for μt 1 /m, …").
+    pub source: String,
+}
+
+impl Predicted {
+    /// The response at separation `d` (m): linear between the two nearest separations predicted, the
+    /// nearest one beyond them.
+    fn at(&self, d: f64, out: &mut [f32]) {
+        let s = &self.separations_m;
+        let k = s.partition_point(|&x| x <= d);
+        let (a, b, w) = match k {
+            0 => (0, 0, 0.0),
+            k if k == s.len() => (k - 1, k - 1, 0.0),
+            k => (k - 1, k, ((d - s[k - 1]) / (s[k] - s[k - 1])) as f32),
+        };
+        for ((o, &x), &y) in out.iter_mut().zip(&self.curves[a]).zip(&self.curves[b]) {
+            *o = x + w * (y - x);
+        }
+    }
+}
+
+/// Subtracts `predicted` from every histogram of `cap`, each at its own separation.
+pub fn subtract_predicted(
+    cap: &mut Capture,
+    predicted: &Predicted,
+    signature: Option<Signature>,
+) -> Result<Removed> {
+    let bins = cap.time.bins;
+    if predicted.separations_m.is_empty()
+        || predicted.curves.len() != predicted.separations_m.len()
+        || predicted.curves.iter().any(|c| c.len() != bins)
+    {
+        return Err(Error::param(format!(
+            "the predicted medium response does not match the capture ({} separations, {} curves, the capture has {bins} bins)",
+            predicted.separations_m.len(),
+            predicted.curves.len()
+        )));
+    }
+    let mut model = vec![0.0f32; bins];
+    let (mut total, mut left) = (0.0f64, 0.0f64);
+    for (i, d) in separations(cap).into_iter().enumerate() {
+        predicted.at(d, &mut model);
+        for (v, &m) in cap.h[i * bins..(i + 1) * bins].iter_mut().zip(&model) {
+            total += (*v as f64).powi(2);
+            *v -= m;
+            left += (*v as f64).powi(2);
+        }
+    }
+    Ok(Removed {
+        signature,
+        source: predicted.source.clone(),
+        share: energy_share(total, left),
+    })
+}
+
+fn energy_share(total: f64, left: f64) -> f64 {
+    if total > 0.0 {
+        1.0 - left / total
+    } else {
+        0.0
     }
 }
 
@@ -91,8 +162,11 @@ pub fn subtract(cap: &mut Capture, signature: Option<Signature>) -> Removed {
     }
     Removed {
         signature,
-        rings: n_rings,
-        share: if total > 0.0 { 1.0 - left / total } else { 0.0 },
+        source: format!(
+            "fitted from the capture ({n_rings} rings of equal laser–sensor separation, smoothed over {:.0} % of the path)",
+            100.0 * SMOOTH_SHARE
+        ),
+        share: energy_share(total, left),
     }
 }
 
@@ -134,7 +208,7 @@ pub(super) fn rings(separation: &[f64]) -> Vec<usize> {
 
 /// The mean over `2·half[i] + 1` bins centred on each bin `i`, shrinking symmetrically at the ends so
 /// that a decaying response is not pulled toward the window's edge.
-fn moving_average(v: &[f64], half: &[usize]) -> Vec<f64> {
+pub fn moving_average(v: &[f64], half: &[usize]) -> Vec<f64> {
     let mut prefix = vec![0.0f64; v.len() + 1];
     for (i, x) in v.iter().enumerate() {
         prefix[i + 1] = prefix[i] + x;
@@ -163,6 +237,37 @@ mod tests {
             moving_average(&[1.0, 5.0, 3.0], &[4; 3]),
             vec![1.0, 3.0, 3.0]
         );
+    }
+
+    #[test]
+    fn a_prediction_is_subtracted_at_each_histograms_separation() {
+        use murk_core::{DVec3, PointSet, TimeAxis};
+        // One SPAD point at the origin, laser points 0, 0.5 and 1 m away.
+        let lasers = PointSet::wall_grid(DVec3::new(0.5, 0.0, 0.0), 1.5, 0.1, 3, 1);
+        let time = TimeAxis {
+            start_m: 0.0,
+            bin_width_m: 0.1,
+            bins: 2,
+        };
+        let mut cap = Capture {
+            sensor: PointSet::single(DVec3::ZERO),
+            pairing: murk_core::Pairing::Product,
+            ..Capture::confocal(lasers, time, vec![10.0; 6], String::new())
+        };
+        let predicted = Predicted {
+            separations_m: vec![0.0, 1.0],
+            curves: vec![vec![2.0, 4.0], vec![4.0, 8.0]],
+            source: "test".into(),
+        };
+        let removed = subtract_predicted(&mut cap, &predicted, None).unwrap();
+        assert_eq!(cap.h, vec![8.0, 6.0, 7.0, 4.0, 6.0, 2.0]);
+        assert_eq!(removed.source, "test");
+        let short = Predicted {
+            curves: vec![vec![1.0]; 2],
+            ..predicted
+        };
+        let e = subtract_predicted(&mut cap, &short, None).unwrap_err();
+        assert!(e.to_string().contains("does not match the capture"), "{e}");
     }
 
     #[test]

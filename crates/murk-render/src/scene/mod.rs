@@ -112,8 +112,9 @@ impl Scene {
             toml::to_string(&table).map_err(|e| Error::format(path, e.to_string()))?
         };
         let bad = |field: &str, msg: String| match set_by(field, &assignments) {
-            // A value an override set is named with how it was set, not only by the file it changed.
-            Some(written) => Error::format(path, format!("{field} (from {written}): {msg}")),
+            // A value an override set is named with how it was set, not only by the file it changed,
+            // and, like any bad override, it is the caller's argument: a parameter error.
+            Some(written) => bad_override(format!("{field} (from {written}): {msg}")),
             None => Error::format(path, format!("{field}: {msg}")),
         };
         let dir = path.parent().unwrap_or(Path::new("."));
