@@ -3,6 +3,7 @@
 //! every method on the real captures (`--real`); the renderer next to mitransient (`--render`).
 
 mod confocal;
+mod medium;
 mod real;
 mod render;
 
@@ -27,6 +28,7 @@ cargo run --release -p murk-bench -- --runs 9 --skip-z\n  \
 cargo run --release -p murk-bench -- --paper-only shelf          # the shelf's 142³ volume alone\n  \
 cargo run --release -p murk-bench -- --render --only z-letter   # the renderer on the paper's format\n  \
 cargo run --release -p murk-bench -- --real ../shared/data/real/cdt_lindell2020\n  \
+cargo run --release -p murk-bench -- --medium fog.h5 --runs 3      # the medium-aware path's cost\n  \
 cargo run --release -p murk-bench -- --confocal-vs-tal --tal-bench ../shared/reference/tal_bench.py"
 )]
 pub struct BenchArgs {
@@ -53,6 +55,10 @@ pub struct BenchArgs {
     /// (letter_s.mat … letters_ut.mat of Lindell & Wetzstein 2020).
     #[arg(long)]
     pub real: Option<PathBuf>,
+    /// Benchmark the medium-aware path on this capture (one in a medium, rendered by murk) instead:
+    /// the plain reconstruction, the default one, and the medium's estimate.
+    #[arg(long, value_name = "CAPTURE")]
+    pub medium: Option<PathBuf>,
     /// Where the renderer benchmark finds its scene files.
     #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
@@ -183,6 +189,9 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
     );
     if let Some(dir) = &a.real {
         return crate::real::run(dir, a.runs, quiet);
+    }
+    if let Some(cap) = &a.medium {
+        return crate::medium::run(cap, a.runs, quiet);
     }
     if a.render {
         let mit = match (&a.mitransient_python, &a.mitransient_bench) {

@@ -618,7 +618,23 @@ pub fn search_depth(
     if !applies {
         return Ok((*req, None));
     }
-    let whole = Plan::new(cap, req, progress)?
+    // The whole reach at no more than the search's planes; the depth range kept gets the default
+    // volume's spacing.
+    let full = default_volume(cap)?;
+    let step_m = (full.z.end - full.z.start) / (full.z.n - 1) as f64;
+    let coarse = Volume {
+        z: Axis::new(
+            full.z.start,
+            full.z.end,
+            full.z.n.min(medium::search::SEARCH_PLANES),
+        ),
+        ..full
+    };
+    let whole_req = Request {
+        volume: VolumeSpec::Given(coarse),
+        ..*req
+    };
+    let whole = Plan::new(cap, &whole_req, progress)?
         .with_predicted(predicted.cloned())
         .run(cap.clone(), progress)?;
     // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
@@ -634,7 +650,7 @@ pub fn search_depth(
         };
         open_m.is_none_or(|open_m| shortest_path_m(cap, &plane) >= open_m)
     };
-    let Some(found) = medium::search::choose(&whole, &usable) else {
+    let Some(found) = medium::search::choose(&whole, &usable, step_m) else {
         return Ok((*req, None));
     };
     let line = found.describe(&whole.volume);

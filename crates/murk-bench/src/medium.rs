@@ -1,0 +1,74 @@
+//! `murk-bench --medium CAPTURE`: what the medium-aware path costs on a capture in a medium, as
+//! `murk reconstruct` runs it (plan and run together, the default volume): the plain path (removal and
+//! depth search off), the default path (detection, the fitted removal, the depth search and the band
+//! it keeps) and the medium's estimate (`murk medium`: its table of renders and the fit), alternated
+//! run by run so that the machine's drift meets each alike.
+
+use crate::say;
+use anyhow::Context;
+use murk_core::NoProgress;
+use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
+use murk_recon::pipeline::{self, Method, Options, Request};
+use std::path::Path;
+use std::time::Instant;
+
+pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+    let ctx = || path.display().to_string();
+    let cap = murk_io::read_capture(path)?;
+    let method = Method::from_name("pf", cap.kind(), &Options::default()).with_context(ctx)?;
+    let aware = Request::new(method);
+    let plain = Request {
+        medium: MediumAware {
+            removal: MediumRemoval::Off,
+            depth_search: DepthSearch::Off,
+        },
+        ..aware
+    };
+    let estimate = murk_medium::EstimateOptions::default();
+    let (mut t_plain, mut t_aware, mut t_estimate) = (Vec::new(), Vec::new(), Vec::new());
+    let time = |f: &mut dyn FnMut() -> anyhow::Result<()>, out: &mut Vec<f64>| {
+        let t0 = Instant::now();
+        f()?;
+        out.push(t0.elapsed().as_secs_f64());
+        anyhow::Ok(())
+    };
+    for _ in 0..runs {
+        time(
+            &mut || Ok(pipeline::run(cap.clone(), &plain, &NoProgress).map(drop)?),
+            &mut t_plain,
+        )?;
+        time(
+            &mut || Ok(pipeline::run(cap.clone(), &aware, &NoProgress).map(drop)?),
+            &mut t_aware,
+        )?;
+        time(
+            &mut || Ok(murk_medium::estimate(&cap, &estimate, &|_, _| {}).map(drop)?),
+            &mut t_estimate,
+        )?;
+    }
+    let (p, m, e) = (
+        crate::median(&t_plain),
+        crate::median(&t_aware),
+        crate::median(&t_estimate),
+    );
+    say(quiet, format!("medium-aware path on {}:", path.display()));
+    say(
+        quiet,
+        format!("  plain (removal and depth search off): {p:.3} s"),
+    );
+    say(
+        quiet,
+        format!(
+            "  default (detection, removal, depth search): {m:.3} s ({:+.0} %)",
+            100.0 * (m / p - 1.0)
+        ),
+    );
+    say(
+        quiet,
+        format!(
+            "  the medium's estimate (table and fit): {e:.3} s ({:.1}× the plain reconstruction)",
+            e / p
+        ),
+    );
+    Ok(())
+}
