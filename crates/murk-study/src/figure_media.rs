@@ -34,14 +34,20 @@ struct Foam {
     /// Transport mean free paths of foam the light crosses to reach the object: depth × μs′ inside
     /// the medium, the slab's thickness × μs′ behind it.
     mfp: Option<f64>,
+    /// A CDT capture: the object stands in air behind a slab of foam.
+    behind_slab: bool,
 }
 
 impl Foam {
     /// What the row says about the capture.
     fn describe(&self) -> String {
-        let at = match self.depth_m {
-            Some(d) => format!("object {} cm deep in the foam", murk_core::short(d * 100.0)),
-            None => "object behind or in the medium".into(),
+        let at = match (self.depth_m, self.behind_slab) {
+            (Some(d), _) => format!("object {} cm deep in the foam", murk_core::short(d * 100.0)),
+            (None, true) => format!(
+                "object behind a {} cm foam slab",
+                murk_core::short(SlabParams::default().thickness_m * 100.0)
+            ),
+            (None, false) => "object inside the medium".into(),
         };
         match self.mfp {
             Some(m) => format!("{at}, {m:.1} transport mean free paths"),
@@ -69,6 +75,7 @@ fn foams(data: &Path) -> Result<Vec<Foam>> {
             mfp: depth_m.map(|d| d * musp),
             depth_m,
             cap,
+            behind_slab: false,
         });
     }
     let slab = SlabParams::default();
@@ -80,6 +87,7 @@ fn foams(data: &Path) -> Result<Vec<Foam>> {
                 cap: import(&path, &ImportOptions::preset(Preset::Cdt))?,
                 depth_m: None,
                 mfp: Some(slab.thickness_m * slab.mu_s_prime_per_m),
+                behind_slab: true,
             });
         }
     }
