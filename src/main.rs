@@ -42,7 +42,8 @@ enum Command {
     Render(cmd::render::RenderArgs),
     /// Import a real capture (a public NLOS dataset with --format, or any 3-D array) into y-tal HDF5.
     Import(cmd::import::ImportArgs),
-    /// Reproduce a figure: `real` reconstructs the CDT captures with CDT and Phasor Fields.
+    /// Reproduce a figure: `real` reconstructs the CDT captures with CDT and Phasor Fields; `media`
+    /// the foam captures with every method.
     Figure(cmd::figure::FigureArgs),
     /// Run a study: `paper` renders, reconstructs and scores every experiment of Luesia et al.
     Experiment(cmd::experiment::ExperimentArgs),

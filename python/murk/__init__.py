@@ -75,6 +75,7 @@ __all__ = [
     "Reconstruction",
     "read_capture",
     "write_capture",
+    "import_capture",
     "synth",
     "render",
     "render_albedos",
@@ -137,6 +138,37 @@ def write_capture(path: Union[str, bytes, os.PathLike], capture: Capture, compre
     >>> murk.write_capture("copy.h5", cap)
     """
     _murk.write_capture(_path(path, "path"), capture, compression)
+
+
+def import_capture(
+    path: Union[str, bytes, os.PathLike],
+    format: Optional[str] = None,
+    *,
+    wall_size: Optional[float] = None,
+    bin_width_ps: Optional[float] = None,
+    bin_width_m: Optional[float] = None,
+    gate_bins: Optional[int] = None,
+    flip: Optional[str] = None,
+    t0_bin: Optional[int] = None,
+    tof: Union[None, str, bytes, os.PathLike] = None,
+    var: Optional[str] = None,
+    axes: Optional[str] = None,
+    confocal: bool = False,
+) -> Capture:
+    """Reads a public dataset's capture (``format``: cdt, lct, lct-transient, fk, ahn2019,
+    xiao2024, wu2021, abp, znlos, bmm) or any 3-D array (``axes="t,x,y"`` in the array's order,
+    ``var``, ``bin_width_*``, ``wall_size``, ``confocal=True``), as ``murk import``; the keywords
+    are its flags. A ``bmm`` capture carries its medium's constants, which ``reconstruct(cap,
+    "bmm")`` reads. docs/import.md has each dataset's details.
+
+    >>> cap = murk.import_capture("4cmFoam_LambertianT_7cmFoam.mat", "bmm")
+    >>> rec = murk.reconstruct(cap, "bmm")
+    """
+    return _murk.import_capture(_path(path, "path"), dict(
+        format=format, var=var, axes=axes, confocal=confocal, wall_size=wall_size,
+        bin_width_ps=bin_width_ps, bin_width_m=bin_width_m, gate_bins=gate_bins, flip=flip,
+        t0_bin=t0_bin, tof=None if tof is None else _path(tof, "tof"),
+    ))
 
 
 def synth(
@@ -389,12 +421,16 @@ def reconstruct(
     slab_mua: float = 0.53,
     slab_musp: float = 262.0,
     slab_n: float = 1.12,
+    medium_n: Optional[float] = None,
+    medium_musp: Optional[float] = None,
+    medium_mua: Optional[float] = None,
     threads: Optional[int] = None,
     progress: Progress = None,
 ) -> Reconstruction:
     """Reconstructs a capture with any method of ``murk reconstruct`` (pf, pf-exact, bp, fbp, lct,
-    fk, cdt); the keywords are its flags and take the same values, and the volume is the one its
-    ``--out x.npy`` writes, byte for byte.
+    fk, cdt, bmm); the keywords are its flags and take the same values, and the volume is the one
+    its ``--out x.npy`` writes, byte for byte. bmm's medium: ``medium_n``, ``medium_musp`` (μs′,
+    1/m), ``medium_mua`` (μa, 1/m); unset ones come from the capture, else the BMM foam's.
 
     capture: a Capture (its H is copied once, since reconstruction gates and tapers its own copy)
     or a capture file (read straight into the reconstruction: no copy). volume:
@@ -402,7 +438,7 @@ def reconstruct(
 
     >>> rec = murk.reconstruct("z.h5", volume="-0.99:0.99:73,-0.99:0.99:59,1.5:2.5:73")
     >>> rec.params["wavelength_m"], rec.intensity.max()
-    >>> fk = murk.reconstruct(cap, "fk")     # confocal captures: lct, fk, cdt on their own grid
+    >>> fk = murk.reconstruct(cap, "fk")     # confocal captures: lct, fk, cdt, bmm on their own grid
     """
     intensity, axes, rows, warnings = _murk.reconstruct(
         capture if isinstance(capture, Capture) else _path(capture, "capture"),
@@ -411,7 +447,8 @@ def reconstruct(
              lateral=lateral, gate=_text(gate), window_end=window_end,
              medium_removal=medium_removal, depth_search=depth_search, t_offset=_text(t_offset),
              snr=snr, weighting=weighting,
-             slab=(slab_thickness, slab_mua, slab_musp, slab_n)),
+             slab=(slab_thickness, slab_mua, slab_musp, slab_n),
+             medium=(medium_n, medium_musp, medium_mua)),
         threads, _progress(progress, "reconstruct"),
     )
     x, y, z = axes

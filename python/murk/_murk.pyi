@@ -50,6 +50,20 @@ class Capture:
 
 def read_capture(path: _Path) -> Capture: ...
 def write_capture(path: _Path, capture: Capture, compression: int = 0) -> None: ...
+class _ImportArgs(TypedDict):
+    format: Optional[str]
+    var: Optional[str]
+    axes: Optional[str]
+    confocal: bool
+    wall_size: Optional[float]
+    bin_width_ps: Optional[float]
+    bin_width_m: Optional[float]
+    gate_bins: Optional[int]
+    flip: Optional[str]
+    t0_bin: Optional[int]
+    tof: Optional[str]
+
+def import_capture(path: _Path, args: _ImportArgs) -> Capture: ...
 class _SynthArgs(TypedDict):
     targets: List[str]
     kind: str
@@ -104,6 +118,7 @@ class _ReconstructArgs(TypedDict):
     snr: Optional[float]
     weighting: str
     slab: Tuple[float, float, float, float]
+    medium: Tuple[Optional[float], Optional[float], Optional[float]]
 
 def synth(args: _SynthArgs) -> Capture: ...
 def render(scene: str, args: _RenderArgs, threads: Optional[int], progress: _Progress) -> List[Capture]: ...

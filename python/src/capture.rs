@@ -2,6 +2,7 @@
 
 use crate::{compute, to_py};
 use murk_core::{Pairing, PointLayout, PointSet};
+use murk_io::import::{BinWidth, Dim, Flip, ImportOptions, Layout, Preset};
 use numpy::ndarray::{ArrayView, IxDyn};
 use numpy::{PyArray, PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
@@ -238,6 +239,66 @@ impl<'a> Source<'a> {
 #[pyfunction]
 pub fn read_capture(py: Python<'_>, path: PathBuf) -> PyResult<Capture> {
     let cap = py.detach(|| murk_io::read_capture(&path)).map_err(to_py)?;
+    Ok(Capture { cap })
+}
+
+/// The keywords of `murk.import_capture` (its path aside), which are `murk import`'s flags.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct ImportArgs {
+    format: Option<String>,
+    var: Option<String>,
+    axes: Option<String>,
+    confocal: bool,
+    wall_size: Option<f64>,
+    bin_width_ps: Option<f64>,
+    bin_width_m: Option<f64>,
+    gate_bins: Option<usize>,
+    flip: Option<String>,
+    t0_bin: Option<usize>,
+    tof: Option<PathBuf>,
+}
+
+impl ImportArgs {
+    /// The library's options, as `murk import` builds them from its flags.
+    fn options(&self) -> murk_core::Result<ImportOptions> {
+        let bin_width = match (self.bin_width_ps, self.bin_width_m) {
+            (Some(_), Some(_)) => {
+                return Err(murk_core::Error::param(
+                    "give bin_width_ps or bin_width_m, not both",
+                ))
+            }
+            (ps, m) => ps.map(BinWidth::Ps).or(m.map(BinWidth::M)),
+        };
+        Ok(ImportOptions {
+            layout: Layout::choose(
+                self.format.as_deref().map(Preset::named).transpose()?,
+                self.var.clone(),
+                self.axes.as_deref().map(Dim::parse_axes).transpose()?,
+                self.confocal,
+            )?,
+            wall_size_m: self.wall_size,
+            bin_width,
+            gate_bins: self.gate_bins,
+            flip: self
+                .flip
+                .as_deref()
+                .map(Flip::parse)
+                .transpose()?
+                .unwrap_or_default(),
+            t0_bin: self.t0_bin,
+            tof: self.tof.clone(),
+        })
+    }
+}
+
+/// Reads a public dataset's capture, or any 3-D array, as `murk import` does; see
+/// `murk.import_capture`.
+#[pyfunction]
+pub fn import_capture(py: Python<'_>, path: PathBuf, args: ImportArgs) -> PyResult<Capture> {
+    let cap = py
+        .detach(|| murk_io::import::import(&path, &args.options()?))
+        .map_err(to_py)?;
     Ok(Capture { cap })
 }
 

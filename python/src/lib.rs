@@ -197,6 +197,7 @@ fn _murk(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<capture::Capture>()?;
     m.add_function(wrap_pyfunction!(capture::read_capture, m)?)?;
     m.add_function(wrap_pyfunction!(capture::write_capture, m)?)?;
+    m.add_function(wrap_pyfunction!(capture::import_capture, m)?)?;
     m.add_function(wrap_pyfunction!(capture::_capture_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(ops::synth, m)?)?;
     m.add_function(wrap_pyfunction!(ops::render, m)?)?;

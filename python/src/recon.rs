@@ -2,7 +2,7 @@
 
 use crate::capture::Source;
 use crate::compute;
-use murk_baselines::{Reflectance, SlabParams};
+use murk_baselines::{BmmParams, Reflectance, SlabParams};
 use murk_core::window::WindowEnd;
 use murk_core::{Error, Named, Result, Volume};
 use murk_recon::medium::removal::Predicted;
@@ -40,6 +40,8 @@ pub struct Args {
     snr: Option<f64>,
     weighting: String,
     slab: (f64, f64, f64, f64),
+    /// bmm's medium: (n, μs′, μa); unset ones come from the capture.
+    medium: (Option<f64>, Option<f64>, Option<f64>),
 }
 
 impl Args {
@@ -129,7 +131,11 @@ impl Args {
                 n,
                 ..Default::default()
             },
-            medium: Default::default(),
+            medium: BmmParams {
+                n: self.medium.0,
+                mu_s_prime_per_m: self.medium.1,
+                mu_a_per_m: self.medium.2,
+            },
         })
     }
 }

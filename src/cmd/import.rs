@@ -2,10 +2,9 @@
 //! The codec, its orientation convention and each dataset's layout live in `murk_io::import`.
 
 use crate::cmd::progress::say;
-use anyhow::bail;
 use clap::builder::PossibleValue;
 use clap::{Args, ValueEnum};
-use murk_io::import::{BinWidth, Dim, Flip, Generic, ImportOptions, Layout, Preset};
+use murk_io::import::{BinWidth, Dim, Flip, ImportOptions, Layout, Preset};
 use std::path::PathBuf;
 
 /// A `--format` value: one of the library's presets.
@@ -101,50 +100,23 @@ pub struct ImportArgs {
     pub out: PathBuf,
 }
 
-/// `t,x,y` in any order; the library checks that each axis appears once.
 fn parse_axes(s: &str) -> Result<[Dim; 3], String> {
-    let dims = s
-        .split(',')
-        .map(|a| match a.trim() {
-            "t" => Ok(Dim::T),
-            "x" => Ok(Dim::X),
-            "y" => Ok(Dim::Y),
-            other => Err(format!("'{other}' is not an axis (t, x or y)")),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    dims.try_into()
-        .map_err(|d: Vec<Dim>| format!("name three axes (t, x and y), not {}", d.len()))
+    Dim::parse_axes(s).map_err(|e| e.to_string())
 }
 
 fn parse_flip(s: &str) -> Result<Flip, String> {
-    let mut flip = Flip::default();
-    for a in s.split(',') {
-        let axis = match a.trim() {
-            "x" => &mut flip.x,
-            "y" => &mut flip.y,
-            other => return Err(format!("'{other}' is not an axis to flip (x or y)")),
-        };
-        // Twice would read as undoing the flip, or as a typo for "x,y": neither is guessed.
-        if std::mem::replace(axis, true) {
-            return Err(format!("'{}' is named twice", a.trim()));
-        }
-    }
-    Ok(flip)
+    Flip::parse(s).map_err(|e| e.to_string())
 }
 
 impl ImportArgs {
     fn options(&self) -> anyhow::Result<ImportOptions> {
-        let layout = match (self.format, self.axes) {
-            (Some(f), _) => Layout::Preset(f.0),
-            (None, Some(axes)) => Layout::Generic(Generic {
-                var: self.var.clone().unwrap_or_default(),
-                axes,
-                confocal: self.confocal,
-            }),
-            (None, None) => bail!("give --format, or describe the array with --axes"),
-        };
         Ok(ImportOptions {
-            layout,
+            layout: Layout::choose(
+                self.format.map(|f| f.0),
+                self.var.clone(),
+                self.axes,
+                self.confocal,
+            )?,
             wall_size_m: self.wall_size_m,
             bin_width: self
                 .bin_width_ps

@@ -230,7 +230,16 @@ impl CdtPlan {
             progress,
             Fft3::FORWARD_PASSES + Fft3::MAP_REAL_PASSES + Stolt::MIGRATE_PASSES,
         );
-        let mut spec = self.stolt.transform(&g.sample(capture), |_, v| v, &steps);
+        // The grid ends at its `max_path_m`, but a capture may record later paths. A deep target's
+        // return, with the slab's slow tail, then crosses the grid's end while strong, and a
+        // histogram cut there ends in a step that the deconvolution and the migration turn into a
+        // bright false surface on the volume's last planes. So the later paths are read into the
+        // padding, up to 1.5 grids: the last quarter stays zero as a guard against the filter's
+        // circular wrap, and a step there images beyond the cropped volume (docs/window-ends.md).
+        let read = g.recorded(capture, 3 * g.nt / 2);
+        let mut spec = self
+            .stolt
+            .transform(&read.sample(capture), |_, v| v, &steps);
         spec.par_iter_mut()
             .zip(&self.filter)
             .for_each(|(b, f)| *b *= f);
@@ -259,7 +268,19 @@ impl CdtPlan {
             ),
         )
         .row("snr", p.snr)
-        .row("time grid", p.grid))
+        .row("time grid", p.grid)
+        .row(
+            "paths read",
+            format!(
+                "0–{} m{}",
+                murk_core::short(read.nt as f64 * g.ds),
+                if read.nt > g.nt {
+                    " (past the grid's end, into its padding)"
+                } else {
+                    ""
+                }
+            ),
+        ))
     }
 }
 
@@ -376,6 +397,99 @@ mod tests {
         );
         let k_fk = fk(&c, FkParams::default()).unwrap().argmax()[2];
         assert!(k_fk >= 65, "f-k without deconvolution: depth index {k_fk}");
+    }
+
+    /// The geometry of the real CDT captures: 32² over 0.7 m, 512 bins of 16 ps (2.46 m of path),
+    /// with a 0.2 m square target at depth `z` seen through the default foam.
+    fn square_behind_foam(z: f64) -> Capture {
+        let mut c = confocal(32, 0.7, axis(0.0, 16e-12 * SPEED_OF_LIGHT_M_PER_S, 512));
+        add_plane(&mut c, z, 0.2, 10);
+        through_slab(&c, &SlabParams::default()).unwrap()
+    }
+
+    /// (depth of the plane with the most intensity over the square's columns, median over those
+    /// columns of their brightest voxel's depth), on CDT's default grid.
+    fn square_depths(r: &Reconstruction) -> (f64, f64) {
+        let nz = r.volume.z.n;
+        let mut profile = vec![0f64; nz];
+        let mut depths = Vec::new();
+        for ix in 12..20 {
+            for iy in 12..20 {
+                let col = &r.intensity[r.volume.index(ix, iy, 0)..][..nz];
+                profile
+                    .iter_mut()
+                    .zip(col)
+                    .for_each(|(p, &v)| *p += v as f64);
+                depths.push(r.volume.z.at(argmax(col.iter().map(|&v| v as f64))));
+            }
+        }
+        (
+            r.volume.z.at(argmax(profile.into_iter())),
+            murk_core::median(&depths),
+        )
+    }
+
+    fn argmax(v: impl Iterator<Item = f64>) -> usize {
+        v.enumerate()
+            .fold((0, f64::MIN), |b, (k, x)| if x > b.1 { (k, x) } else { b })
+            .0
+    }
+
+    /// The bins of [`square_behind_foam`] that the default grid's 128 samples average: 416 × 16 ps
+    /// is 1.996 m of path, and the last sample averages paths up to 1.992 m.
+    const GRID_BINS: usize = 416;
+
+    /// The default grid keeps 2.0 m of path (depths to 1 m), the first 416 bins here. A target at
+    /// 0.7–0.85 m returns, with the slab's tail, across that end. Read only up to it (as before
+    /// the fix, and as a capture cut there still is), the step pulls the surface onto the last
+    /// planes; read into the padding, the depth is the target's: the most intense plane within
+    /// 2 cm, the median column within 2.5 cm (CDT puts a square's columns about 1.6–2 cm shallow
+    /// wherever it stands, 0.484 m at 0.5 m).
+    #[test]
+    fn deep_target_near_the_grids_end_keeps_its_depth() {
+        for z in [0.7, 0.8, 0.85] {
+            let c = square_behind_foam(z);
+            if z >= 0.8 {
+                let cut = cdt(&c.first_bins(GRID_BINS), CdtParams::default()).unwrap();
+                let (false_depth, _) = square_depths(&cut);
+                assert!(
+                    false_depth > 0.95,
+                    "cut at the grid's end: {false_depth:.3} m"
+                );
+            }
+            let r = cdt(&c, CdtParams::default()).unwrap();
+            assert!(r
+                .rows
+                .iter()
+                .any(|(k, v)| k == "paths read" && v.contains("padding")));
+            let (plane, median) = square_depths(&r);
+            assert!(
+                (plane - z).abs() <= 0.02 && (median - z).abs() <= 0.025,
+                "target at {z} m: plane {plane:.3} m, median column {median:.3} m"
+            );
+        }
+    }
+
+    /// Targets whose return has faded by the grid's end (to 0 % and 2.4 % of the summed peak at
+    /// 0.3 and 0.5 m): reading the later paths moves no depth and changes a voxel by at most 1 % of
+    /// the peak (measured 0.03 % and 0.8 %; docs/window-ends.md).
+    #[test]
+    fn targets_far_from_the_grids_end_are_unchanged() {
+        for z in [0.3, 0.5] {
+            let c = square_behind_foam(z);
+            let (old, new) = (
+                cdt(&c.first_bins(GRID_BINS), CdtParams::default()).unwrap(),
+                cdt(&c, CdtParams::default()).unwrap(),
+            );
+            let peak = old.intensity.iter().fold(0f32, |m, &v| m.max(v));
+            let diff = old
+                .intensity
+                .iter()
+                .zip(&new.intensity)
+                .fold(0f32, |m, (a, b)| m.max((a - b).abs()));
+            assert!(diff <= 1e-2 * peak, "z {z}: changed by {diff} of {peak}");
+            assert_eq!(square_depths(&old), square_depths(&new), "z {z}");
+        }
     }
 
     #[test]

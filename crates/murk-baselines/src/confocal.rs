@@ -70,16 +70,10 @@ impl ConfocalGeometry {
         let far = g.point(g.nx - 1, g.ny - 1);
         let t = &capture.time;
         let (ds, nt) = match grid {
-            TimeGrid::Native => {
-                // Cover the latest wall-relative path any histogram recorded.
-                let end = (0..capture.n_hist())
-                    .map(|i| t.end_m() - round_trip_offset(capture, i))
-                    .fold(f64::MIN, f64::max);
-                (
-                    t.bin_width_m,
-                    (end / t.bin_width_m).ceil().max(1.0) as usize,
-                )
-            }
+            TimeGrid::Native => (
+                t.bin_width_m,
+                samples_to(latest_path_m(capture), t.bin_width_m),
+            ),
             TimeGrid::Resample { max_path_m, bins } => {
                 if !(max_path_m > 0.0 && max_path_m.is_finite()) || bins == 0 {
                     return Err(Error::param(format!(
@@ -104,6 +98,13 @@ impl ConfocalGeometry {
             ds,
             nt,
         })
+    }
+
+    /// This grid's samples, continued up to the latest wall-relative path `capture` recorded, or
+    /// `max` samples if fewer (never fewer than the grid's own).
+    pub fn recorded(&self, capture: &Capture, max: usize) -> ConfocalGeometry {
+        let nt = samples_to(latest_path_m(capture), self.ds).clamp(self.nt, max.max(self.nt));
+        ConfocalGeometry { nt, ..*self }
     }
 
     /// Lateral spacings |Δx|, |Δy|.
@@ -184,6 +185,18 @@ impl ConfocalGeometry {
         );
         out
     }
+}
+
+/// The latest wall-relative path any histogram of `capture` recorded (m).
+fn latest_path_m(capture: &Capture) -> f64 {
+    (0..capture.n_hist())
+        .map(|i| capture.time.end_m() - round_trip_offset(capture, i))
+        .fold(f64::MIN, f64::max)
+}
+
+/// Samples of `step_m` that cover paths 0 to `path_m` (at least one).
+fn samples_to(path_m: f64, step_m: f64) -> usize {
+    (path_m / step_m).ceil().max(1.0) as usize
 }
 
 /// Laser→wall plus wall→SPAD path of histogram `i` (zero unless the time axis includes them).

@@ -87,16 +87,18 @@ impl Stolt {
         }
     }
 
-    /// Spectrum of `tau` ([nx][ny][m]) zero-padded into the first octant, sample k of each line
-    /// mapped through `f(k, value)` first.
+    /// Spectrum of `tau` ([nx][ny][len], len ≤ 2m; usually m) zero-padded into the padded grid,
+    /// sample k of each line mapped through `f(k, value)` first.
     pub fn transform(
         &self,
         tau: &[f32],
         f: impl Fn(usize, f32) -> f32 + Sync,
         steps: &Steps,
     ) -> Vec<C32> {
+        let len = tau.len() / (self.nx * self.ny);
+        debug_assert!(len <= 2 * self.m && len * self.nx * self.ny == tau.len());
         let fill = |ix: usize, iy: usize, line: &mut [f32]| {
-            let src = &tau[(ix * self.ny + iy) * self.m..][..self.m];
+            let src = &tau[(ix * self.ny + iy) * len..][..len];
             line.iter_mut()
                 .zip(src)
                 .enumerate()

@@ -3,17 +3,14 @@
 //! 8 cycles, with λ read on the depth axis and, for comparison, on the path axis), as a PNG grid
 //! (rows CDT, PF, PF; a column per scene) and an index.html with parameters, depths and timings.
 
+use crate::figures::{check_out, depths, grid_plane};
 use murk_baselines::{CdtParams, CdtPlan, Pulse};
-use murk_core::{Capture, Error, Reconstruction, Result, Volume};
+use murk_core::{Capture, Reconstruction, Result, Volume};
 use murk_io::import::{import, ImportOptions, Preset, CDT_SCENES};
 use murk_recon::{Falloff, NoProgress, PfForm, PfParams, Wavelength};
-use murk_view::pictures::{self, Plane};
+use murk_view::pictures;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Screen pixels per voxel in grid.png, and the gap between cells.
-const ZOOM: usize = 6;
-const GAP: usize = 6;
 
 /// Median seconds of `runs` calls, and the last result.
 fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
@@ -25,24 +22,6 @@ fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
         secs.push(t0.elapsed().as_secs_f64());
     }
     Ok((murk_core::median(&secs), last.expect("at least one run")))
-}
-
-/// Depth of the brightest voxel, and the median per-pixel argmax depth over pixels whose
-/// maximum-intensity projection exceeds half of its maximum (NaN when no pixel does: an all-zero
-/// reconstruction).
-fn depths(rec: &Reconstruction) -> (f64, f64) {
-    let (p, _) = rec.peak();
-    let v = pictures::views(&rec.volume, &rec.intensity);
-    let max = v.front.values.iter().cloned().fold(f32::MIN, f32::max);
-    let zs: Vec<f64> = v
-        .front
-        .values
-        .iter()
-        .zip(&v.depth.values)
-        .filter(|(f, _)| **f > 0.5 * max)
-        .map(|(_, d)| *d as f64)
-        .collect();
-    (p[2], murk_core::median(&zs))
 }
 
 struct Cell {
@@ -87,21 +66,7 @@ fn scene(path: &Path, snr: f64, runs: usize, pfs: &[PfParams]) -> Result<Vec<Cel
 /// `out/grid.png` and `out/index.html`, and returns the index's path; `say` receives one line per
 /// reconstruction.
 pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> Result<PathBuf> {
-    // The folder is made only once there is something to put in it (a failed or interrupted run
-    // leaves none behind), but a path that cannot become one is refused first.
-    if out.exists() && !out.is_dir() {
-        return Err(Error::param(format!(
-            "{}: is a file; the figure needs a folder",
-            out.display()
-        )));
-    }
-    // Results do not go among the captures they are made from.
-    if murk_io::same_target(out, data) {
-        return Err(Error::param(format!(
-            "{}: is the --data folder; the figure needs a folder of its own",
-            out.display()
-        )));
-    }
+    check_out(data, out)?;
     // The paper's "λ = 4Δc, 8 cycles" for these confocal captures, read two ways. On the depth axis
     // (one-way distance, as confocal codes such as Lindell's define their wavelength) it is 8Δc of round-trip
     // path; read on the path axis, the round-trip kernel e^{2ikr} puts λ/2 = 2Δc at the lateral Nyquist
@@ -164,7 +129,11 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
         }
         cells.push(pair);
     }
-    let grid = grid_plane(&cells);
+    let columns: Vec<Vec<Option<&Reconstruction>>> = cells
+        .iter()
+        .map(|scene| scene.iter().map(|c| Some(&c.rec)).collect())
+        .collect();
+    let grid = grid_plane(&columns, EXTENTS.into());
     murk_io::create_output_dir(out)?;
     let png = out.join("grid.png");
     pictures::write_png(&png, &grid, 0.0, 1.0)?;
@@ -177,35 +146,5 @@ pub fn figure_real(data: &Path, out: &Path, runs: usize, say: &dyn Fn(&str)) -> 
     Ok(index)
 }
 
-/// Front views side by side, each normalised to [0, 1], NaN (black) between cells.
-fn grid_plane(cells: &[Vec<Cell>]) -> Plane {
-    let front = |c: &Cell| pictures::views(&c.rec.volume, &c.rec.intensity).front;
-    let (cw, ch) = {
-        let f = front(&cells[0][0]);
-        (f.width * ZOOM, f.height * ZOOM)
-    };
-    let rows = cells[0].len();
-    let (w, h) = (cells.len() * (cw + GAP) - GAP, rows * (ch + GAP) - GAP);
-    let mut values = vec![f32::NAN; w * h];
-    for (col, pair) in cells.iter().enumerate() {
-        for (row, c) in pair.iter().enumerate() {
-            let f = front(c);
-            let max = f.values.iter().copied().fold(f32::MIN, f32::max);
-            let min = f.values.iter().copied().fold(f32::MAX, f32::min);
-            let span = (max - min).max(f32::MIN_POSITIVE);
-            for y in 0..ch.min(f.height * ZOOM) {
-                for x in 0..cw.min(f.width * ZOOM) {
-                    let v = f.values[(y / ZOOM) * f.width + x / ZOOM];
-                    values[(row * (ch + GAP) + y) * w + col * (cw + GAP) + x] = (v - min) / span;
-                }
-            }
-        }
-    }
-    Plane {
-        width: w,
-        height: h,
-        values,
-        extents: "rows: CDT, PF (λ = 4Δc of depth), PF (λ = 4Δc of path); columns: letter_s, mannequin, letter_t, cones, letters_ut; each a front view (from the wall, +y up, +x left), normalised to its own range".into(),
-        axes_m: None,
-    }
-}
+/// The grid's extents line: what its rows and columns hold.
+const EXTENTS: &str = "rows: CDT, PF (λ = 4Δc of depth), PF (λ = 4Δc of path); columns: letter_s, mannequin, letter_t, cones, letters_ut; each a front view (from the wall, +y up, +x left), normalised to its own range";

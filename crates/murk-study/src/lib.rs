@@ -16,13 +16,16 @@
 //! ```
 
 pub mod demo;
+mod figure_media;
 mod figure_real;
+mod figures;
 pub mod metrics;
 pub mod plan;
 pub mod report;
 pub mod run;
 
 pub use demo::demo;
+pub use figure_media::figure_media;
 pub use figure_real::figure_real;
 
 use murk_core::{Error, Result};

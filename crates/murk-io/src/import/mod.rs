@@ -40,6 +40,27 @@ pub enum Dim {
     Y,
 }
 
+impl Dim {
+    /// `t,x,y` in any order (what `--axes` and Python's `axes` take); that each axis appears once
+    /// is checked on import.
+    pub fn parse_axes(s: &str) -> Result<[Dim; 3]> {
+        let dims = s
+            .split(',')
+            .map(|a| match a.trim() {
+                "t" => Ok(Dim::T),
+                "x" => Ok(Dim::X),
+                "y" => Ok(Dim::Y),
+                other => Err(Error::param(format!(
+                    "'{other}' is not an axis (t, x or y)"
+                ))),
+            })
+            .collect::<Result<Vec<_>>>()?;
+        dims.try_into().map_err(|d: Vec<Dim>| {
+            Error::param(format!("name three axes (t, x and y), not {}", d.len()))
+        })
+    }
+}
+
 /// Axes to reverse after the layout's own mapping (a scan shown mirrored or upside down).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Flip {
@@ -48,6 +69,27 @@ pub struct Flip {
 }
 
 impl Flip {
+    /// `x`, `y` or `x,y` (what `--flip` and Python's `flip` take).
+    pub fn parse(s: &str) -> Result<Flip> {
+        let mut flip = Flip::default();
+        for a in s.split(',') {
+            let axis = match a.trim() {
+                "x" => &mut flip.x,
+                "y" => &mut flip.y,
+                other => {
+                    return Err(Error::param(format!(
+                        "'{other}' is not an axis to flip (x or y)"
+                    )))
+                }
+            };
+            // Twice would read as undoing the flip, or as a typo for "x,y": neither is guessed.
+            if std::mem::replace(axis, true) {
+                return Err(Error::param(format!("'{}' is named twice", a.trim())));
+            }
+        }
+        Ok(flip)
+    }
+
     fn xor(self, o: Flip) -> Flip {
         Flip {
             x: self.x != o.x,
@@ -106,6 +148,29 @@ pub struct Generic {
 pub enum Layout {
     Preset(Preset),
     Generic(Generic),
+}
+
+impl Layout {
+    /// A preset when `format` is given, else the generic form that `var`, `axes` and `confocal`
+    /// describe (`axes` required).
+    pub fn choose(
+        format: Option<Preset>,
+        var: Option<String>,
+        axes: Option<[Dim; 3]>,
+        confocal: bool,
+    ) -> Result<Layout> {
+        match (format, axes) {
+            (Some(p), _) => Ok(Layout::Preset(p)),
+            (None, Some(axes)) => Ok(Layout::Generic(Generic {
+                var: var.unwrap_or_default(),
+                axes,
+                confocal,
+            })),
+            (None, None) => Err(Error::param(
+                "give a format, or describe the array with its axes",
+            )),
+        }
+    }
 }
 
 /// What to import and how; `None` takes the layout's published value.

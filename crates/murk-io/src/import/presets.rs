@@ -108,6 +108,17 @@ impl Preset {
     ];
 
     /// The `--format` name.
+    /// The preset called `name`; an unknown name is refused listing the others.
+    pub fn named(name: &str) -> Result<Preset> {
+        Preset::ALL
+            .into_iter()
+            .find(|p| p.name() == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
+                Error::param(format!("format '{name}': expected {}", names.join(", ")))
+            })
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Preset::Cdt => "cdt",
