@@ -52,6 +52,9 @@ fn without_reference_noise(e: f64, spp: u64, ref_spp: u64) -> f64 {
     e / (1.0 + spp as f64 / ref_spp as f64).sqrt()
 }
 
+/// The T in fog, the case whose anisotropy [`anisotropy`] measures.
+const FOG: &Case = &CASES[2];
+
 const CASES: [Case; 3] = [
     Case {
         file: "t-wall-single.toml",
@@ -99,6 +102,9 @@ pub fn run(
     }
     for c in CASES.iter().filter(|c| wanted(c.file)) {
         t_case(scenes, c, runs, mit, quiet)?;
+        if c.file == FOG.file {
+            anisotropy(scenes, runs, quiet)?;
+        }
     }
     if wanted("z-letter.toml") {
         paper_format(scenes, runs, quiet)?;
@@ -148,6 +154,55 @@ fn t_case(
         rate / 1e6,
         cm / ours
     ));
+    Ok(())
+}
+
+/// Phase-function anisotropies and albedos of issue 47's table: the cost of forward scattering is CPU ×
+/// error² at each g relative to g = 0 at the same albedo (a ratio that does not depend on spp).
+const GS: [f64; 3] = [0.0, 0.7, 0.9];
+const ALBEDOS: [f64; 2] = [0.5, 0.83];
+
+/// The fog T at each g and albedo: CPU seconds × relL2² over the object window, the error from pairs of
+/// independent renders (no reference, whose own noise grows with g), the median of `runs` pairs.
+fn anisotropy(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+    for albedo in ALBEDOS {
+        let costs = GS
+            .iter()
+            .map(|&g| {
+                let ov = Overrides {
+                    set: vec![format!("medium.g={g}"), format!("medium.albedo={albedo}")],
+                    ..Overrides::default()
+                };
+                let scene = load(scenes, FOG.file, &ov)?;
+                let plan = Plan::new(&scene);
+                let pairs = (0..runs.max(1) as u64)
+                    .map(|p| {
+                        let a = timed_render(&plan, FOG.spp, 2 * p, None)?;
+                        let b = timed_render(&plan, FOG.spp, 2 * p + 1, None)?;
+                        let mask = FOG.mask(&scene.capture.time, a.h.len());
+                        let e = split_rel_l2(&a.h, &b.h, &mask);
+                        Ok(0.5 * (a.cpu_s + b.cpu_s) * e * e)
+                    })
+                    .collect::<anyhow::Result<Vec<_>>>()?;
+                Ok(median(&pairs))
+            })
+            .collect::<anyhow::Result<Vec<f64>>>()?;
+        let row: Vec<String> = GS
+            .iter()
+            .zip(&costs)
+            .map(|(g, c)| format!("g {g}: {c:.3e} ({:.1}×)", c / costs[0]))
+            .collect();
+        say(
+            quiet,
+            format!(
+                "{} at α {albedo}, {} spp, CPU-s × relL2² over the object window (median of {} pairs; × g = 0): {}",
+                FOG.file,
+                FOG.spp,
+                runs.max(1),
+                row.join(", ")
+            ),
+        );
+    }
     Ok(())
 }
 
