@@ -14,9 +14,11 @@
 //!    own response, which every scan point sees), blurred laterally (σ = 2 scan steps) and tapered
 //!    at the scan's edges; an absorbing or reflecting object perturbs the fluence by the same
 //!    two-leg product, of either sign, so no square root is taken;
-//! 3. the perturbation times t³ (the half-space round trip falls as t^{−7/2}, the kernel as
+//! 3. the perturbation times t³ (the half-space round trip falls as t^{−7/2} early, the kernel as
 //!    t^{−1/2}), inverted per histogram by Tikhonov-regularised least squares, the weight chosen by
-//!    generalised cross-validation;
+//!    generalised cross-validation. The regularisation, not the data, sets how deep a deep object
+//!    comes out: it is compressed towards the surface (docs/reconstruction.md, "Why deep objects
+//!    come out shallow");
 //! 4. f-k (Stolt) migration of the virtual wave, |·|².
 //!
 //! The published code takes t·√h, inverts with a pseudo-inverse and migrates; murk's steps 2–3
@@ -153,7 +155,8 @@ pub fn bmm_with(
     let steps = Steps::start(progress, Fft3::FORWARD_PASSES + Stolt::MIGRATE_PASSES);
     let background = background(&samples, g.nt, start + 1, end);
     // The object's perturbation of each histogram, weighted by t³ (t in units of Δt): the round
-    // trip through the half-space's boundary falls as t^{−7/2}, the transform's kernel as t^{−1/2}.
+    // trip through the half-space's boundary falls as t^{−7/2} early (later as t^{−5/2}: exactly,
+    // t^{−3/2} times three source–image terms), the transform's kernel as t^{−1/2}.
     let u: Vec<f64> = samples
         .par_chunks(g.nt)
         .flat_map_iter(|h| {
