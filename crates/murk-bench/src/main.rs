@@ -27,6 +27,7 @@ cargo run --release -p murk-bench                               # PF on the pape
 cargo run --release -p murk-bench -- --runs 9 --skip-z\n  \
 cargo run --release -p murk-bench -- --paper-only shelf          # the shelf's 142³ volume alone\n  \
 cargo run --release -p murk-bench -- --render --only z-letter   # the renderer on the paper's format\n  \
+cargo run --release -p murk-bench -- --render --only anisotropy --set render.target_lobe=0.9   # forward scattering's cost\n  \
 cargo run --release -p murk-bench -- --real ../shared/data/real/cdt_lindell2020\n  \
 cargo run --release -p murk-bench -- --medium fog.h5 --runs 3      # the medium-aware path's cost\n  \
 cargo run --release -p murk-bench -- --confocal-vs-tal --tal-bench ../shared/reference/tal_bench.py"
@@ -62,6 +63,10 @@ pub struct BenchArgs {
     /// Where the renderer benchmark finds its scene files.
     #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
+    /// With --render: a scene override KEY=VALUE for every case (repeatable), e.g.
+    /// render.target_lobe=0.9, to measure what a sampling setting does.
+    #[arg(long, value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
     /// With --render: only the cases whose scene file name contains this (e.g. t-wall-single;
     /// z-letter for the paper format).
     #[arg(long)]
@@ -206,7 +211,13 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
             (Some(_), None) => bail!("--mitransient-python needs --mitransient-bench SCRIPT"),
             (None, _) => None,
         };
-        return crate::render::run(&a.scenes, a.runs, a.only.as_deref(), mit.as_ref(), quiet);
+        return crate::render::run(
+            &a.scenes,
+            a.runs,
+            (a.only.as_deref(), &a.set),
+            mit.as_ref(),
+            quiet,
+        );
     }
     // Given explicitly, a missing file is an error (the default venv's absence only skips y-tal);
     // a bare command name is looked up on PATH when it runs.

@@ -85,46 +85,70 @@ const CASES: [Case; 3] = [
 
 /// `only`: run just the cases whose scene file name contains it. `mit`: render each T case with
 /// mitransient in this run too, instead of quoting its recorded figures.
+/// The anisotropy case's name for `--only` (it also runs with `--only t-wall-medium`).
+const ANISOTROPY: &str = "t-wall-medium.toml anisotropy";
+
+/// `only`: run just the cases whose name contains it; `set`: scene overrides for every case. `mit`:
+/// render each T case with mitransient in this run too, instead of quoting its recorded figures.
 pub fn run(
     scenes: &Path,
     runs: usize,
-    only: Option<&str>,
+    (only, set): (Option<&str>, &[String]),
     mit: Option<&Mitransient>,
     quiet: bool,
 ) -> anyhow::Result<()> {
-    let wanted = |file: &str| only.is_none_or(|o| file.contains(o));
-    if !CASES.iter().any(|c| wanted(c.file)) && !wanted("z-letter.toml") {
+    let wanted = |name: &str| only.is_none_or(|o| name.contains(o));
+    let names: Vec<&str> = CASES
+        .iter()
+        .map(|c| c.file)
+        .chain([ANISOTROPY, "z-letter.toml"])
+        .collect();
+    if !names.iter().any(|n| wanted(n)) {
         bail!(
-            "--only {}: matches none of the scenes ({}, z-letter.toml)",
+            "--only {}: matches none of the cases ({})",
             only.unwrap_or_default(),
-            CASES.iter().map(|c| c.file).collect::<Vec<_>>().join(", ")
+            names.join(", ")
         );
     }
+    let scenes = Scenes { dir: scenes, set };
     for c in CASES.iter().filter(|c| wanted(c.file)) {
-        t_case(scenes, c, runs, mit, quiet)?;
-        if c.file == FOG.file {
-            anisotropy(scenes, runs, quiet)?;
-        }
+        t_case(&scenes, c, runs, mit, quiet)?;
+    }
+    if wanted(ANISOTROPY) {
+        anisotropy(&scenes, runs, quiet)?;
     }
     if wanted("z-letter.toml") {
-        paper_format(scenes, runs, quiet)?;
+        paper_format(&scenes, runs, quiet)?;
     }
     Ok(())
 }
 
-fn load(scenes: &Path, file: &str, ov: &Overrides) -> anyhow::Result<Scene> {
-    let path = scenes.join(file);
-    Scene::load(&path, ov).with_context(|| format!("{} (use --scenes DIR)", path.display()))
+/// Where the scene files are, and the overrides every case gets.
+struct Scenes<'a> {
+    dir: &'a Path,
+    set: &'a [String],
+}
+
+impl Scenes<'_> {
+    /// `file` with `extra` overrides, then the user's.
+    fn load(&self, file: &str, extra: &[String]) -> anyhow::Result<Scene> {
+        let path = self.dir.join(file);
+        let ov = Overrides {
+            set: extra.iter().chain(self.set).cloned().collect(),
+            ..Overrides::default()
+        };
+        Scene::load(&path, &ov).with_context(|| format!("{} (use --scenes DIR)", path.display()))
+    }
 }
 
 fn t_case(
-    scenes: &Path,
+    scenes: &Scenes,
     c: &Case,
     runs: usize,
     mit: Option<&Mitransient>,
     quiet: bool,
 ) -> anyhow::Result<()> {
-    let scene = load(scenes, c.file, &Overrides::default())?;
+    let scene = scenes.load(c.file, &[])?;
     let plan = Plan::new(&scene);
     let reference = timed_render(&plan, c.ref_spp, 1_000_000, None)?;
     let mask = c.mask(&scene.capture.time, reference.h.len());
@@ -164,16 +188,15 @@ const ALBEDOS: [f64; 2] = [0.5, 0.83];
 
 /// The fog T at each g and albedo: CPU seconds × relL2² over the object window, the error from pairs of
 /// independent renders (no reference, whose own noise grows with g), the median of `runs` pairs.
-fn anisotropy(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+fn anisotropy(scenes: &Scenes, runs: usize, quiet: bool) -> anyhow::Result<()> {
     for albedo in ALBEDOS {
         let costs = GS
             .iter()
             .map(|&g| {
-                let ov = Overrides {
-                    set: vec![format!("medium.g={g}"), format!("medium.albedo={albedo}")],
-                    ..Overrides::default()
-                };
-                let scene = load(scenes, FOG.file, &ov)?;
+                let scene = scenes.load(
+                    FOG.file,
+                    &[format!("medium.g={g}"), format!("medium.albedo={albedo}")],
+                )?;
                 let plan = Plan::new(&scene);
                 let pairs = (0..runs.max(1) as u64)
                     .map(|p| {
@@ -282,11 +305,11 @@ fn mitransient_live(
 /// α = 0.5). A full render to 6 % takes hours here, so: the error of one run is measured on 1024 central
 /// laser points (shard 8/16: rows 64–71) from pairs of independent runs, and the CPU time to 6 % over the whole grid
 /// is extrapolated with error ∝ spp^−½ and CPU ∝ laser points × spp. Peak memory: a full-grid render.
-fn paper_format(scenes: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+fn paper_format(scenes: &Scenes, runs: usize, quiet: bool) -> anyhow::Result<()> {
     const SPP: u64 = 128;
     // The Z's direct returns: 2 m + 2 m at the centre to 2.81 m + 2.08 m from a grid corner.
     const WINDOW: (f64, f64) = (4.0, 4.9);
-    let scene = load(scenes, "z-letter.toml", &Overrides::default())?;
+    let scene = scenes.load("z-letter.toml", &[])?;
     let plan = Plan::new(&scene);
     let shard = Some((8, 16));
     let pairs: Vec<_> = (0..runs.max(1) as u64)
