@@ -153,14 +153,21 @@ impl Tracer<'_> {
                 if t_hit < t - EPS {
                     return None;
                 }
-                let (m0, m1) = m.region.clip(o.p, w, t_hit)?;
+                let (m0, m1) = m.clip(o.p, w, t_hit)?;
                 if t < m0 || t > m1 {
                     return None;
                 }
-                let tr = m.transmittance(t - m0);
+                let seg = Segment {
+                    o: o.p,
+                    d: w,
+                    t0: m0,
+                    t1: t,
+                };
+                // Exact: the legs' ratios are the tile's balance weights.
+                let tr = m.transmittance(seg);
                 let opl = o.extra_m + t + m.extra_path_m(t - m0);
                 Some(Leg {
-                    f: g * tr * m.sigma_s_per_m(),
+                    f: g * tr * m.sigma_s_at(f.y),
                     opl,
                     d: w,
                 })
@@ -171,7 +178,9 @@ impl Tracer<'_> {
                 if (t_hit - t).abs() > 1e-6 * t.max(1.0) || cos_y <= 0.0 {
                     return None;
                 }
-                let (tr, extra) = self.transmit(o.p, w, t);
+                let (tr, extra) = self.in_medium(o.p, w, t).map_or((1.0, 0.0), |(m, seg)| {
+                    (m.transmittance(seg), m.extra_path_m(seg.len_m()))
+                });
                 Some(Leg {
                     f: g * tr * cos_y,
                     opl: o.extra_m + t + extra,

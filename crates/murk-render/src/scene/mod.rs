@@ -220,7 +220,7 @@ impl Scene {
         let (il, ih) = range(&c.illum, c.laser_xyz);
         let (sl, sh) = range(&c.sensor, c.sensor_xyz);
         // Geometric bounds; a medium's index stretches paths, so scale the upper end by it.
-        let ior = self.medium.map_or(1.0, |m| m.ior);
+        let ior = self.medium.as_ref().map_or(1.0, |m| m.ior);
         let (earliest, latest) = (il + sl, (ih + sh) * ior);
         let t = &c.time;
         if earliest >= t.end_m() {

@@ -6,7 +6,7 @@ use super::file::{
 };
 use super::{check_albedo, v3, Bad, CaptureSpec, Relay};
 use crate::geometry::{triangulate, Aabb, Object, Shape};
-use crate::medium::{Medium, Phase};
+use crate::medium::{Homogeneous, Kind, Medium, Phase};
 use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
 use std::path::Path;
 
@@ -316,7 +316,9 @@ impl MediumDef {
             ));
         }
         Ok((m.mu_t_per_m > 0.0).then(|| Medium {
-            sigma_t_per_m: m.mu_t_per_m,
+            kind: Kind::Homogeneous(Homogeneous {
+                sigma_t_per_m: m.mu_t_per_m,
+            }),
             albedo: m.albedo,
             phase: Phase::new(m.g),
             ior: m.ior,
