@@ -78,20 +78,15 @@ impl Tracer<'_> {
         self.connect_hit(Ray { o: x, d: w }, &h, carry, targets, s, out);
     }
 
-    /// The medium's part of `o + t·d`, t ∈ [0, t_max], where a medium is there.
-    pub(super) fn in_medium(&self, o: DVec3, d: DVec3, t_max: f64) -> Option<(&Medium, Segment)> {
-        let m = self.medium()?;
-        let (t0, t1) = m.clip(o, d, t_max)?;
-        Some((m, Segment { o, d, t0, t1 }))
-    }
-
-    /// An estimate of the transmittance along `o + t·d`, t ∈ [0, t_max], and the optical path the
-    /// medium adds to it.
-    pub(super) fn transmit(&self, o: DVec3, d: DVec3, t_max: f64, s: &mut Sampler) -> (f64, f64) {
-        self.in_medium(o, d, t_max).map_or((1.0, 0.0), |(m, seg)| {
-            let tr = m.estimate_transmittance(&[seg], &mut || s.next());
-            (tr, m.extra_path_m(seg.len_m()))
-        })
+    /// The transmittance along `o + t·d`, t ∈ [0, t_max], and the optical path the medium adds to it.
+    pub(super) fn transmit(&self, o: DVec3, d: DVec3, t_max: f64) -> (f64, f64) {
+        match self.medium().map(|m| (m, m.clip(o, d, t_max))) {
+            Some((m, Some((t0, t1)))) => (
+                m.transmittance(&[Segment { o, d, t0, t1 }]),
+                m.extra_path_m(t1 - t0),
+            ),
+            _ => (1.0, 0.0),
+        }
     }
 
     /// Connects the surface hit `h` of the ray `x + t·w` to every target, through the transmittance of
@@ -106,7 +101,7 @@ impl Tracer<'_> {
         out: &mut Sink,
     ) {
         let (x, w) = (ray.o, ray.d);
-        let (tr, extra) = self.transmit(x, w, h.t, s);
+        let (tr, extra) = self.transmit(x, w, h.t);
         let v = Vertex::Surface {
             n: h.n,
             albedo: h.albedo,
@@ -152,7 +147,7 @@ impl Tracer<'_> {
             if f <= 0.0 || (tgt.p != seen && self.scene.geometry.occluded(y, w, r)) {
                 continue;
             }
-            let (tr, extra) = self.transmit(y, w, r, s);
+            let (tr, extra) = self.transmit(y, w, r);
             let value = beta * f * tr * cos_t / (PI * r2) * mis(k);
             self.splat(out, k0 + k, opl + r + extra + tgt.extra_m, (value, scat), s);
         }

@@ -363,7 +363,7 @@ impl Tracer<'_> {
                 t1: tl,
             },
         ];
-        let value = from.beta * f * m.estimate_transmittance(&legs, &mut || s.next()) / t2
+        let value = from.beta * f * m.transmittance(&legs) / t2
             * m.sigma_s_at(y)
             * m.phase.eval(-w.dot(wl))
             * cos_l

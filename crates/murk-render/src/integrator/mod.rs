@@ -526,7 +526,7 @@ impl<'a> Tracer<'a> {
                             self.connect_hit(Ray { o: pos, d }, &h, carry, targets, s, out);
                             connected = true;
                         }
-                        // Free flight: scatter with density σt·exp(−σt·(t − m0)), else cross (weight T/P = 1).
+                        // Free flight: scatter with density σt(y)·T(m0 → t), else cross (weight T/P = 1).
                         let flight = Segment {
                             o: pos,
                             d,
@@ -590,7 +590,7 @@ impl<'a> Tracer<'a> {
                             t0: m0,
                             t1: m1,
                         };
-                        beta *= m.estimate_transmittance(&[seg], &mut || s.next());
+                        beta *= m.transmittance(&[seg]);
                     }
                 }
             }

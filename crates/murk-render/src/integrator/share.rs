@@ -163,8 +163,7 @@ impl Tracer<'_> {
                     t0: m0,
                     t1: t,
                 };
-                // Exact: the legs' ratios are the tile's balance weights.
-                let tr = m.transmittance(seg);
+                let tr = m.transmittance(&[seg]);
                 let opl = o.extra_m + t + m.extra_path_m(t - m0);
                 Some(Leg {
                     f: g * tr * m.sigma_s_at(f.y),
@@ -178,9 +177,7 @@ impl Tracer<'_> {
                 if (t_hit - t).abs() > 1e-6 * t.max(1.0) || cos_y <= 0.0 {
                     return None;
                 }
-                let (tr, extra) = self.in_medium(o.p, w, t).map_or((1.0, 0.0), |(m, seg)| {
-                    (m.transmittance(seg), m.extra_path_m(seg.len_m()))
-                });
+                let (tr, extra) = self.transmit(o.p, w, t);
                 Some(Leg {
                     f: g * tr * cos_y,
                     opl: o.extra_m + t + extra,

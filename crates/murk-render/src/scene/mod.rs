@@ -11,8 +11,8 @@ mod file;
 mod resolve;
 
 pub use file::{
-    CaptureDef, CaptureKindDef, MediumDef, ObjectDef, RelayDef, RelayKind, RenderDef, SceneFile,
-    TraceFrom,
+    CaptureDef, CaptureKindDef, MediumDef, MediumKindDef, ObjectDef, RelayDef, RelayKind,
+    RenderDef, SceneFile, TraceFrom,
 };
 
 /// The relay surface as the integrator sees it.
@@ -53,8 +53,8 @@ pub struct Scene {
     pub overrides: Vec<String>,
     /// One label per `[[object]]`, in order (ground truth's object ids index it).
     pub object_names: Vec<String>,
-    /// The mesh files the scene reads: inputs that no output may replace.
-    pub mesh_files: Vec<PathBuf>,
+    /// The files the scene reads (meshes, a density grid): inputs that no output may replace.
+    pub input_files: Vec<PathBuf>,
     pub file_name: String,
 }
 
@@ -125,7 +125,7 @@ impl Scene {
         s.check(&bad)?;
         let medium = match &f.medium {
             None => None,
-            Some(m) => m.resolve(&bad)?,
+            Some(m) => m.resolve(dir, &bad)?,
         };
         if let Some(p) = s
             .hidden_geometry_sampling
@@ -156,6 +156,13 @@ impl Scene {
                 ));
             }
         }
+        // Likewise the densities of a grid.
+        if let Some(crate::medium::Kind::Grid(g)) = medium.as_ref().map(|m| &m.kind) {
+            resolved.push_str(&format!(
+                "\nmedium.density_fnv1a = {:016x}",
+                g.fingerprint()
+            ));
+        }
         let geometry = Geometry::new(objects);
         if geometry.is_empty() && !medium.as_ref().is_some_and(Medium::scatters) {
             return Err(bad(
@@ -174,13 +181,19 @@ impl Scene {
             source,
             resolved,
             overrides: assignments.iter().map(|(_, _, w)| w.clone()).collect(),
-            mesh_files: f
+            input_files: f
                 .objects
                 .iter()
                 .filter_map(|o| match o {
                     file::ObjectDef::Mesh { file, .. } => Some(dir.join(file)),
                     _ => None,
                 })
+                .chain(
+                    f.medium
+                        .as_ref()
+                        .and_then(|m| m.density.as_ref())
+                        .map(|d| dir.join(d)),
+                )
                 .collect(),
             object_names: f
                 .objects
