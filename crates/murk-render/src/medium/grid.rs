@@ -25,8 +25,8 @@ pub struct Grid {
 
 impl Grid {
     /// The grid of `path` (shape (nx, ny, nz), x slowest) stretched over `region`, with σt =
-    /// density × `mu_t_per_m`. Errors name the file: a rank other than 3, more than [`MAX_CELLS`],
-    /// a density that is negative or not finite, or no density above zero.
+    /// density × `mu_t_per_m`. Errors name the file: a rank other than 3, more than `MAX_CELLS`
+    /// (256³), a density that is negative or not finite, or no density above zero.
     pub fn load(path: &Path, mu_t_per_m: f64, region: &Aabb) -> Result<Grid> {
         let bad = |msg: String| Error::format(path, msg);
         let (shape, density) = murk_io::read_npy_f32_with_limit(path, MAX_CELLS * 4)?;
