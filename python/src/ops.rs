@@ -127,7 +127,7 @@ fn checked_outputs(
         .is_none()
         .then_some(path)
         .into_iter()
-        .chain(scene.mesh_files.iter().map(PathBuf::as_path))
+        .chain(scene.input_files.iter().map(PathBuf::as_path))
         .collect();
     if let Some(c) = args.checkpoint.as_deref() {
         if let Some(input) = file.iter().find(|f| murk_io::same_target(f, c)) {

@@ -130,7 +130,7 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     let scene = Scene::load(&a.scene, &ov)?;
     // The scene file and the meshes it reads are inputs that no output may replace.
     let inputs: Vec<&Path> = std::iter::once(a.scene.as_path())
-        .chain(scene.mesh_files.iter().map(PathBuf::as_path))
+        .chain(scene.input_files.iter().map(PathBuf::as_path))
         .collect();
     let outs = render_outputs(&a.out, a.albedos.as_deref());
     for out in &outs {

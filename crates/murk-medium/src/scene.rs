@@ -5,7 +5,8 @@ use murk_core::{Capture, Error, Result};
 
 /// The resolved scene TOML that `murk render` stored in the capture's `scene_info`, without its
 /// `[[object]]` tables. The medium's values in it are replaced by the table's; only the geometry
-/// (relay, capture layout, time axis, the medium's extent) is used.
+/// (relay, capture layout, time axis, the medium's extent) is used. The model is homogeneous: a
+/// heterogeneous medium's kind and density are dropped, and its box is fitted by one μt, α and g.
 pub fn medium_only(cap: &Capture) -> Result<String> {
     let text = stored_scene(&cap.scene_info).ok_or_else(|| {
         Error::param(
@@ -26,6 +27,9 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
     medium.insert("mu_t".into(), toml::Value::Float(1.0));
     medium.insert("albedo".into(), toml::Value::Float(0.5));
     medium.insert("g".into(), toml::Value::Float(0.0));
+    for key in ["kind", "density", "height_scale"] {
+        medium.remove(key);
+    }
     toml::to_string(&table).map_err(|e| Error::param(format!("scene_info.scene: {e}")))
 }
 
@@ -48,9 +52,9 @@ mod tests {
 
     #[test]
     fn the_stored_scene_is_read_and_its_objects_dropped() {
-        let info = "generator: murk render\nscene: |\n  [medium]\n  mu_t = 1.0\n  \n  [[object]]\n  shape = \"quad\"\n  [relay]\n  kind = \"wall\"\nalbedo: 0.5\n";
+        let info = "generator: murk render\nscene: |\n  [medium]\n  mu_t = 1.0\n  kind = \"grid\"\n  density = \"plume.npy\"\n  \n  [[object]]\n  shape = \"quad\"\n  [relay]\n  kind = \"wall\"\nalbedo: 0.5\n";
         let text = stored_scene(info).unwrap();
-        assert!(text.starts_with("[medium]\nmu_t = 1.0\n"));
+        assert!(text.starts_with("[medium]\nmu_t = 1.0\nkind = \"grid\"\n"));
         assert!(!text.contains("albedo: 0.5"));
         let cap = Capture {
             scene_info: info.to_string(),
@@ -67,6 +71,11 @@ mod tests {
         };
         let only = medium_only(&cap).unwrap();
         assert!(only.contains("[medium]") && only.contains("[relay]") && !only.contains("object"));
+        // The model is homogeneous: the grid and its file are gone.
+        assert!(
+            !only.contains("grid") && !only.contains("density"),
+            "{only}"
+        );
         let none = Capture {
             scene_info: "generator: murk synth\n".into(),
             ..cap

@@ -156,7 +156,11 @@ impl<'a> Plan<'a> {
     /// `medium.albedo = albedos[j]` and the same seed. The tracing is paid once; only the histogram
     /// writes are paid per albedo.
     pub fn sweep(scene: &'a Scene, albedos: &[f64]) -> Result<Self> {
-        let own = scene.medium.filter(|_| scene.scatters()).map(|m| m.albedo);
+        let own = scene
+            .medium
+            .as_ref()
+            .filter(|_| scene.scatters())
+            .map(|m| m.albedo);
         let Some(own) = own else {
             return Err(Error::param(
                 "an albedo sweep needs a scattering medium (medium.mu_t > 0 and medium.albedo > 0)",

@@ -546,7 +546,7 @@ fn overrides_are_named_recorded_and_guard_resume() {
     .unwrap();
     assert_eq!(base.source, SCENE, "no overrides: the file's own text");
     assert!(
-        matches!(fog.medium.unwrap().phase, murk_render::Phase::HenyeyGreenstein { g } if g == 0.7)
+        matches!(fog.medium.as_ref().unwrap().phase, murk_render::Phase::HenyeyGreenstein { g } if g == 0.7)
     );
     assert_eq!(fog.capture.illum.len(), 4);
     let info = murk_render::scene_info(&fog, 8, 1, None);

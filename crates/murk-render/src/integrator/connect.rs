@@ -78,12 +78,15 @@ impl Tracer<'_> {
         self.connect_hit(Ray { o: x, d: w }, &h, carry, targets, s, out);
     }
 
-    /// Transmittance along `o + t·d`, t ∈ [0, t_max], and the optical path the medium adds to it.
+    /// The transmittance along `o + t·d`, t ∈ [0, t_max], and the optical path the medium adds to it.
     pub(super) fn transmit(&self, o: DVec3, d: DVec3, t_max: f64) -> (f64, f64) {
-        self.medium().map_or((1.0, 0.0), |m| {
-            let l = m.overlap(o, d, t_max);
-            (m.transmittance(l), m.extra_path_m(l))
-        })
+        match self.medium().map(|m| (m, m.clip(o, d, t_max))) {
+            Some((m, Some((t0, t1)))) => (
+                m.transmittance(&[Segment { o, d, t0, t1 }]),
+                m.extra_path_m(t1 - t0),
+            ),
+            _ => (1.0, 0.0),
+        }
     }
 
     /// Connects the surface hit `h` of the ray `x + t·w` to every target, through the transmittance of

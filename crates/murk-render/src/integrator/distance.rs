@@ -209,7 +209,7 @@ impl Tracer<'_> {
             return 0.0;
         }
         let hit = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
-        match m.region.clip(tgt.p, wl, hit) {
+        match m.clip(tgt.p, wl, hit) {
             Some((a, b)) if tl >= a && tl <= b => {
                 Equiangular::new(tgt.p, wl, x, a, b).map_or(0.0, |e| p_dir * e.pdf(tl) / tl2)
             }
@@ -309,7 +309,7 @@ impl Tracer<'_> {
         }
         let u = s.next();
         let hit_l = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
-        let Some((a, b)) = m.region.clip(tgt.p, wl, hit_l) else {
+        let Some((a, b)) = m.clip(tgt.p, wl, hit_l) else {
             return;
         };
         let Some(eq) = Equiangular::new(tgt.p, wl, from.x, a, b) else {
@@ -335,10 +335,16 @@ impl Tracer<'_> {
         if hit < t - EPS {
             return;
         }
-        let Some((m0, m1)) = m.region.clip(from.x, w, hit) else {
+        let Some((m0, m1)) = m.clip(from.x, w, hit) else {
             return;
         };
-        let pff = m.free_flight_pdf(t - m0);
+        let leg = Segment {
+            o: from.x,
+            d: w,
+            t0: m0,
+            t1: t,
+        };
+        let pff = m.flight(leg).1;
         let p_path = self.dir_pdf(from, w)
             * (pff
                 + self
@@ -348,8 +354,17 @@ impl Tracer<'_> {
         let cos_l = tgt.n.dot(wl);
         let p_l = p_dir * peq / (tl * tl);
         // Integrand (volume measure) over the sum of densities: the balance-weighted estimate.
-        let value = from.beta * f * m.transmittance((t - m0) + (tl - a)) / t2
-            * m.sigma_s_per_m()
+        let legs = [
+            leg,
+            Segment {
+                o: tgt.p,
+                d: wl,
+                t0: a,
+                t1: tl,
+            },
+        ];
+        let value = from.beta * f * m.transmittance(&legs) / t2
+            * m.sigma_s_at(y)
             * m.phase.eval(-w.dot(wl))
             * cos_l
             / (PI * tl * tl)

@@ -13,7 +13,7 @@
 //! measurements that chose their defaults are in `docs/renderer-sampling.md`.
 
 use crate::geometry::{Geometry, Hit, Shape, EPS};
-use crate::medium::Medium;
+use crate::medium::{Medium, Segment};
 use crate::scene::Scene;
 use murk_core::DVec3;
 use rand_core::Rng;
@@ -121,7 +121,7 @@ impl<'a> Tracer<'a> {
         let rr_depth = set.rr_depth.unwrap_or(if scatters { u32::MAX } else { 5 });
         let medium_objects = set.object_connections && scatters && hidden.total > 0.0;
         let forward = scatters
-            && matches!(scene.medium.map(|m| m.phase),
+            && matches!(scene.medium.as_ref().map(|m| m.phase),
                 Some(crate::medium::Phase::HenyeyGreenstein { g }) if g >= 0.3);
         let target_lobe = set.target_lobe.unwrap_or(if forward { 0.5 } else { 0.0 });
         let object_draws = if hidden.total > 0.0 {
@@ -466,10 +466,9 @@ impl<'a> Tracer<'a> {
             let mut medium_len = 0.0;
             let mut connected = false;
             if let Some(m) = self.medium() {
-                if let Some((m0, m1)) = m.region.clip(pos, d, t_hit) {
+                if let Some((m0, m1)) = m.clip(pos, d, t_hit) {
                     medium_len = m1 - m0;
-                    let sigma_s = m.sigma_s_per_m();
-                    if sigma_s > 0.0 {
+                    if m.scatters() {
                         // Connections from distances drawn toward each target (equiangular, and uniform in the
                         // capture's time window), MIS-combined (balance heuristic) with each other, with the
                         // free-flight vertex's connection below and with target-side sampling.
@@ -493,8 +492,13 @@ impl<'a> Tracer<'a> {
                                     continue;
                                 }
                                 let y = pos + d * t;
-                                let (tr, pff) = m.transmittance_and_pdf(t - m0);
-                                let b = beta * sigma_s * tr / pdf;
+                                let (tr, pff) = m.flight(Segment {
+                                    o: pos,
+                                    d,
+                                    t0: m0,
+                                    t1: t,
+                                });
+                                let b = beta * m.sigma_s_at(y) * tr / pdf;
                                 let w =
                                     pdf / (seg[k].pdf(t) + pff + target_pdf(m, &seg[k], k, y, t));
                                 let o = opl + t + m.extra_path_m(t - m0);
@@ -522,14 +526,20 @@ impl<'a> Tracer<'a> {
                             self.connect_hit(Ray { o: pos, d }, &h, carry, targets, s, out);
                             connected = true;
                         }
-                        // Free flight: scatter with density σt·exp(−σt·(t − m0)), else cross (weight T/P = 1).
-                        let t = m0 + m.sample_distance(s.next());
+                        // Free flight: scatter with density σt(y)·T(m0 → t), else cross (weight T/P = 1).
+                        let flight = Segment {
+                            o: pos,
+                            d,
+                            t0: m0,
+                            t1: m1,
+                        };
+                        let t = m.sample_flight(flight, &mut || s.next());
                         if t < m1 {
                             depth += 1;
                             // What leaves this vertex keeps the first vertex's outgoing direction.
                             out.at_first = false;
                             let y = pos + d * t;
-                            let pff = m.free_flight_pdf(t - m0);
+                            let pff = m.flight(Segment { t1: t, ..flight }).1;
                             let mis = |k: usize| {
                                 pff / (pff + seg[k].pdf(t) + target_pdf(m, &seg[k], k, y, t))
                             };
@@ -574,7 +584,13 @@ impl<'a> Tracer<'a> {
                         }
                     } else {
                         // Pure absorber: weight by the transmittance instead of sampling.
-                        beta *= m.transmittance(medium_len);
+                        let seg = Segment {
+                            o: pos,
+                            d,
+                            t0: m0,
+                            t1: m1,
+                        };
+                        beta *= m.transmittance(&[seg]);
                     }
                 }
             }

@@ -153,14 +153,20 @@ impl Tracer<'_> {
                 if t_hit < t - EPS {
                     return None;
                 }
-                let (m0, m1) = m.region.clip(o.p, w, t_hit)?;
+                let (m0, m1) = m.clip(o.p, w, t_hit)?;
                 if t < m0 || t > m1 {
                     return None;
                 }
-                let tr = m.transmittance(t - m0);
+                let seg = Segment {
+                    o: o.p,
+                    d: w,
+                    t0: m0,
+                    t1: t,
+                };
+                let tr = m.transmittance(&[seg]);
                 let opl = o.extra_m + t + m.extra_path_m(t - m0);
                 Some(Leg {
-                    f: g * tr * m.sigma_s_per_m(),
+                    f: g * tr * m.sigma_s_at(f.y),
                     opl,
                     d: w,
                 })

@@ -184,15 +184,19 @@ impl Default for RenderDef {
     }
 }
 
-/// A homogeneous medium filling the box `min`..`max` (e.g. the half-space behind the diffuser clipped to a
-/// box, or the inside of a room).
+/// A participating medium filling the box `min`..`max` (e.g. the half-space behind the diffuser clipped
+/// to a box, or the inside of a room): homogeneous, or with its extinction scaled by a density that
+/// varies over the box (docs/media-heterogeneous.md).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MediumDef {
-    /// Extinction coefficient μt (1/m).
+    /// How the extinction varies over the box (default: homogeneous).
+    #[serde(default)]
+    pub kind: MediumKindDef,
+    /// Extinction coefficient μt (1/m); where a density varies, σt(x) = density(x) × μt.
     #[serde(rename = "mu_t")]
     pub mu_t_per_m: f64,
-    /// Single-scattering albedo α = μs/μt.
+    /// Single-scattering albedo α = μs/μt, the same at every point.
     pub albedo: f64,
     /// Henyey–Greenstein anisotropy, |g| ≤ 0.9999.
     #[serde(default)]
@@ -204,6 +208,26 @@ pub struct MediumDef {
     pub min_m: [f64; 3],
     #[serde(rename = "max")]
     pub max_m: [f64; 3],
+    /// kind = "grid": a `.npy` of densities, shape (nx, ny, nz), relative to the scene file; its cells
+    /// split the box evenly, cell [0, 0, 0] at `min`.
+    pub density: Option<PathBuf>,
+    /// kind = "height": the height (m) over which the density falls by e, from 1 at the box's floor
+    /// (y = min.y; y is up).
+    #[serde(rename = "height_scale")]
+    pub height_scale_m: Option<f64>,
+}
+
+/// How a medium's extinction varies over its box.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MediumKindDef {
+    /// μt everywhere.
+    #[default]
+    Homogeneous,
+    /// μt × the density grid of `density`.
+    Grid,
+    /// μt × exp(−(y − min.y)/height_scale): fog settling toward the floor.
+    Height,
 }
 
 fn one() -> f64 {

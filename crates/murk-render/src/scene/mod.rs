@@ -11,8 +11,8 @@ mod file;
 mod resolve;
 
 pub use file::{
-    CaptureDef, CaptureKindDef, MediumDef, ObjectDef, RelayDef, RelayKind, RenderDef, SceneFile,
-    TraceFrom,
+    CaptureDef, CaptureKindDef, MediumDef, MediumKindDef, ObjectDef, RelayDef, RelayKind,
+    RenderDef, SceneFile, TraceFrom,
 };
 
 /// The relay surface as the integrator sees it.
@@ -47,14 +47,14 @@ pub struct Scene {
     /// The scene file's text, or the resolved TOML where overrides apply; recorded in `scene_info`.
     pub source: String,
     /// The resolved scene as sorted `key = value` lines ([`canonical`]), then a fingerprint of each
-    /// mesh's triangles: what a checkpoint and a study's task key compare.
+    /// mesh's triangles and of a density grid: what a checkpoint and a study's task key compare.
     pub resolved: String,
     /// The overrides as the user wrote them (`--set medium.g=0.7`, `--grid 32`).
     pub overrides: Vec<String>,
     /// One label per `[[object]]`, in order (ground truth's object ids index it).
     pub object_names: Vec<String>,
-    /// The mesh files the scene reads: inputs that no output may replace.
-    pub mesh_files: Vec<PathBuf>,
+    /// The files the scene reads (meshes, a density grid): inputs that no output may replace.
+    pub input_files: Vec<PathBuf>,
     pub file_name: String,
 }
 
@@ -125,7 +125,7 @@ impl Scene {
         s.check(&bad)?;
         let medium = match &f.medium {
             None => None,
-            Some(m) => m.resolve(&bad)?,
+            Some(m) => m.resolve(dir, &bad)?,
         };
         if let Some(p) = s
             .hidden_geometry_sampling
@@ -156,6 +156,13 @@ impl Scene {
                 ));
             }
         }
+        // Likewise the densities of a grid.
+        if let Some(crate::medium::Kind::Grid(g)) = medium.as_ref().map(|m| &m.kind) {
+            resolved.push_str(&format!(
+                "\nmedium.density_fnv1a = {:016x}",
+                g.fingerprint()
+            ));
+        }
         let geometry = Geometry::new(objects);
         if geometry.is_empty() && !medium.as_ref().is_some_and(Medium::scatters) {
             return Err(bad(
@@ -174,13 +181,19 @@ impl Scene {
             source,
             resolved,
             overrides: assignments.iter().map(|(_, _, w)| w.clone()).collect(),
-            mesh_files: f
+            input_files: f
                 .objects
                 .iter()
                 .filter_map(|o| match o {
                     file::ObjectDef::Mesh { file, .. } => Some(dir.join(file)),
                     _ => None,
                 })
+                .chain(
+                    f.medium
+                        .as_ref()
+                        .and_then(|m| m.density.as_ref())
+                        .map(|d| dir.join(d)),
+                )
                 .collect(),
             object_names: f
                 .objects
@@ -220,7 +233,7 @@ impl Scene {
         let (il, ih) = range(&c.illum, c.laser_xyz);
         let (sl, sh) = range(&c.sensor, c.sensor_xyz);
         // Geometric bounds; a medium's index stretches paths, so scale the upper end by it.
-        let ior = self.medium.map_or(1.0, |m| m.ior);
+        let ior = self.medium.as_ref().map_or(1.0, |m| m.ior);
         let (earliest, latest) = (il + sl, (ih + sh) * ior);
         let t = &c.time;
         if earliest >= t.end_m() {

@@ -2,11 +2,11 @@
 //! name them) and settles its defaults here, once.
 
 use super::file::{
-    CaptureDef, CaptureKindDef, MediumDef, ObjectDef, RelayDef, RelayKind, RenderDef,
+    CaptureDef, CaptureKindDef, MediumDef, MediumKindDef, ObjectDef, RelayDef, RelayKind, RenderDef,
 };
 use super::{check_albedo, v3, Bad, CaptureSpec, Relay};
 use crate::geometry::{triangulate, Aabb, Object, Shape};
-use crate::medium::{Medium, Phase};
+use crate::medium::{Grid, Height, Homogeneous, Kind, Medium, Phase};
 use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
 use std::path::Path;
 
@@ -272,8 +272,8 @@ impl RenderDef {
 const MAX_ABS_G: f64 = 0.9999;
 
 impl MediumDef {
-    /// The medium, or `None` where it does not attenuate (μt = 0).
-    pub(super) fn resolve(&self, bad: Bad) -> Result<Option<Medium>> {
+    /// The medium, or `None` where it does not attenuate (μt = 0); a density grid is read from `dir`.
+    pub(super) fn resolve(&self, dir: &Path, bad: Bad) -> Result<Option<Medium>> {
         let m = self;
         murk_core::Limits::extinction(m.mu_t_per_m).map_err(|e| bad("medium.mu_t", e))?;
         check_albedo(m.albedo, "medium.albedo", bad)?;
@@ -315,15 +315,75 @@ impl MediumDef {
                 ),
             ));
         }
-        Ok((m.mu_t_per_m > 0.0).then(|| Medium {
-            sigma_t_per_m: m.mu_t_per_m,
+        let region = Aabb {
+            min: v3(m.min_m),
+            max: v3(m.max_m),
+        };
+        let kind = self.kind(dir, &region, bad)?;
+        Ok(kind.map(|kind| Medium {
+            kind,
             albedo: m.albedo,
             phase: Phase::new(m.g),
             ior: m.ior,
-            region: Aabb {
-                min: v3(m.min_m),
-                max: v3(m.max_m),
-            },
+            region,
+        }))
+    }
+
+    /// How σt varies over `region`, each kind with its own fields and no other's; `None` where μt = 0.
+    fn kind(&self, dir: &Path, region: &Aabb, bad: Bad) -> Result<Option<Kind>> {
+        let only = |field: &str, kind: &str| {
+            bad(
+                &format!("medium.{field}"),
+                format!(
+                    "is read only with medium.kind = \"{kind}\", here it is \"{}\"",
+                    format!("{:?}", self.kind).to_lowercase()
+                ),
+            )
+        };
+        if self.kind != MediumKindDef::Grid && self.density.is_some() {
+            return Err(only("density", "grid"));
+        }
+        if self.kind != MediumKindDef::Height && self.height_scale_m.is_some() {
+            return Err(only("height_scale", "height"));
+        }
+        let mu_t = self.mu_t_per_m;
+        if mu_t <= 0.0 {
+            return Ok(None);
+        }
+        Ok(Some(match self.kind {
+            MediumKindDef::Homogeneous => Kind::Homogeneous(Homogeneous {
+                sigma_t_per_m: mu_t,
+            }),
+            MediumKindDef::Grid => {
+                let Some(file) = &self.density else {
+                    return Err(bad(
+                        "medium.density",
+                        "kind = \"grid\" needs a density grid (.npy, shape (nx, ny, nz))".into(),
+                    ));
+                };
+                let grid = Grid::load(&dir.join(file), mu_t, region)?;
+                murk_core::Limits::extinction(grid.majorant_per_m)
+                    .map_err(|e| bad("medium.mu_t × the largest density", e))?;
+                Kind::Grid(grid)
+            }
+            MediumKindDef::Height => {
+                let h = self.height_scale_m.unwrap_or(f64::NAN);
+                // Below a millimetre the falloff's exponent overflows along paths that descend.
+                if !(1e-3..=1e6).contains(&h) {
+                    return Err(bad(
+                        "medium.height_scale",
+                        format!(
+                            "kind = \"height\" needs a height_scale in [0.001, 1e6] m, got {}",
+                            self.height_scale_m.map_or("none".into(), short)
+                        ),
+                    ));
+                }
+                Kind::Height(Height {
+                    sigma_t_floor_per_m: mu_t,
+                    floor_y_m: region.min.y,
+                    scale_m: h,
+                })
+            }
         }))
     }
 }

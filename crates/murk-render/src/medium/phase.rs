@@ -1,6 +1,5 @@
-//! Homogeneous participating medium in an axis-aligned region, with its phase function.
+//! Phase functions: the angular distribution of light scattered in a medium.
 
-use crate::geometry::Aabb;
 use murk_core::DVec3;
 use std::f64::consts::PI;
 
@@ -50,60 +49,6 @@ impl Phase {
         let (a, b) = dir.any_orthonormal_pair();
         let phi = 2.0 * PI * u2;
         (dir * cos + a * (sin * phi.cos()) + b * (sin * phi.sin())).normalize()
-    }
-}
-
-/// A homogeneous medium filling `region`; boundaries are index-matched (no refraction), and `ior`
-/// only stretches optical paths inside it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Medium {
-    pub sigma_t_per_m: f64,
-    pub albedo: f64,
-    pub phase: Phase,
-    pub ior: f64,
-    pub region: Aabb,
-}
-
-impl Medium {
-    pub fn sigma_s_per_m(&self) -> f64 {
-        self.sigma_t_per_m * self.albedo
-    }
-
-    /// Fraction of light that crosses `len_m` of the medium unscattered and unabsorbed.
-    pub fn transmittance(&self, len_m: f64) -> f64 {
-        (-self.sigma_t_per_m * len_m).exp()
-    }
-
-    /// Density of a free flight ending after `len_m` (σt·e^{−σt·len}).
-    pub fn free_flight_pdf(&self, len_m: f64) -> f64 {
-        self.transmittance_and_pdf(len_m).1
-    }
-
-    /// [`Medium::transmittance`] and [`Medium::free_flight_pdf`] after `len_m`, from one exponential.
-    pub fn transmittance_and_pdf(&self, len_m: f64) -> (f64, f64) {
-        let tr = self.transmittance(len_m);
-        (tr, self.sigma_t_per_m * tr)
-    }
-
-    /// A free-flight distance drawn from [`Medium::free_flight_pdf`] with the uniform number `u`.
-    pub fn sample_distance(&self, u: f64) -> f64 {
-        -(1.0 - u).ln() / self.sigma_t_per_m
-    }
-
-    /// Optical path that `len_m` of geometric path inside the medium adds beyond `len_m` itself.
-    pub fn extra_path_m(&self, len_m: f64) -> f64 {
-        (self.ior - 1.0) * len_m
-    }
-
-    /// Whether it scatters light (not only absorbs it).
-    pub fn scatters(&self) -> bool {
-        self.sigma_s_per_m() > 0.0
-    }
-    /// Length of the segment `o + t·d`, t ∈ [0, t_max], inside the medium (d must be unit).
-    pub fn overlap(&self, o: DVec3, d: DVec3, t_max: f64) -> f64 {
-        self.region
-            .clip(o, d, t_max)
-            .map_or(0.0, |(t0, t1)| t1 - t0)
     }
 }
 

@@ -1,0 +1,135 @@
+//! Bad density grids (`[medium] kind = "grid"`) through the real `murk` binary: one line on stderr
+//! naming the density file and the problem, a non-zero exit code, no panic; and bad medium fields
+//! named by the scene file.
+
+use std::path::{Path, PathBuf};
+
+#[path = "common/cli.rs"]
+mod cli;
+
+fn dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("murk-cli-density-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A small fog scene in `d` whose `[medium]` has the lines `medium`; its path.
+fn scene(d: &Path, name: &str, medium: &str) -> PathBuf {
+    let p = d.join(name);
+    std::fs::write(
+        &p,
+        format!(
+            "[relay]\nkind = \"wall\"\nsize = [1.0, 1.0]\n[capture]\nkind = \"laser-grid\"\n\
+             grid = [2, 2]\nbins = 64\nbin_width = 0.05\n[medium]\nalbedo = 0.5\nmu_t = 1.0\n\
+             min = [-1.5, -1.5, 0.001]\nmax = [1.5, 1.5, 2.5]\n{medium}\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+/// A `.npy` header (version 1) for `descr` and `shape`, padded as numpy pads it.
+fn npy_header(descr: &str, shape: &str) -> Vec<u8> {
+    let mut h = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+    h.push_str(&" ".repeat((64 - (10 + h.len() + 1) % 64) % 64));
+    h.push('\n');
+    let mut b = b"\x93NUMPY\x01\x00".to_vec();
+    b.extend((h.len() as u16).to_le_bytes());
+    b.extend(h.as_bytes());
+    b
+}
+
+/// Renders `scene` and asserts a clean one-line failure containing every `needle`.
+fn fails(d: &Path, scene: &Path, needles: &[&str]) {
+    let out = d.join("r.h5");
+    let args = [
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--quiet",
+    ];
+    let (code, _, err) = cli::murk(&args);
+    assert_ne!(code, 0, "{args:?} succeeded");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "expected one line, got:\n{err}");
+    assert!(
+        lines[0].starts_with("murk: error: ") && !err.contains("panicked"),
+        "{err}"
+    );
+    for n in needles {
+        assert!(lines[0].contains(n), "'{n}' not in: {}", lines[0]);
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn bad_density_grids_are_one_line_naming_the_file() {
+    let d = dir();
+    let grid = |name: &str| format!("kind = \"grid\"\ndensity = \"{name}\"");
+    let write = |name: &str, shape: &[usize], v: &[f32]| {
+        murk_io::write_npy_f32(&d.join(name), shape, v).unwrap();
+    };
+    let mut nan = vec![0.5f32; 8];
+    nan[5] = f32::NAN;
+    write("nan.npy", &[2, 2, 2], &nan);
+    write(
+        "negative.npy",
+        &[2, 2, 2],
+        &[0.5, 0.5, -0.1, 0.5, 0.5, 0.5, 0.5, 0.5],
+    );
+    write("flat.npy", &[4, 2], &[0.5; 8]);
+    write("zero.npy", &[2, 2, 2], &[0.0; 8]);
+    // A header claiming 10⁵ cells a side, over a few bytes of data: refused before allocating.
+    let mut absurd = npy_header("<f4", "(100000, 100000, 100000)");
+    absurd.extend([0u8; 16]);
+    std::fs::write(d.join("absurd.npy"), absurd).unwrap();
+    // A 2 × 2 × 2 header whose data stops after five values.
+    let mut cut = npy_header("<f4", "(2, 2, 2)");
+    cut.extend([0u8; 20]);
+    std::fs::write(d.join("cut.npy"), cut).unwrap();
+    for (file, needles) in [
+        ("nan.npy", &["nan.npy", "density[1, 0, 1] = NaN"][..]),
+        (
+            "negative.npy",
+            &["negative.npy", "density[0, 1, 0] = -0.1", "≥ 0"],
+        ),
+        ("flat.npy", &["flat.npy", "3 dimensions", "[4, 2]"]),
+        ("zero.npy", &["zero.npy", "every density is 0"]),
+        ("absurd.npy", &["absurd.npy", "read limit"]),
+        ("cut.npy", &["cut.npy", "truncated"]),
+        ("missing.npy", &["missing.npy"]),
+    ] {
+        let s = scene(&d, &format!("{file}.toml"), &grid(file));
+        fails(&d, &s, needles);
+    }
+    // Fields of one kind given to another, and a kind without its field: named by the scene file.
+    for (medium, needles) in [
+        (
+            "density = \"nan.npy\"",
+            &["medium.density", "kind = \"grid\""][..],
+        ),
+        (
+            "kind = \"grid\"",
+            &["medium.density", "needs a density grid"],
+        ),
+        ("kind = \"height\"", &["medium.height_scale", "got none"]),
+        (
+            "kind = \"height\"\nheight_scale = 0.0",
+            &["medium.height_scale", "got 0"],
+        ),
+        (
+            "kind = \"grid\"\nheight_scale = 1.0\ndensity = \"nan.npy\"",
+            &["medium.height_scale"],
+        ),
+    ] {
+        let s = scene(&d, "fields.toml", medium);
+        let mut all = vec!["fields.toml"];
+        all.extend(needles);
+        fails(&d, &s, &all);
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
