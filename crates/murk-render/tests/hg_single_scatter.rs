@@ -24,8 +24,9 @@ const ALBEDO: f64 = 0.5;
 const Z0: f64 = 0.001;
 const BIN: f64 = 0.05;
 const BINS: usize = 42;
-/// g = 0 is the isotropic baseline the anisotropic cases are also compared with.
-const GS: [f64; 3] = [0.7, 0.0, -0.7];
+/// g = 0 (index 1) is the isotropic baseline the anisotropic cases are also compared with; g = 0.7 and 0.9
+/// take the forward phase lobe of the target-side draws by default.
+const GS: [f64; 4] = [0.7, 0.0, -0.7, 0.9];
 /// Several times the seed spread of one window's sum at the spp used (measured spread: docs/study.md).
 const TOL_WINDOW: f64 = 0.03;
 /// The ratio of g ≠ 0 to g = 0 in one window: the same seed draws the same vertices for every g (at

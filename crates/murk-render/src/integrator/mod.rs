@@ -120,10 +120,12 @@ impl<'a> Tracer<'a> {
             .unwrap_or(if scatters { 1.0 } else { 0.1 });
         let rr_depth = set.rr_depth.unwrap_or(if scatters { u32::MAX } else { 5 });
         let medium_objects = set.object_connections && scatters && hidden.total > 0.0;
-        let forward = scatters
-            && matches!(scene.medium.as_ref().map(|m| m.phase),
-                Some(crate::medium::Phase::HenyeyGreenstein { g }) if g >= 0.3);
-        let target_lobe = set.target_lobe.unwrap_or(if forward { 0.5 } else { 0.0 });
+        let target_lobe = set.target_lobe.unwrap_or_else(|| {
+            scene
+                .medium
+                .as_ref()
+                .map_or(0.0, Medium::default_target_lobe)
+        });
         let object_draws = if hidden.total > 0.0 {
             set.object_draws
         } else {

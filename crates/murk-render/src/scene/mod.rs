@@ -163,6 +163,13 @@ impl Scene {
                 g.fingerprint()
             ));
         }
+        // A forward medium's default lobe share is part of what its render computes: the key names
+        // it, so that checkpoints made with another default are refused (scenes without one keep
+        // their keys and bytes).
+        let lobe = medium.as_ref().map_or(0.0, Medium::default_target_lobe);
+        if f.render.target_lobe.is_none() && lobe > 0.0 {
+            resolved.push_str(&format!("\nrender.target_lobe_default = {lobe}"));
+        }
         let geometry = Geometry::new(objects);
         if geometry.is_empty() && !medium.as_ref().is_some_and(Medium::scatters) {
             return Err(bad(
