@@ -1,4 +1,4 @@
-//! `murk.reconstruct`: `murk_recon::pipeline::run_with`, the call behind `murk reconstruct`.
+//! `murk.reconstruct`: `murk_methods::run_with`, the call behind `murk reconstruct`.
 
 use crate::capture::Source;
 use crate::compute;
@@ -7,7 +7,7 @@ use murk_core::window::WindowEnd;
 use murk_core::{Error, Named, Result, Volume};
 use murk_recon::medium::removal::Predicted;
 use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
-use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
+use murk_methods::{Gate, Method, Options, Request, TOffset, VolumeSpec};
 use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
@@ -45,10 +45,10 @@ pub struct Args {
 }
 
 impl Args {
-    /// The library request for a capture of `kind`, as `murk reconstruct` builds it from its flags.
-    fn request(&self, kind: murk_core::CaptureKind) -> Result<Request> {
+    /// The library request, as `murk reconstruct` builds it from its flags.
+    fn request(&self) -> Result<Request> {
         let o = self.options()?;
-        let method = Method::from_name(&self.method, kind, &o)?;
+        let method = Method::named(&self.method, &o)?;
         Ok(Request {
             method,
             volume: match &self.volume {
@@ -140,6 +140,16 @@ impl Args {
     }
 }
 
+/// Every method `reconstruct` takes, with a line about it: the library's table, as `murk
+/// reconstruct --help` lists it.
+#[pyfunction]
+pub fn methods() -> Vec<(&'static str, &'static str)> {
+    murk_methods::METHODS
+        .iter()
+        .map(|m| (m.name, m.help))
+        .collect()
+}
+
 /// Runs one reconstruction; returns (intensity [nx, ny, nz] float32 without a copy, (x, y, z), rows,
 /// warnings). See `murk.reconstruct`.
 #[pyfunction]
@@ -154,9 +164,9 @@ pub fn reconstruct<'py>(
     let source = Source::of(capture)?;
     let out = compute(py, progress, threads, |t| {
         let cap = source.owned()?;
-        let req = args.request(cap.kind())?;
+        let req = args.request()?;
         let predicted = args.predicted(&cap)?;
-        pipeline::run_with(cap, &req, predicted, t)
+        murk_methods::run_with(cap, &req, predicted, t)
     })?;
     let v = out.volume;
     let intensity = PyArray1::from_vec(py, out.intensity).reshape(v.shape().to_vec())?;

@@ -4,9 +4,9 @@ use crate::cmd::progress::{say, Bar};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use murk_baselines::{BmmParams, SlabParams};
-use murk_core::{CaptureKind, Named, Volume};
+use murk_core::{Named, Volume};
+use murk_methods::{Gate, Method, Options, Request, TOffset, VolumeSpec, METHODS};
 use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
-use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
 use murk_recon::{Compensation, Wavelength};
 use murk_view::pictures;
 use std::path::PathBuf;
@@ -14,7 +14,9 @@ use std::path::PathBuf;
 /// `--method`'s values, with their help, from the library's list.
 fn method_names() -> clap::builder::PossibleValuesParser {
     clap::builder::PossibleValuesParser::new(
-        Method::NAMES.map(|(name, help)| clap::builder::PossibleValue::new(name).help(help)),
+        METHODS
+            .iter()
+            .map(|m| clap::builder::PossibleValue::new(m.name).help(m.help)),
     )
 }
 
@@ -224,10 +226,10 @@ impl SlabArgs {
 }
 
 impl ReconstructArgs {
-    /// The library request these arguments make for `cap`.
-    pub fn request(&self, kind: CaptureKind) -> anyhow::Result<Request> {
+    /// The library request these arguments make.
+    pub fn request(&self) -> anyhow::Result<Request> {
         let o = self.options()?;
-        let method = Method::from_name(&self.method, kind, &o)?;
+        let method = Method::named(&self.method, &o)?;
         Ok(Request {
             method,
             volume: match &self.volume {
@@ -317,10 +319,10 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         ),
         false => None,
     };
-    let req = a.request(kind)?;
+    let req = a.request()?;
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
-    let mut out = pipeline::run_with(cap, &req, predicted, &bar)
+    let mut out = murk_methods::run_with(cap, &req, predicted, &bar)
         .with_context(|| a.file.display().to_string())?;
     out.rows
         .extend(compensated_with.map(|line| ("compensated with".to_string(), line)));

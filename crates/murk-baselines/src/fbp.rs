@@ -26,6 +26,19 @@ pub struct FbpOptions {
     pub filter: FbpFilter,
 }
 
+/// Filtered backprojection on one volume: as [`crate::BpPlan`], its plan is the volume and the options.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FbpPlan {
+    pub volume: Volume,
+    pub options: FbpOptions,
+}
+
+impl murk_core::Reconstructor for FbpPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        fbp_with(capture, &self.volume, self.options, progress)
+    }
+}
+
 pub fn fbp(capture: &Capture, volume: &Volume, opts: FbpOptions) -> Result<Reconstruction> {
     fbp_with(capture, volume, opts, &NoProgress)
 }

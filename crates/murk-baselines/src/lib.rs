@@ -23,11 +23,11 @@ mod progress_tests;
 #[cfg(test)]
 mod testutil;
 
-pub use bmm::{bmm, bmm_with, BmmParams, Medium, FOAM};
-pub use bp::{backproject, backproject_with, BpOptions};
+pub use bmm::{bmm, bmm_with, BmmParams, BmmPlan, Medium, FOAM};
+pub use bp::{backproject, backproject_with, BpOptions, BpPlan};
 pub use cdt::{cdt, through_slab, CdtParams, CdtPlan, Pulse, SlabParams};
 pub use confocal::TimeGrid;
-pub use fbp::{fbp, fbp_with, FbpFilter, FbpOptions};
+pub use fbp::{fbp, fbp_with, FbpFilter, FbpOptions, FbpPlan};
 pub use fk::{fk, FkParams, FkPlan};
 pub use lct::{lct, LctParams, LctPlan, Reflectance};
 

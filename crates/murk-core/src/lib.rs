@@ -32,7 +32,7 @@ pub use limits::{non_finite, short, Limits};
 pub use named::Named;
 pub use points::{PointLayout, PointSet, RegularGrid};
 pub use progress::{NoProgress, Progress};
-pub use reconstruction::Reconstruction;
+pub use reconstruction::{Reconstruction, Reconstructor};
 pub use truth::GroundTruth;
 pub use volume::{Axis, Volume};
 

@@ -13,7 +13,6 @@ pub mod medium;
 mod pf_exact;
 mod pf_fast;
 mod phase;
-pub mod pipeline;
 mod resample;
 pub mod spectrum;
 
@@ -102,6 +101,12 @@ pub enum PfForm {
     Exact,
 }
 
+impl murk_core::Named for PfForm {
+    const WHAT: &'static str = "form";
+    const CHOICES: &'static [(&'static str, Self)] =
+        &[("fast", Self::Fast), ("exact", Self::Exact)];
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PfParams {
     pub wavelength: Wavelength,
@@ -171,8 +176,9 @@ pub struct ReconInfo {
     /// The fast form's depth slabs, each with its own time window: (planes, frequencies, DFT length).
     /// Their planes are the ones evaluated, which may be every other one (see [`Lateral::Propagating`]).
     pub slabs: Vec<Slab>,
-    /// "fast" or "exact" (the fast path falls back to exact when the capture is not a planar grid).
-    pub evaluated_with: &'static str,
+    /// The form evaluated: the fast one falls back to the exact one when the capture is not a planar
+    /// grid.
+    pub evaluated_with: PfForm,
     pub warnings: Vec<String>,
 }
 
@@ -193,7 +199,10 @@ impl ReconInfo {
         vec![
             (
                 "method".into(),
-                format!("Phasor Fields ({} form)", self.evaluated_with),
+                format!(
+                    "Phasor Fields ({} form)",
+                    murk_core::Named::name(self.evaluated_with)
+                ),
             ),
             ("wavelength_m".into(), format!("{:.6}", self.wavelength_m)),
             ("sigma_m".into(), format!("{:.6}", self.sigma_m)),
@@ -381,7 +390,7 @@ impl PfPlan {
         let (values, evaluated_with, slabs) = match &self.fast {
             Some(plan) => {
                 let (values, slabs) = plan.run(cap, self.sigma_m, self.wavelength_m, progress)?;
-                (values, "fast", slabs)
+                (values, PfForm::Fast, slabs)
             }
             None => {
                 let spectra = spectrum::spectra(cap, std::slice::from_ref(&self.window));
@@ -392,7 +401,7 @@ impl PfPlan {
                     self.params.falloff,
                     progress,
                 );
-                (values, "exact", Vec::new())
+                (values, PfForm::Exact, Vec::new())
             }
         };
         Ok(Field {
@@ -415,7 +424,7 @@ impl PfPlan {
     pub fn run(&self, cap: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
         let f = self.field(cap, progress)?;
         let mut rows = f.info.rows();
-        if f.info.evaluated_with == "fast" {
+        if f.info.evaluated_with == PfForm::Fast {
             rows.push((
                 "lateral".into(),
                 murk_core::Named::name(self.params.lateral).to_string(),
@@ -437,6 +446,12 @@ impl PfPlan {
             rows,
             warnings: f.info.warnings,
         })
+    }
+}
+
+impl murk_core::Reconstructor for PfPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        self.run(capture, progress)
     }
 }
 

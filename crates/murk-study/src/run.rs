@@ -4,7 +4,7 @@
 use crate::metrics::{self, IouScores};
 use crate::plan::{CaptureJob, Cell, Format, Plan, SceneKind};
 use murk_core::{Capture, Error, GroundTruth, Result, Volume};
-use murk_recon::pipeline::{self, Method, Request, VolumeSpec};
+use murk_methods::{Method, Options, Request, VolumeSpec};
 use murk_recon::{Compensation, NoProgress, PfForm, PfParams, Wavelength};
 use murk_render::{merge, RenderOptions};
 use murk_view::{views, Plane, Views};
@@ -551,9 +551,9 @@ fn aware_intensity(
     };
     let req = Request {
         volume: VolumeSpec::Given(*volume),
-        ..Request::new(Method::Pf(params))
+        ..Request::new(Method::named("pf", &Options::from_pf(&params))?)
     };
-    let rec = pipeline::run(cap.clone(), &req, &NoProgress)?;
+    let rec = murk_methods::run(cap.clone(), &req, &NoProgress)?;
     Ok(Aware {
         intensity: rec.intensity,
         estimate,

@@ -9,6 +9,7 @@
 mod layout;
 mod request;
 mod targets;
+pub mod testutil;
 
 pub use layout::{CaptureLayout, LayoutKind};
 pub use request::{floats, synthesize, Synthesis};
