@@ -37,12 +37,14 @@
 //! # Ok::<(), murk_core::Error>(())
 //! ```
 
+mod args;
 mod depth;
 mod method;
 mod plan;
 mod request;
 mod table;
 
+pub use args::RequestArgs;
 pub use depth::{default_volume, search_depth};
 pub use method::{Method, Options};
 pub use plan::{run, run_with, ReconPlan};

@@ -195,3 +195,103 @@ fn the_table_names_each_method_once_and_every_knob_has_a_reader() {
         "slab parameters are read only by cdt and by t-offset 'slab'; fk would ignore them"
     );
 }
+
+/// The front ends' arguments at `murk reconstruct`'s defaults.
+fn default_args() -> RequestArgs {
+    RequestArgs {
+        method: "pf".into(),
+        volume: None,
+        wavelength_m: None,
+        wavefactor: None,
+        cycles: 4.0,
+        compensate: None,
+        mu_t_per_m: None,
+        albedo: None,
+        falloff: "none".into(),
+        lateral: "propagating".into(),
+        snr: None,
+        weighting: "diffuse".into(),
+        slab: murk_baselines::SlabParams::default(),
+        medium: murk_baselines::BmmParams::default(),
+        t_offset: None,
+        gate: Gate::Auto,
+        window_end: "auto".into(),
+        medium_removal: "auto".into(),
+        depth_search: "auto".into(),
+    }
+}
+
+/// The defaults make `Request::new`'s request; each knob reaches the options under its name; both
+/// wavelengths, or a compensation without μt, are refused (an unknown compensation named first).
+#[test]
+fn request_args_make_the_request() {
+    let pf = Method::named("pf", &Options::default()).unwrap();
+    assert_eq!(default_args().request().unwrap(), Request::new(pf));
+    let given = RequestArgs {
+        method: "pf-exact".into(),
+        volume: Some("-0.5:0.5:3,-0.5:0.5:3,0.4:0.6:3".into()),
+        wavefactor: Some(6.0),
+        compensate: Some("paper".into()),
+        mu_t_per_m: Some(1.0),
+        albedo: Some(0.5),
+        falloff: "inv-r".into(),
+        t_offset: Some("0.25".into()),
+        window_end: "keep".into(),
+        ..default_args()
+    };
+    let req = given.request().unwrap();
+    let o = req.method.options();
+    assert_eq!(req.method.name(), "pf-exact");
+    assert_eq!(o.wavelength, Some(murk_recon::Wavelength::WallFactor(6.0)));
+    assert_eq!(
+        o.compensation,
+        Compensation::Paper {
+            mu_t_per_m: 1.0,
+            albedo: 0.5
+        }
+    );
+    assert_eq!(o.falloff, murk_recon::Falloff::InvR);
+    assert_eq!(req.t_offset, TOffset::Metres(0.25));
+    assert_eq!(req.window_end, murk_core::window::WindowEnd::Keep);
+    assert!(matches!(req.volume, VolumeSpec::Given(v) if v.z.n == 3));
+    let none = RequestArgs {
+        compensate: Some("none".into()),
+        mu_t_per_m: Some(1.0),
+        ..default_args()
+    };
+    assert_eq!(none.options().unwrap().compensation, Compensation::None);
+    for (args, want) in [
+        (
+            RequestArgs {
+                wavelength_m: Some(0.1),
+                wavefactor: Some(4.0),
+                ..default_args()
+            },
+            "give wavelength or wavefactor, not both",
+        ),
+        (
+            RequestArgs {
+                compensate: Some("paper".into()),
+                ..default_args()
+            },
+            "compensate needs mu_t",
+        ),
+        (
+            RequestArgs {
+                compensate: Some("papr".into()),
+                ..default_args()
+            },
+            "compensate 'papr': expected",
+        ),
+        (
+            RequestArgs {
+                lateral: "some".into(),
+                ..default_args()
+            },
+            "lateral 'some': expected propagating, full",
+        ),
+    ] {
+        let e = args.request().unwrap_err().to_string();
+        assert!(e.starts_with(want), "{e}");
+    }
+}
