@@ -230,7 +230,7 @@ impl ReconPlan {
 }
 
 /// Runs `req` on `cap` (plans and runs). With the default volume, a method on a volume and a capture
-/// whose early bins are a medium's response, the depth range is first searched ([`medium::search`]).
+/// whose early bins are a medium's response, the depth range is first searched ([`murk_recon::medium::search`]).
 pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Reconstruction> {
     run_with(cap, req, None, progress)
 }

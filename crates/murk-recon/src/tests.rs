@@ -350,7 +350,7 @@ fn fast_matches_frequency_domain_oracle_on_the_lattice() {
     };
     let cap = random_capture();
     assert!(
-        !pf_fast::Plan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
+        !pf_fast::FastPlan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
             .unwrap()
             .folds()
     );
@@ -440,7 +440,7 @@ fn kaiser_bessel_reads_match_the_oracle() {
         z: Axis::new(0.45, 0.55, 3),
     };
     for lateral in [Lateral::Propagating, Lateral::Full] {
-        let plan = pf_fast::Plan::new(&cap, cap.kind(), &vol, Falloff::None, lateral).unwrap();
+        let plan = pf_fast::FastPlan::new(&cap, cap.kind(), &vol, Falloff::None, lateral).unwrap();
         // The band's centre wavenumber on the nearest plane (the wall is at z = 0).
         let k = 2.0 * std::f64::consts::PI / PfParams::default().wavelength_m(&cap).unwrap();
         assert_eq!(
@@ -508,7 +508,7 @@ fn fast_matches_frequency_domain_oracle_on_centred_volumes() {
         ),
     ] {
         assert!(
-            pf_fast::Plan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
+            pf_fast::FastPlan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
                 .unwrap()
                 .folds()
         );

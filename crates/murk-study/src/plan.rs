@@ -302,7 +302,7 @@ pub(crate) fn cell_label(figure: Figure, row: &str, col: &str) -> String {
 
 /// The whole study: cells over capture jobs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Plan {
+pub struct StudyPlan {
     pub scale: Scale,
     pub seeds: u64,
     pub shards: usize,
@@ -337,8 +337,8 @@ fn fmt_num(v: f64) -> String {
     }
 }
 
-impl Plan {
-    pub fn new(opt: &StudyOptions) -> Result<Plan> {
+impl StudyPlan {
+    pub fn new(opt: &StudyOptions) -> Result<StudyPlan> {
         if opt.seeds == 0 || opt.seeds > 64 {
             return Err(Error::param(format!(
                 "seeds must be in 1..=64, got {}",
@@ -360,7 +360,7 @@ impl Plan {
                 opt.shards
             )));
         }
-        let mut plan = Plan {
+        let mut plan = StudyPlan {
             scale: opt.scale,
             seeds: opt.seeds,
             shards: opt.shards,
@@ -534,7 +534,7 @@ impl Plan {
             albedo: albedos.iter().copied().fold(medium.albedo, f64::max),
             ..medium
         };
-        let set = Plan::overrides(opt, scene, traced);
+        let set = StudyPlan::overrides(opt, scene, traced);
         let resolved = load_scene(&opt.scenes_dir, scene, &set)?;
         let render = murk_render::Plan::with_albedos(&resolved, sweep(albedos))?;
         let spp = opt.spp.unwrap_or(Format::of(scene, opt.scale).spp);
@@ -750,7 +750,7 @@ mod tests {
         let metres = |scale: Scale, figure: Figure| -> Vec<f64> {
             let mut opt = options(&[figure], 1, 1);
             opt.scale = scale;
-            let plan = Plan::new(&opt).unwrap();
+            let plan = StudyPlan::new(&opt).unwrap();
             plan.cells
                 .iter()
                 .map(|c| c.wall_factor(scale) * 2.0 / Format::of(c.scene, scale).grid as f64)
@@ -781,12 +781,12 @@ mod tests {
         std::fs::copy(here, dir.join("z-letter.toml")).unwrap();
         let mut opt = options(&[Figure::Fig3a, Figure::Fig4], 1, 1);
         opt.scenes_dir = dir.clone();
-        assert!(Plan::new(&opt).is_ok());
+        assert!(StudyPlan::new(&opt).is_ok());
         opt.only = vec![Figure::Fig5];
-        let e = Plan::new(&opt).unwrap_err().to_string();
+        let e = StudyPlan::new(&opt).unwrap_err().to_string();
         assert!(e.contains("no shelf.toml in this scenes folder"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
-        let e = Plan::new(&opt).unwrap_err().to_string();
+        let e = StudyPlan::new(&opt).unwrap_err().to_string();
         assert!(
             e.contains(": no such scenes folder (the study reads z-letter.toml"),
             "{e}"
@@ -798,7 +798,7 @@ mod tests {
     /// each row of albedos is one sweep.
     #[test]
     fn cells_share_captures() {
-        let plan = Plan::new(&options(&[], 1, 1)).unwrap();
+        let plan = StudyPlan::new(&options(&[], 1, 1)).unwrap();
         let count = |f: Figure| plan.cells.iter().filter(|c| c.figure == f).count();
         assert_eq!(
             Figure::ALL.map(count),
@@ -858,7 +858,7 @@ mod tests {
     /// carry the overrides, seed and shard.
     #[test]
     fn tasks_and_commands() {
-        let mut plan = Plan::new(&options(&[Figure::Fig3a], 2, 3)).unwrap();
+        let mut plan = StudyPlan::new(&options(&[Figure::Fig3a], 2, 3)).unwrap();
         assert_eq!(plan.captures.len(), 2);
         assert_eq!(plan.n_tasks(), 6);
         let mut ids: Vec<&String> = plan
@@ -900,7 +900,7 @@ mod tests {
         plan.retain_cells(|_| false);
         assert!(plan.captures.is_empty());
         // A row of Fig. 3b is one task that renders every albedo; one cell alone is a plain render.
-        let row = Plan::new(&StudyOptions {
+        let row = StudyPlan::new(&StudyOptions {
             cells: vec!["μt = 2".into()],
             ..options(&[Figure::Fig3b], 1, 1)
         })
@@ -912,7 +912,7 @@ mod tests {
         let id = &row.captures[0].id;
         assert_eq!(row.cells[2].captures, [format!("{id}-albedo0.5")]);
         assert!(cmd.contains(&format!("/out/renders/{id}.h5 ")), "{cmd}");
-        let one = Plan::new(&StudyOptions {
+        let one = StudyPlan::new(&StudyOptions {
             cells: vec!["μt = 2 α = 0.5".into()],
             ..options(&[Figure::Fig3b], 1, 1)
         })
@@ -924,9 +924,9 @@ mod tests {
         );
         assert_eq!(one.cells[0].captures, [one.captures[0].id.clone()]);
         // Every label that progress prints selects its cell, Fig. 4's and 5's (no row) too.
-        let all = Plan::new(&options(&Figure::ALL, 1, 1)).unwrap();
+        let all = StudyPlan::new(&options(&Figure::ALL, 1, 1)).unwrap();
         for label in all.cells.iter().map(Cell::label) {
-            let picked = Plan::new(&StudyOptions {
+            let picked = StudyPlan::new(&StudyOptions {
                 cells: vec![label.clone()],
                 ..options(&Figure::ALL, 1, 1)
             })
@@ -934,7 +934,7 @@ mod tests {
             assert_eq!(picked.cells.len(), 1, "{label}");
             assert_eq!(picked.cells[0].label(), label);
         }
-        assert!(Plan::new(&options(&[], 0, 1)).is_err());
+        assert!(StudyPlan::new(&options(&[], 0, 1)).is_err());
         assert!(Figure::parse("fig9")
             .unwrap_err()
             .to_string()
