@@ -15,6 +15,7 @@
 //! let index = murk_study::run_study(std::path::Path::new("study"), &opt, &Silent).unwrap();
 //! ```
 
+pub mod cells;
 pub mod demo;
 mod figure_media;
 mod figure_real;

@@ -1,6 +1,7 @@
 //! The study as data: figure cells (what to reconstruct and compare) over render tasks (what to
 //! simulate), each task keyed by the fingerprint of its resolved scene so finished work is found again.
 
+use crate::cells::{CellSpec, NO_MEDIUM};
 use murk_core::{Error, Result};
 use murk_render::{fingerprint, render_outputs, Overrides, Scene};
 use serde::{Deserialize, Serialize};
@@ -368,75 +369,18 @@ impl StudyPlan {
             cells: Vec::new(),
             captures: Vec::new(),
         };
-        let none = MediumParams {
-            mu_t_per_m: 0.0,
-            albedo: 0.5,
-            g: 0.0,
-        };
-        let fog = |mu_t_per_m, albedo, g| MediumParams {
-            mu_t_per_m,
-            albedo,
-            g,
-        };
-        let wanted = |f: Figure| opt.only.is_empty() || opt.only.contains(&f);
-        let mut cells: Vec<(Figure, String, String, SceneKind, MediumParams, f64)> = Vec::new();
-        let z = SceneKind::ZLetter;
-        if wanted(Figure::Fig3a) {
-            cells.push((
-                Figure::Fig3a,
-                "no medium".into(),
-                String::new(),
-                z,
-                none,
-                1.0,
-            ));
-        }
-        if wanted(Figure::Fig3b) {
-            for mu_t in [0.5, 1.0, 2.0] {
-                for a in ALBEDOS {
-                    let (r, c) = (format!("μt = {mu_t}"), format!("α = {a}"));
-                    cells.push((Figure::Fig3b, r, c, z, fog(mu_t, a, 0.0), 1.0));
-                }
-            }
-        }
-        if wanted(Figure::Fig3c) {
-            for g in [0.7, 0.0, -0.7] {
-                for a in ALBEDOS {
-                    let (r, c) = (format!("g = {g}"), format!("α = {a}"));
-                    cells.push((Figure::Fig3c, r, c, z, fog(1.0, a, g), 1.0));
-                }
-            }
-        }
-        if wanted(Figure::Fig4) {
-            for k in [1.0, 2.0, 3.0] {
-                let c = if k == 1.0 {
-                    "λ = λ0".to_string()
-                } else {
-                    format!("λ = {k}λ0")
-                };
-                cells.push((Figure::Fig4, String::new(), c, z, fog(1.0, 0.83, 0.0), k));
-            }
-        }
-        if wanted(Figure::Fig5) {
-            for mu_t in [0.0, 1.0, 1.5] {
-                let c = if mu_t == 0.0 {
-                    "no medium".to_string()
-                } else {
-                    format!("μt = {mu_t}")
-                };
-                let m = MediumParams {
-                    mu_t_per_m: mu_t,
-                    ..none
-                };
-                cells.push((Figure::Fig5, String::new(), c, SceneKind::Shelf, m, 1.0));
-            }
-        }
-        cells.retain(|(f, r, c, ..)| {
+        let none = NO_MEDIUM;
+        let mut cells: Vec<CellSpec> = Figure::ALL
+            .into_iter()
+            .filter(|f| opt.only.is_empty() || opt.only.contains(f))
+            .flat_map(Figure::cells)
+            .collect();
+        cells.retain(|c| {
             opt.cells.is_empty()
                 || opt
                     .cells
                     .iter()
-                    .any(|k| holds_words(&cell_label(*f, r, c), k))
+                    .any(|k| holds_words(&cell_label(c.figure, &c.row, &c.col), k))
         });
         if cells.is_empty() {
             return Err(Error::param(format!(
@@ -453,7 +397,7 @@ impl StudyPlan {
         }
         // Only the scenes the chosen cells render.
         for scene in [SceneKind::ZLetter, SceneKind::Shelf] {
-            let used = cells.iter().any(|(.., k, _, _)| *k == scene);
+            let used = cells.iter().any(|c| c.scene == scene);
             if used && !opt.scenes_dir.join(scene.file()).is_file() {
                 return Err(Error::param(format!(
                     "{}: no {} in this scenes folder",
@@ -465,8 +409,9 @@ impl StudyPlan {
         // Cells whose fog differs only in albedo share one render, an albedo sweep: its paths do not
         // depend on the albedo, so the tracing is paid once per row (docs/study.md).
         let mut sweeps: Vec<((SceneKind, u64, u64), Vec<f64>)> = Vec::new();
-        for (.., scene, m, _) in cells.iter().filter(|c| c.4.mu_t_per_m > 0.0) {
-            let key = (*scene, m.mu_t_per_m.to_bits(), m.g.to_bits());
+        for c in cells.iter().filter(|c| c.medium.mu_t_per_m > 0.0) {
+            let (scene, m) = (c.scene, &c.medium);
+            let key = (scene, m.mu_t_per_m.to_bits(), m.g.to_bits());
             match sweeps.iter_mut().find(|(k, _)| *k == key) {
                 Some((_, a)) if !a.contains(&m.albedo) => a.push(m.albedo),
                 Some(_) => {}
@@ -483,7 +428,15 @@ impl StudyPlan {
                 .find(|(k, a)| *k == key && a.len() > 1)
                 .map_or_else(Vec::new, |(_, a)| a.clone())
         };
-        for (figure, row, col, scene, medium, lambda_factor) in cells {
+        for CellSpec {
+            figure,
+            row,
+            col,
+            scene,
+            medium,
+            lambda_factor,
+        } in cells
+        {
             let albedos = sweep_of(scene, medium);
             let captures = (0..opt.seeds)
                 .map(|s| plan.capture(opt, scene, medium, &albedos, s))
