@@ -81,6 +81,7 @@ __all__ = [
     "render_albedos",
     "merge",
     "reconstruct",
+    "methods",
     "estimate_medium",
     "Error",
     "InputError",
@@ -453,6 +454,15 @@ def reconstruct(
     )
     x, y, z = axes
     return Reconstruction(intensity, x, y, z, dict(rows), list(warnings))
+
+
+def methods() -> Dict[str, str]:
+    """The methods ``reconstruct`` takes, each with a line about it: the library's table, as
+    ``murk reconstruct --help`` lists it.
+
+    >>> "cdt" in murk.methods()
+    """
+    return dict(_murk.methods())
 
 
 def estimate_medium(

@@ -210,6 +210,7 @@ fn _murk(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ops::study_plan, m)?)?;
     m.add_function(wrap_pyfunction!(ops::run_study, m)?)?;
     m.add_function(wrap_pyfunction!(recon::reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(recon::methods, m)?)?;
     m.add_function(wrap_pyfunction!(medium::estimate_medium, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -1,14 +1,12 @@
-//! `murk.reconstruct`: `murk_recon::pipeline::run_with`, the call behind `murk reconstruct`.
+//! `murk.reconstruct`: `murk_methods::run_with`, the call behind `murk reconstruct`.
 
 use crate::capture::Source;
 use crate::compute;
-use murk_baselines::{BmmParams, Reflectance, SlabParams};
-use murk_core::window::WindowEnd;
-use murk_core::{Error, Named, Result, Volume};
+use murk_baselines::{BmmParams, SlabParams};
+use murk_core::{Error, Named, Result};
+use murk_methods::{Gate, Request, RequestArgs};
 use murk_recon::medium::removal::Predicted;
-use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
-use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
-use murk_recon::{Compensation, Falloff, Lateral, Wavelength};
+use murk_recon::medium::MediumRemoval;
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 
@@ -45,24 +43,48 @@ pub struct Args {
 }
 
 impl Args {
-    /// The library request for a capture of `kind`, as `murk reconstruct` builds it from its flags.
-    fn request(&self, kind: murk_core::CaptureKind) -> Result<Request> {
-        let o = self.options()?;
-        let method = Method::from_name(&self.method, kind, &o)?;
-        Ok(Request {
-            method,
-            volume: match &self.volume {
-                Some(spec) => VolumeSpec::Given(Volume::parse(spec)?),
-                None => VolumeSpec::Default,
+    /// The library request, as `murk reconstruct` builds it from its flags.
+    fn request(&self) -> Result<Request> {
+        // As the CLI's --mu-t and --albedo: read by a compensation or the model removal, else refused.
+        let uncompensated = matches!(self.compensate.as_deref(), None | Some("none"));
+        if uncompensated && (self.mu_t.is_some() || self.albedo.is_some()) && !self.model()? {
+            return Err(Error::param(
+                "mu_t and albedo are read by a compensation (paper or ballistic) or medium_removal='model' only; they would be ignored",
+            ));
+        }
+        let (thickness_m, mu_a_per_m, mu_s_prime_per_m, n) = self.slab;
+        RequestArgs {
+            method: self.method.clone(),
+            volume: self.volume.clone(),
+            wavelength_m: self.wavelength,
+            wavefactor: self.wavefactor,
+            cycles: self.cycles,
+            compensate: self.compensate.clone(),
+            mu_t_per_m: self.mu_t,
+            albedo: self.albedo,
+            falloff: self.falloff.clone(),
+            lateral: self.lateral.clone(),
+            snr: self.snr,
+            weighting: self.weighting.clone(),
+            slab: SlabParams {
+                thickness_m,
+                mu_a_per_m,
+                mu_s_prime_per_m,
+                n,
+                ..Default::default()
             },
-            t_offset: TOffset::parse(self.t_offset.as_deref(), &o, &method)?,
+            medium: BmmParams {
+                n: self.medium.0,
+                mu_s_prime_per_m: self.medium.1,
+                mu_a_per_m: self.medium.2,
+            },
+            t_offset: self.t_offset.clone(),
             gate: self.gate.parse::<Gate>()?,
-            window_end: WindowEnd::named(&self.window_end)?,
-            medium: MediumAware {
-                removal: MediumRemoval::named(&self.medium_removal)?,
-                depth_search: DepthSearch::named(&self.depth_search)?,
-            },
-        })
+            window_end: self.window_end.clone(),
+            medium_removal: self.medium_removal.clone(),
+            depth_search: self.depth_search.clone(),
+        }
+        .request()
     }
 
     fn model(&self) -> Result<bool> {
@@ -89,55 +111,16 @@ impl Args {
         };
         murk_medium::model::for_removal(cap, self.mu_t, self.albedo, estimate.as_deref()).map(Some)
     }
+}
 
-    fn options(&self) -> Result<Options> {
-        let wavelength = match (self.wavelength, self.wavefactor) {
-            (Some(_), Some(_)) => {
-                return Err(Error::param("give wavelength or wavefactor, not both"))
-            }
-            (Some(m), None) => Some(Wavelength::Metres(m)),
-            (None, Some(f)) => Some(Wavelength::WallFactor(f)),
-            (None, None) => None,
-        };
-        // As the CLI's --mu-t and --albedo: read by a compensation or the model removal, else ignored.
-        let compensation = match (self.compensate.as_deref().unwrap_or("none"), self.mu_t) {
-            ("none", None) if self.albedo.is_none() => Compensation::None,
-            ("none", _) if self.model()? => Compensation::None,
-            ("none", _) => {
-                return Err(Error::param(
-                    "mu_t and albedo are read by a compensation (paper or ballistic) or medium_removal='model' only; they would be ignored",
-                ))
-            }
-            (c, None) => {
-                // An unknown name is named first.
-                Compensation::named(c, 0.0, self.albedo)?;
-                return Err(Error::param("compensate needs mu_t"));
-            }
-            (c, Some(mu_t)) => Compensation::named(c, mu_t, self.albedo)?,
-        };
-        let (thickness_m, mu_a_per_m, mu_s_prime_per_m, n) = self.slab;
-        Ok(Options {
-            wavelength,
-            cycles: self.cycles,
-            falloff: Falloff::named(&self.falloff)?,
-            compensation,
-            lateral: Lateral::named(&self.lateral)?,
-            snr: self.snr,
-            reflectance: Reflectance::named(&self.weighting)?,
-            slab: SlabParams {
-                thickness_m,
-                mu_a_per_m,
-                mu_s_prime_per_m,
-                n,
-                ..Default::default()
-            },
-            medium: BmmParams {
-                n: self.medium.0,
-                mu_s_prime_per_m: self.medium.1,
-                mu_a_per_m: self.medium.2,
-            },
-        })
-    }
+/// Every method `reconstruct` takes, with a line about it: the library's table, as `murk
+/// reconstruct --help` lists it.
+#[pyfunction]
+pub fn methods() -> Vec<(&'static str, &'static str)> {
+    murk_methods::METHODS
+        .iter()
+        .map(|m| (m.name, m.help))
+        .collect()
 }
 
 /// Runs one reconstruction; returns (intensity [nx, ny, nz] float32 without a copy, (x, y, z), rows,
@@ -154,9 +137,9 @@ pub fn reconstruct<'py>(
     let source = Source::of(capture)?;
     let out = compute(py, progress, threads, |t| {
         let cap = source.owned()?;
-        let req = args.request(cap.kind())?;
+        let req = args.request()?;
         let predicted = args.predicted(&cap)?;
-        pipeline::run_with(cap, &req, predicted, t)
+        murk_methods::run_with(cap, &req, predicted, t)
     })?;
     let v = out.volume;
     let intensity = PyArray1::from_vec(py, out.intensity).reshape(v.shape().to_vec())?;

@@ -100,3 +100,13 @@ def test_progress_true_draws_a_bar_per_stage(capsys):
         update(done, total)
     err = capsys.readouterr().err
     assert "1000/1000" in err and "3000/3000" in err, err
+
+
+def test_methods_are_the_clis():
+    # One table in the library: murk.methods() lists what --method takes, in --help's order.
+    methods = murk.methods()
+    assert list(methods)[:4] == ["pf", "pf-exact", "bp", "fbp"] and "cdt" in methods
+    assert {case[1] for case in CASES} <= set(methods)
+    text = cli("reconstruct", "--help")
+    for name, line in methods.items():
+        assert f"- {name}:" in text and line.split(" (")[0] in text, name

@@ -4,17 +4,16 @@ use crate::cmd::progress::{say, Bar};
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use murk_baselines::{BmmParams, SlabParams};
-use murk_core::{CaptureKind, Named, Volume};
-use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
-use murk_recon::pipeline::{self, Gate, Method, Options, Request, TOffset, VolumeSpec};
-use murk_recon::{Compensation, Wavelength};
+use murk_methods::{Gate, Request, RequestArgs, METHODS};
 use murk_view::pictures;
 use std::path::PathBuf;
 
 /// `--method`'s values, with their help, from the library's list.
 fn method_names() -> clap::builder::PossibleValuesParser {
     clap::builder::PossibleValuesParser::new(
-        Method::NAMES.map(|(name, help)| clap::builder::PossibleValue::new(name).help(help)),
+        METHODS
+            .iter()
+            .map(|m| clap::builder::PossibleValue::new(m.name).help(m.help)),
     )
 }
 
@@ -162,13 +161,13 @@ pub enum WindowEndArg {
     Keep,
 }
 
-/// The library's value for a choice the parser accepted: the flags' value names are the library's
-/// own (`value_names_are_the_librarys` checks), so the CLI keeps only their help texts.
-fn library<T: Named>(choice: impl ValueEnum) -> anyhow::Result<T> {
+/// The library's name of a choice the parser accepted: the flags' value names are the library's own
+/// (`value_names_are_the_librarys` checks), so the CLI keeps only their help texts.
+fn name(choice: impl ValueEnum) -> anyhow::Result<String> {
     let value = choice
         .to_possible_value()
         .context("a choice without a name")?;
-    Ok(T::named(value.get_name())?)
+    Ok(value.get_name().to_string())
 }
 
 /// The scattering slab in front of the scene (CDT; `--t-offset slab`). Defaults: the 2.54 cm foam
@@ -224,57 +223,37 @@ impl SlabArgs {
 }
 
 impl ReconstructArgs {
-    /// The library request these arguments make for `cap`.
-    pub fn request(&self, kind: CaptureKind) -> anyhow::Result<Request> {
-        let o = self.options()?;
-        let method = Method::from_name(&self.method, kind, &o)?;
-        Ok(Request {
-            method,
-            volume: match &self.volume {
-                Some(spec) => VolumeSpec::Given(Volume::parse(spec)?),
-                None => VolumeSpec::Default,
-            },
-            t_offset: TOffset::parse(self.t_offset.as_deref(), &o, &method)?,
-            gate: self.gate.parse::<Gate>().context("--gate")?,
-            window_end: library(self.window_end)?,
-            medium: MediumAware {
-                removal: library::<MediumRemoval>(self.medium_removal)?,
-                depth_search: library::<DepthSearch>(self.depth_search)?,
-            },
-        })
+    /// The library request these arguments make.
+    pub fn request(&self) -> anyhow::Result<Request> {
+        Ok(self.request_args()?.request()?)
     }
 
-    /// The method options these arguments set.
-    pub fn options(&self) -> anyhow::Result<Options> {
-        let wavelength = match (self.wavelength, self.wavefactor) {
-            (Some(m), _) => Some(Wavelength::Metres(m)),
-            (None, Some(f)) => Some(Wavelength::WallFactor(f)),
-            (None, None) => None,
-        };
-        let compensation = match self.compensate {
-            None => Compensation::None,
-            Some(c) => Compensation::named(
-                c.to_possible_value()
-                    .context("a choice without a name")?
-                    .get_name(),
-                self.mu_t_per_m.unwrap_or(0.0),
-                self.albedo,
-            )?,
-        };
-        Ok(Options {
-            wavelength,
+    /// The arguments as the library takes them from the CLI and Python alike.
+    fn request_args(&self) -> anyhow::Result<RequestArgs> {
+        Ok(RequestArgs {
+            method: self.method.clone(),
+            volume: self.volume.clone(),
+            wavelength_m: self.wavelength,
+            wavefactor: self.wavefactor,
             cycles: self.cycles,
-            falloff: library(self.falloff)?,
-            compensation,
-            lateral: library(self.lateral)?,
+            compensate: self.compensate.map(name).transpose()?,
+            mu_t_per_m: self.mu_t_per_m,
+            albedo: self.albedo,
+            falloff: name(self.falloff)?,
+            lateral: name(self.lateral)?,
             snr: self.slab.snr,
-            reflectance: library(self.slab.weighting)?,
+            weighting: name(self.slab.weighting)?,
             slab: self.slab.slab(),
             medium: BmmParams {
                 n: self.slab.medium_n,
                 mu_s_prime_per_m: self.slab.medium_musp,
                 mu_a_per_m: self.slab.medium_mua,
             },
+            t_offset: self.t_offset.clone(),
+            gate: self.gate.parse::<Gate>().context("--gate")?,
+            window_end: name(self.window_end)?,
+            medium_removal: name(self.medium_removal)?,
+            depth_search: name(self.depth_search)?,
         })
     }
 }
@@ -317,10 +296,10 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         ),
         false => None,
     };
-    let req = a.request(kind)?;
+    let req = a.request()?;
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
-    let mut out = pipeline::run_with(cap, &req, predicted, &bar)
+    let mut out = murk_methods::run_with(cap, &req, predicted, &bar)
         .with_context(|| a.file.display().to_string())?;
     out.rows
         .extend(compensated_with.map(|line| ("compensated with".to_string(), line)));
@@ -415,6 +394,9 @@ mod tests {
     use super::*;
     use murk_baselines::Reflectance;
     use murk_core::window::WindowEnd;
+    use murk_core::Named;
+    use murk_recon::medium::{DepthSearch, MediumRemoval};
+    use murk_recon::Compensation;
     use murk_recon::{Falloff, Lateral};
 
     fn names<T: ValueEnum>() -> Vec<String> {

@@ -124,6 +124,19 @@ const END_LEVEL: f32 = 0.01;
 /// a measurable trace by the window's end.
 const REACH_EXPONENT: f64 = 16.0;
 
+/// The boundary migration model for captures of one geometry: its window and inversion are measured
+/// on each capture, so its plan is the parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BmmPlan {
+    pub params: BmmParams,
+}
+
+impl murk_core::Reconstructor for BmmPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        bmm_with(capture, self.params, progress)
+    }
+}
+
 /// One-shot boundary migration (the window, the inversion and the migration are per capture).
 pub fn bmm(capture: &Capture, params: BmmParams) -> Result<Reconstruction> {
     bmm_with(capture, params, &NoProgress)

@@ -20,6 +20,19 @@ pub struct BpOptions {
     pub inverse_square: bool,
 }
 
+/// Backprojection on one volume: it plans nothing ahead, so its plan is the volume and the options.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BpPlan {
+    pub volume: Volume,
+    pub options: BpOptions,
+}
+
+impl murk_core::Reconstructor for BpPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        backproject_with(capture, &self.volume, self.options, progress)
+    }
+}
+
 /// Backprojects `capture` into `volume`; output in the volume's C order [nx, ny, nz].
 pub fn backproject(capture: &Capture, volume: &Volume, opts: BpOptions) -> Result<Reconstruction> {
     backproject_with(capture, volume, opts, &NoProgress)

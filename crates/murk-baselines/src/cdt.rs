@@ -200,6 +200,12 @@ pub struct CdtPlan {
     filter: Vec<C32>,
 }
 
+impl murk_core::Reconstructor for CdtPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        self.run(capture, progress)
+    }
+}
+
 impl CdtPlan {
     /// Plans for captures of `capture`'s geometry, reporting the kernel's transforms to `progress`
     /// (stopped when it asks).

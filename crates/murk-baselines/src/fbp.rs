@@ -26,6 +26,19 @@ pub struct FbpOptions {
     pub filter: FbpFilter,
 }
 
+/// Filtered backprojection on one volume: as [`crate::BpPlan`], its plan is the volume and the options.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FbpPlan {
+    pub volume: Volume,
+    pub options: FbpOptions,
+}
+
+impl murk_core::Reconstructor for FbpPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        fbp_with(capture, &self.volume, self.options, progress)
+    }
+}
+
 pub fn fbp(capture: &Capture, volume: &Volume, opts: FbpOptions) -> Result<Reconstruction> {
     fbp_with(capture, volume, opts, &NoProgress)
 }
@@ -61,7 +74,7 @@ pub fn fbp_with(
 }
 
 /// ∇²G on a 5×5×5 grid (σ = 1 voxel): G (normalised to sum 1) times (r² − 3σ²)/σ⁴, minus its mean
-/// so that it sums to zero (flat regions filter to 0). C order [x][y][z].
+/// so that it sums to zero (flat regions filter to 0). C order `[x][y][z]`.
 pub fn laplacian_of_gaussian_kernel() -> [f32; 125] {
     let mut g = [0.0f64; 125];
     let mut r2 = [0.0f64; 125];

@@ -32,6 +32,12 @@ pub struct FkPlan {
     stolt: Stolt,
 }
 
+impl murk_core::Reconstructor for FkPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        self.run(capture, progress)
+    }
+}
+
 impl FkPlan {
     pub fn new(capture: &Capture, params: FkParams) -> Result<Self> {
         let geom = ConfocalGeometry::new(capture, params.grid)?;

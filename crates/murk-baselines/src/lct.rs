@@ -63,6 +63,12 @@ pub struct LctPlan {
     resampler: Resampler,
 }
 
+impl murk_core::Reconstructor for LctPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        self.run(capture, progress)
+    }
+}
+
 impl LctPlan {
     /// Plans for captures of `capture`'s geometry. The kernel's spectrum is a pass through a grid
     /// as large as a run's, so it reports to `progress` and stops when asked.

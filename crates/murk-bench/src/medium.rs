@@ -7,15 +7,15 @@
 use crate::say;
 use anyhow::Context;
 use murk_core::NoProgress;
+use murk_methods::{Method, Options, Request};
 use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
-use murk_recon::pipeline::{self, Method, Options, Request};
 use std::path::Path;
 use std::time::Instant;
 
 pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
     let ctx = || path.display().to_string();
     let cap = murk_io::read_capture(path)?;
-    let method = Method::from_name("pf", cap.kind(), &Options::default()).with_context(ctx)?;
+    let method = Method::named("pf", &Options::default()).with_context(ctx)?;
     let aware = Request::new(method);
     let plain = Request {
         medium: MediumAware {
@@ -34,11 +34,11 @@ pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
     };
     for _ in 0..runs {
         time(
-            &mut || Ok(pipeline::run(cap.clone(), &plain, &NoProgress).map(drop)?),
+            &mut || Ok(murk_methods::run(cap.clone(), &plain, &NoProgress).map(drop)?),
             &mut t_plain,
         )?;
         time(
-            &mut || Ok(pipeline::run(cap.clone(), &aware, &NoProgress).map(drop)?),
+            &mut || Ok(murk_methods::run(cap.clone(), &aware, &NoProgress).map(drop)?),
             &mut t_aware,
         )?;
         time(

@@ -8,7 +8,7 @@ use anyhow::Context;
 use murk_baselines::{CdtParams, FbpOptions, FkParams, LctParams};
 use murk_core::{Axis, Capture, Volume};
 use murk_io::import::{import, ImportOptions, Preset, BMM_SCENES, CDT_SCENES};
-use murk_recon::pipeline::default_volume;
+use murk_methods::default_volume;
 use murk_recon::{NoProgress, PfForm, PfParams, Wavelength};
 use std::path::Path;
 use std::time::Instant;

@@ -8,6 +8,17 @@
 //! Both sides are symmetric (Helmholtz reciprocity): illumination points and sensor points are two
 //! [`PointSet`]s, and [`Pairing`] says whether H is measured for every (illumination, sensor) pair
 //! or for the i-th illumination point with the i-th sensor point (confocal scans).
+//!
+//! Reconstructions live on a [`Volume`] of voxel centres, stored in C order [nx, ny, nz]:
+//!
+//! ```
+//! use murk_core::Volume;
+//! let v = Volume::parse("-1:1:3,-1:1:3,0.5:1.5:5")?; // x, y, z: from:to:count, metres
+//! assert_eq!(v.len(), 45);
+//! assert_eq!(v.unravel(v.index(2, 1, 4)), (2, 1, 4));
+//! assert_eq!(v.centre(2, 1, 4).to_array(), [1.0, 0.0, 1.5]);
+//! # Ok::<(), murk_core::Error>(())
+//! ```
 
 pub mod buffer;
 mod capture;
@@ -32,7 +43,7 @@ pub use limits::{non_finite, short, Limits};
 pub use named::Named;
 pub use points::{PointLayout, PointSet, RegularGrid};
 pub use progress::{NoProgress, Progress};
-pub use reconstruction::Reconstruction;
+pub use reconstruction::{Reconstruction, Reconstructor};
 pub use truth::GroundTruth;
 pub use volume::{Axis, Volume};
 

@@ -1,6 +1,17 @@
-//! What every reconstruction method returns.
+//! What every reconstruction method returns, and the contract each method's plan meets.
 
-use crate::{CaptureKind, Volume};
+use crate::{Capture, CaptureKind, Progress, Result, Volume};
+
+/// One reconstruction method planned for captures of one geometry ([`Capture::same_geometry`]): what
+/// it builds once (FFT plans, filters, the volume) is made by its constructor, and each capture of
+/// that geometry is then one [`Reconstructor::reconstruct`] call. Every method (Phasor Fields in
+/// `murk-recon`, the baselines in `murk-baselines`) implements it in its own module, so the dispatcher
+/// above them (`murk-methods`) holds plans of any method behind one type.
+pub trait Reconstructor: Send + Sync {
+    /// Reconstructs `capture`, which has the geometry the plan was made for, reporting to `progress`
+    /// and stopping with an error once it is cancelled.
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction>;
+}
 
 /// A reconstructed volume by any method: `intensity[volume.index(ix, iy, iz)]`, C order [nx, ny, nz],
 /// with the rows that say how it was made and the warnings met on the way.

@@ -20,8 +20,8 @@ pub fn error_line(e: &(dyn std::error::Error + 'static)) -> String {
     msg.replace('\n', "\\n").replace('\r', "\\r")
 }
 
-/// clap's message on one line: its lines up to the usage, joined ("the following required arguments
-/// were not provided: --out <OUT>", "invalid value 'x' for '--method <METHOD>' [possible values: …]").
+/// clap's message on one line: its lines up to the usage, joined (`the following required arguments
+/// were not provided: --out <OUT>`, `invalid value 'x' for '--method <METHOD>' [possible values: …]`).
 /// An argument of `args` holding a line break is quoted by clap as it is, so its breaks are written as
 /// `\n` or `\r` first, as [`error_line`] writes them, rather than split into lines.
 pub fn clap_one_line(text: &str, args: impl IntoIterator<Item = std::ffi::OsString>) -> String {

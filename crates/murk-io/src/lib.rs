@@ -7,6 +7,30 @@
 //! Everything is pure Rust (hdf5-pure, and murk's own MATLAB v5 reader): no system HDF5 library. Every error is a
 //! [`murk_core::Error`] whose message is one line naming the file and the problem; declared sizes
 //! are checked before allocating, and writes are atomic (temporary file + rename).
+//!
+//! ```
+//! use murk_core::{Capture, DVec3, Pairing, PointSet, TimeAxis};
+//!
+//! // One laser and one sensor point, four bins of 1/128 m (the file stores the axis as f32, as y-tal
+//! // does: this width survives exactly).
+//! let cap = Capture {
+//!     illum: PointSet::single(DVec3::ZERO),
+//!     sensor: PointSet::single(DVec3::new(0.5, 0.0, 0.0)),
+//!     laser_xyz: None,
+//!     sensor_xyz: None,
+//!     time: TimeAxis { start_m: 0.0, bin_width_m: 0.0078125, bins: 4 },
+//!     t_accounts_first_and_last_bounces: false,
+//!     pairing: Pairing::Product,
+//!     h: vec![0.0, 1.0, 0.5, 0.0],
+//!     scene_info: String::new(),
+//! };
+//! let path = std::env::temp_dir().join(format!("murk-io-doc-{}.h5", std::process::id()));
+//! murk_io::write_capture(&path, &cap)?;
+//! let back = murk_io::read_capture(&path)?;
+//! assert_eq!((back.h, back.time), (cap.h, cap.time));
+//! std::fs::remove_file(&path).ok();
+//! # Ok::<(), murk_core::Error>(())
+//! ```
 
 mod atomic;
 mod describe;
@@ -18,6 +42,8 @@ pub use mat5::{write_mat_v5, MatArray, MatClass};
 mod npy;
 mod scene_info;
 mod tal;
+#[cfg(test)]
+mod testutil;
 mod truth;
 mod volume;
 

@@ -259,7 +259,7 @@ mod tests {
 
     #[test]
     fn non_mat_files_are_named() {
-        let dir = crate::tal::tests::tmpdir("mat");
+        let dir = crate::testutil::tmpdir("mat");
         let p = dir.join("x.mat");
         std::fs::write(&p, b"MATLAB 5.0 MAT-file, truncated").unwrap();
         let e = read_mat_v5_array(&p, "a").unwrap_err().to_string();

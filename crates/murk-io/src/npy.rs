@@ -239,7 +239,7 @@ mod tests {
 
     #[test]
     fn round_trip_and_errors() {
-        let dir = crate::tal::tests::tmpdir("npy");
+        let dir = crate::testutil::tmpdir("npy");
         let p = dir.join("v.npy");
         let data: Vec<f32> = (0..24).map(|i| i as f32 * 0.5 - 3.0).collect();
         write_npy_f32(&p, &[2, 3, 4], &data).unwrap();
@@ -267,7 +267,7 @@ mod tests {
 
     #[test]
     fn other_dtypes_and_fortran_order() {
-        let dir = crate::tal::tests::tmpdir("npy2");
+        let dir = crate::testutil::tmpdir("npy2");
         let p = dir.join("u.npy");
         // numpy.save of np.asfortranarray(np.arange(6, dtype='>u2').reshape(2, 3)).
         let mut header = "{'descr': '>u2', 'fortran_order': True, 'shape': (2, 3), }".to_string();

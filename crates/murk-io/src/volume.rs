@@ -156,7 +156,7 @@ mod tests {
 
     #[test]
     fn volume_reads_back() {
-        let dir = crate::tal::tests::tmpdir("vol");
+        let dir = crate::testutil::tmpdir("vol");
         let p = dir.join("v.h5");
         let data: Vec<f32> = (0..2 * 3 * 4).map(|i| i as f32).collect();
         let attrs = [

@@ -5,8 +5,8 @@ use crate::posterior;
 use crate::table::ResponseTable;
 use crate::Fixed;
 use murk_core::{Capture, Error, Result};
+use murk_methods::{Method, Options, Request};
 use murk_recon::medium::detect::Signature;
-use murk_recon::pipeline::{self, Method, Options, Request};
 use rayon::prelude::*;
 
 /// Which parameters are fitted.
@@ -168,12 +168,12 @@ fn num(v: f64) -> String {
 /// but no earlier than a fifth into the window: in dense media the search can stop at an artefact
 /// near the wall, and a fit needs the bins. Without a plane, 30 % into the window.
 pub fn scene_onset_m(cap: &Capture) -> Result<f64> {
-    let method = Method::from_name("pf", cap.kind(), &Options::default())?;
+    let method = Method::named("pf", &Options::default())?;
     let (_, found) =
-        pipeline::search_depth(cap, &Request::new(method), None, &murk_core::NoProgress)?;
+        murk_methods::search_depth(cap, &Request::new(method), None, &murk_core::NoProgress)?;
     let (start, span) = (cap.time.start_m, cap.time.end_m() - cap.time.start_m);
     let plane = found.filter(|(f, _)| f.volume.is_some()).map(|(f, _)| {
-        let v = pipeline::default_volume(cap).map(|v| murk_core::Volume {
+        let v = murk_methods::default_volume(cap).map(|v| murk_core::Volume {
             z: murk_core::Axis::new(f.z_m, f.z_m, 1),
             ..v
         });

@@ -5,158 +5,44 @@
 //! U(x_v) = Σ_{l,s} a_l a_s (H_ls ∗ P0)(e_l + d_l + d_s + e_s), I = |U|²·K, with the virtual pulse
 //! P0(s) = exp(i2πs/λ)·exp(−s²/2σ²) normalised so its spectrum is 1 at 1/λ, and σ = cycles·λ/6.
 //! Phases are computed in f64, fields stored in f32.
+//!
+//! ```
+//! use murk_core::{DVec3, NoProgress};
+//! use murk_recon::{reconstruct, PfForm, PfParams, Wavelength};
+//! use murk_synth::testutil::{aligned_volume, point_capture};
+//! use murk_synth::LayoutKind;
+//!
+//! // A point 0.5 m behind a 1 m wall scanned confocally on 32² points; PF on the wall's lattice.
+//! let point = DVec3::new(0.1, -0.2, 0.5);
+//! let cap = point_capture(LayoutKind::Confocal, 0.0, false, point);
+//! let params = PfParams {
+//!     wavelength: Wavelength::default_for(cap.kind()),
+//!     ..PfParams::default()
+//! };
+//! let rec = reconstruct(&cap, &aligned_volume(), &params, PfForm::Fast, &NoProgress)?;
+//! let (peak, _) = rec.peak();
+//! assert!((DVec3::from_array(peak) - point).length() < 0.04, "{peak:?}");
+//! # Ok::<(), murk_core::Error>(())
+//! ```
 
 mod cmul;
 mod compensation;
 mod fft2;
 pub mod medium;
+mod params;
 mod pf_exact;
 mod pf_fast;
 mod phase;
-pub mod pipeline;
 mod resample;
 pub mod spectrum;
 
 pub use compensation::Compensation;
+pub use params::{nyquist_factor, Falloff, Lateral, PfForm, PfParams, Wavelength};
 pub use pf_fast::Slab;
 
 use murk_core::{Capture, CaptureKind, DVec3, Error, Reconstruction, Result, Volume};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex32;
-
-/// Virtual wavelength λ of the phasor pulse.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Wavelength {
-    /// λ in metres.
-    Metres(f64),
-    /// λ = factor × the wall's point spacing Δc (the paper uses 4).
-    WallFactor(f64),
-}
-
-impl Wavelength {
-    /// The default for a capture of `kind`: 4Δc of one-way distance, the paper's choice. Confocal
-    /// data's round-trip kernel e^{2ikr} reads λ on the path, twice the distance, so it is 8Δc there.
-    pub fn default_for(kind: CaptureKind) -> Wavelength {
-        Wavelength::WallFactor(2.0 * nyquist_factor(kind))
-    }
-}
-
-/// The smallest wavefactor a wall sampled every Δc supports: 2, or 4 for confocal data, whose
-/// round-trip kernel e^{2ikr} halves the effective wavelength.
-pub fn nyquist_factor(kind: CaptureKind) -> f64 {
-    if kind == CaptureKind::Confocal {
-        4.0
-    } else {
-        2.0
-    }
-}
-
-/// Amplitude factor a(d) applied to each leg (changes brightness with depth, not focus).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Falloff {
-    /// a = 1 (tal pf_dev's default).
-    None,
-    /// a = 1/d, the paper's RSD kernel e^{ikd}/d.
-    InvR,
-}
-
-impl murk_core::Named for Falloff {
-    const WHAT: &'static str = "falloff";
-    const CHOICES: &'static [(&'static str, Self)] = &[("none", Self::None), ("inv-r", Self::InvR)];
-}
-
-impl murk_core::Named for Lateral {
-    const WHAT: &'static str = "lateral";
-    const CHOICES: &'static [(&'static str, Self)] =
-        &[("propagating", Self::Propagating), ("full", Self::Full)];
-}
-
-/// Which lateral (wall-plane) frequencies the fast form keeps, per depth plane and band frequency.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Lateral {
-    /// The waves that reach the plane: |κ| ≤ √(k² + (ln 10⁴ / z)²) for the kernel's wavenumber k
-    /// (round trip for confocal data) at depth z, plus six FFT lines. The RSD kernel propagates
-    /// |κ| ≤ k and damps |κ| > k by e^{−z·√(κ² − k²)}; past this bound the sampled, truncated kernel
-    /// and data hold leakage of the aperture's edges, and skipping those spectrum lines halves the
-    /// product, the kernel's and the inverse's FFTs along x and their transposes on average over the
-    /// band. Along each axis where the voxels sit off the wall's lattice (not for confocal data) the
-    /// band is cut the same way and read by a 6–12-tap Kaiser–Bessel kernel whose spectrum the data
-    /// were divided by, instead of `Full`'s 16-tap windowed sinc: less aliasing, fewer taps. Against
-    /// `Full` the intensity differs by relL2 1.8e-4 on the synthetic Z letter (128², 142² × 30
-    /// voxels), 3.4e-4 and 6.4e-4 on the real (confocal) mannequin and letter S (docs/reconstruction.md).
-    /// Where the depth step is fine against the field's depth band, only every other plane is
-    /// evaluated and the others interpolated by a 28-tap least-squares filter ("Depth planes" there).
-    #[default]
-    Propagating,
-    /// Every frequency of the FFT grid and every depth plane: the fast form equals the exact discrete
-    /// sum to rounding.
-    Full,
-}
-
-/// How to evaluate the camera.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PfForm {
-    /// Planar FFT convolution when the capture allows it, otherwise the exact form.
-    Fast,
-    /// Time-domain filtered backprojection with exact per-voxel paths (any geometry; slow).
-    Exact,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PfParams {
-    pub wavelength: Wavelength,
-    /// Pulse length in wavelengths: σ = cycles·λ/6 (the paper: 4 synthetic, 8 real).
-    pub cycles: f64,
-    pub falloff: Falloff,
-    pub compensation: Compensation,
-    pub lateral: Lateral,
-}
-
-impl Default for PfParams {
-    fn default() -> Self {
-        PfParams {
-            wavelength: Wavelength::WallFactor(4.0),
-            cycles: 4.0,
-            falloff: Falloff::None,
-            compensation: Compensation::None,
-            lateral: Lateral::Propagating,
-        }
-    }
-}
-
-impl PfParams {
-    pub fn sigma_m(&self, wavelength_m: f64) -> f64 {
-        self.cycles * wavelength_m / 6.0
-    }
-
-    /// λ in metres for this capture (a wall factor times its grid spacing).
-    pub fn wavelength_m(&self, cap: &Capture) -> Result<f64> {
-        self.wavelength_for_spacing(wall_spacing_m(cap))
-    }
-
-    /// λ in metres for a wall sampled every `spacing_m` (`None`: not a grid).
-    fn wavelength_for_spacing(&self, spacing_m: Option<f64>) -> Result<f64> {
-        let l = match self.wavelength {
-            Wavelength::Metres(l) => l,
-            Wavelength::WallFactor(f) => {
-                let d = spacing_m.ok_or_else(|| {
-                    Error::param(
-                        "a wavelength factor needs a wall grid; give the wavelength in metres",
-                    )
-                })?;
-                f * d
-            }
-        };
-        if !(l.is_finite() && l > 0.0) {
-            return Err(Error::param(format!(
-                "wavelength must be > 0 m, got {}",
-                murk_core::short(l)
-            )));
-        }
-        murk_core::Limits::get().length("the wavelength", l)?;
-        Ok(l)
-    }
-}
 
 pub use murk_core::{NoProgress, Progress};
 
@@ -171,8 +57,9 @@ pub struct ReconInfo {
     /// The fast form's depth slabs, each with its own time window: (planes, frequencies, DFT length).
     /// Their planes are the ones evaluated, which may be every other one (see [`Lateral::Propagating`]).
     pub slabs: Vec<Slab>,
-    /// "fast" or "exact" (the fast path falls back to exact when the capture is not a planar grid).
-    pub evaluated_with: &'static str,
+    /// The form evaluated: the fast one falls back to the exact one when the capture is not a planar
+    /// grid.
+    pub evaluated_with: PfForm,
     pub warnings: Vec<String>,
 }
 
@@ -193,7 +80,10 @@ impl ReconInfo {
         vec![
             (
                 "method".into(),
-                format!("Phasor Fields ({} form)", self.evaluated_with),
+                format!(
+                    "Phasor Fields ({} form)",
+                    murk_core::Named::name(self.evaluated_with)
+                ),
             ),
             ("wavelength_m".into(), format!("{:.6}", self.wavelength_m)),
             ("sigma_m".into(), format!("{:.6}", self.sigma_m)),
@@ -281,7 +171,7 @@ pub struct PfPlan {
     spacing_m: Option<f64>,
     window: spectrum::Window,
     /// The fast form's plan; `None` when the exact form is asked for or the fast one does not apply.
-    fast: Option<pf_fast::Plan>,
+    fast: Option<pf_fast::FastPlan>,
     warnings: Vec<String>,
 }
 
@@ -345,7 +235,7 @@ impl PfPlan {
         let fast = match form {
             PfForm::Exact => None,
             PfForm::Fast => {
-                match pf_fast::Plan::new(cap, kind, volume, params.falloff, params.lateral) {
+                match pf_fast::FastPlan::new(cap, kind, volume, params.falloff, params.lateral) {
                     Ok(plan) => Some(plan),
                     Err(why) => {
                         warnings.push(format!(
@@ -381,7 +271,7 @@ impl PfPlan {
         let (values, evaluated_with, slabs) = match &self.fast {
             Some(plan) => {
                 let (values, slabs) = plan.run(cap, self.sigma_m, self.wavelength_m, progress)?;
-                (values, "fast", slabs)
+                (values, PfForm::Fast, slabs)
             }
             None => {
                 let spectra = spectrum::spectra(cap, std::slice::from_ref(&self.window));
@@ -392,7 +282,7 @@ impl PfPlan {
                     self.params.falloff,
                     progress,
                 );
-                (values, "exact", Vec::new())
+                (values, PfForm::Exact, Vec::new())
             }
         };
         Ok(Field {
@@ -415,7 +305,7 @@ impl PfPlan {
     pub fn run(&self, cap: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
         let f = self.field(cap, progress)?;
         let mut rows = f.info.rows();
-        if f.info.evaluated_with == "fast" {
+        if f.info.evaluated_with == PfForm::Fast {
             rows.push((
                 "lateral".into(),
                 murk_core::Named::name(self.params.lateral).to_string(),
@@ -437,6 +327,12 @@ impl PfPlan {
             rows,
             warnings: f.info.warnings,
         })
+    }
+}
+
+impl murk_core::Reconstructor for PfPlan {
+    fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
+        self.run(capture, progress)
     }
 }
 

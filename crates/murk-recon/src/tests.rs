@@ -5,41 +5,10 @@ use murk_core::{Axis, TimeAxis};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
 use rustfft::num_complex::Complex64;
 
-const POINT: DVec3 = DVec3::new(0.1, -0.2, 0.5);
+use murk_synth::testutil::{aligned_volume, point_capture as capture_of, POINT};
 
 fn capture(kind: LayoutKind, start_m: f64, devices: bool) -> Capture {
     capture_of(kind, start_m, devices, POINT)
-}
-
-/// A capture of one point scatterer at `pos`.
-fn capture_of(kind: LayoutKind, start_m: f64, devices: bool, pos: DVec3) -> Capture {
-    let layout = CaptureLayout {
-        kind,
-        wall_size_m: 1.0,
-        grid: 32,
-        point: DVec3::new(0.05, -0.03, 0.0),
-        time: TimeAxis {
-            start_m,
-            bin_width_m: 0.004,
-            bins: 1400,
-        },
-        laser_xyz: devices.then_some(DVec3::new(-0.8, 0.3, -1.2)),
-        sensor_xyz: devices.then_some(DVec3::new(0.6, -0.4, -1.5)),
-    };
-    let mut cap = layout.empty_capture().unwrap();
-    let sc = Target::Point { pos, albedo: 1.0 }.scatterers().unwrap();
-    add_first_bounce(&mut cap, &sc, &SynthOptions::default()).unwrap();
-    cap
-}
-
-/// The wall's own lattice in x, y (32 pixel centres of a 1 m wall) and 21 depths 0.3..0.7.
-fn aligned_volume() -> Volume {
-    let c = 0.5 - 0.5 / 32.0;
-    Volume {
-        x: Axis::new(-c, c, 32),
-        y: Axis::new(-c, c, 32),
-        z: Axis::new(0.3, 0.7, 21),
-    }
 }
 
 fn argmax(r: &Reconstruction) -> [usize; 3] {
@@ -381,7 +350,7 @@ fn fast_matches_frequency_domain_oracle_on_the_lattice() {
     };
     let cap = random_capture();
     assert!(
-        !pf_fast::Plan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
+        !pf_fast::FastPlan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
             .unwrap()
             .folds()
     );
@@ -471,7 +440,7 @@ fn kaiser_bessel_reads_match_the_oracle() {
         z: Axis::new(0.45, 0.55, 3),
     };
     for lateral in [Lateral::Propagating, Lateral::Full] {
-        let plan = pf_fast::Plan::new(&cap, cap.kind(), &vol, Falloff::None, lateral).unwrap();
+        let plan = pf_fast::FastPlan::new(&cap, cap.kind(), &vol, Falloff::None, lateral).unwrap();
         // The band's centre wavenumber on the nearest plane (the wall is at z = 0).
         let k = 2.0 * std::f64::consts::PI / PfParams::default().wavelength_m(&cap).unwrap();
         assert_eq!(
@@ -539,7 +508,7 @@ fn fast_matches_frequency_domain_oracle_on_centred_volumes() {
         ),
     ] {
         assert!(
-            pf_fast::Plan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
+            pf_fast::FastPlan::new(&cap, cap.kind(), &vol, Falloff::None, Lateral::Full)
                 .unwrap()
                 .folds()
         );
@@ -795,104 +764,6 @@ fn default_wavelength_follows_the_round_trip() {
     assert_eq!(crate::nyquist_factor(K::Confocal), 4.0);
 }
 
-/// One plan serves every capture of its geometry, byte for byte as planning for each; a capture of
-/// another geometry is refused.
-#[test]
-fn a_plan_serves_every_capture_of_its_geometry() {
-    use crate::pipeline::{Method, Options, Plan, Request, VolumeSpec};
-    let a = capture(LayoutKind::Confocal, 0.0, false);
-    let b = capture_of(
-        LayoutKind::Confocal,
-        0.0,
-        false,
-        DVec3::new(-0.1, 0.15, 0.45),
-    );
-    for (name, _) in Method::NAMES {
-        let method = Method::from_name(name, a.kind(), &Options::default()).unwrap();
-        let volume = VolumeSpec::Given(Volume {
-            z: Axis::new(0.3, 0.7, 9),
-            ..aligned_volume()
-        });
-        let req = Request {
-            volume,
-            ..Request::new(method)
-        };
-        let plan = Plan::new(&a, &req, &NoProgress).unwrap();
-        for cap in [&a, &b] {
-            let reused = plan.run(cap.clone(), &NoProgress).unwrap();
-            let fresh = crate::pipeline::run(cap.clone(), &req, &NoProgress).unwrap();
-            assert_eq!(reused.intensity, fresh.intensity, "{name}");
-            assert_eq!(reused.rows, fresh.rows, "{name}");
-            // lct, fk and cdt reconstruct on the scan's own grid and say that the volume is ignored.
-            assert_eq!(
-                reused
-                    .warnings
-                    .iter()
-                    .any(|w| w.contains("the given volume is ignored")),
-                method.own_grid(),
-                "{name}: {:?}",
-                reused.warnings
-            );
-        }
-        assert_eq!(method.name(), name);
-        let mut later = a.clone();
-        later.time.start_m += 0.01;
-        let e = plan.run(later, &NoProgress).unwrap_err().to_string();
-        assert!(
-            e.contains("differ from the ones the plan was made for"),
-            "{name}: {e}"
-        );
-    }
-    let e = Method::from_name("lcd", a.kind(), &Options::default()).unwrap_err();
-    assert!(e
-        .to_string()
-        .contains("unknown method 'lcd'; expected one of pf, pf-exact, bp"));
-}
-
-/// A knob that the named method would ignore is refused, naming the knob and the methods that read
-/// it; the same knob for a method that reads it is accepted.
-#[test]
-fn methods_refuse_knobs_they_ignore() {
-    use crate::pipeline::{Method, Options};
-    use murk_baselines::Reflectance;
-    let kind = capture(LayoutKind::Confocal, 0.0, false).kind();
-    let compensated = Options {
-        compensation: Compensation::named("paper", 1.0, Some(0.5)).unwrap(),
-        ..Options::default()
-    };
-    let snr = Options {
-        snr: Some(3.0),
-        ..Options::default()
-    };
-    let weighted = Options {
-        reflectance: Reflectance::Retroreflective,
-        ..Options::default()
-    };
-    let full = Options {
-        lateral: Lateral::Full,
-        ..Options::default()
-    };
-    for (name, o, want) in [
-        ("lct", &compensated, "compensation does not apply to lct, which would ignore it (it applies to pf and pf-exact)"),
-        ("fk", &snr, "a Wiener snr does not apply to fk, which would ignore it (it applies to lct and cdt)"),
-        ("cdt", &weighted, "a reflectance weighting does not apply to cdt"),
-        ("pf-exact", &full, "a lateral band does not apply to pf-exact"),
-    ] {
-        let e = Method::from_name(name, kind, o).unwrap_err().to_string();
-        assert!(e.starts_with(want), "{name}: {e}");
-    }
-    for (name, o) in [
-        ("pf", &compensated),
-        ("pf-exact", &compensated),
-        ("lct", &snr),
-        ("cdt", &snr),
-        ("lct", &weighted),
-        ("pf", &full),
-    ] {
-        assert!(Method::from_name(name, kind, o).is_ok(), "{name}");
-    }
-}
-
 /// A compensation whose gain reaches its cap at some voxels says so, with their share; one that
 /// stays below it says nothing.
 #[test]
@@ -916,64 +787,6 @@ fn clamped_compensation_is_reported() {
         w.iter().any(|w| w.contains("at 100.0 % of the voxels")),
         "{w:?}"
     );
-}
-
-/// A volume out of the window's reach is refused when planning, naming the volume; a gate set by
-/// hand after the window is refused naming the gate, and one before it is said to fade nothing.
-#[test]
-fn a_volume_or_gate_beyond_the_window_is_refused() {
-    use crate::pipeline::{Gate, Method, Options, Plan, Request, VolumeSpec};
-    let cap = capture(LayoutKind::Confocal, 0.0, false);
-    for name in ["pf", "bp"] {
-        let method = Method::from_name(name, cap.kind(), &Options::default()).unwrap();
-        // The window ends at 5.6 m of path; a confocal voxel 4 m deep is 8 m away.
-        let far = Request {
-            volume: VolumeSpec::Given(Volume {
-                z: Axis::new(4.0, 5.0, 5),
-                ..aligned_volume()
-            }),
-            ..Request::new(method)
-        };
-        let e = Plan::new(&cap, &far, &NoProgress)
-            .err()
-            .unwrap()
-            .to_string();
-        assert!(
-            e.contains("the volume lies beyond the capture's window")
-                && e.contains("8.000 m")
-                && e.contains("5.600 m"),
-            "{name}: {e}"
-        );
-        let late_gate = Request {
-            gate: Gate::At(6.0),
-            ..Request::new(method)
-        };
-        let e = crate::pipeline::run(cap.clone(), &late_gate, &NoProgress)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("the gate at 6.000 m opens after"), "{name}: {e}");
-        // One before the window (it starts at 0) is no error, but is said: it fades nothing.
-        let early_gate = Request {
-            gate: Gate::At(0.0),
-            ..Request::new(method)
-        };
-        let out = crate::pipeline::run(cap.clone(), &early_gate, &NoProgress).unwrap();
-        assert!(
-            out.warnings.iter().any(|w| w
-                .contains("the gate at 0.000 m opens before the capture's window starts (0.000 m")),
-            "{name}: {:?}",
-            out.warnings
-        );
-        let on_time = Request {
-            gate: Gate::At(1.0),
-            ..Request::new(method)
-        };
-        let out = crate::pipeline::run(cap.clone(), &on_time, &NoProgress).unwrap();
-        assert!(
-            !out.warnings.iter().any(|w| w.contains("fades nothing")),
-            "{name}"
-        );
-    }
 }
 
 /// Finely sampled depths: the fast form evaluates every other plane (and a few past the ends) and

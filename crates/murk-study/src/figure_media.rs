@@ -8,8 +8,8 @@ use crate::figures::{check_out, depths, grid_plane};
 use murk_baselines::{BmmParams, SlabParams};
 use murk_core::{Capture, Error, Reconstruction, Result};
 use murk_io::import::{import, ImportOptions, Preset, BMM_SCENES, CDT_SCENES};
+use murk_methods::{Method, Options, Request};
 use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
-use murk_recon::pipeline::{self, Method, Options, Request};
 use murk_recon::NoProgress;
 use murk_view::pictures;
 use std::path::{Path, PathBuf};
@@ -106,14 +106,14 @@ fn foams(data: &Path) -> Result<Vec<Foam>> {
 
 /// `method` on `cap` with `murk reconstruct`'s defaults, the medium-aware path on or off.
 fn reconstruct(cap: &Capture, method: &str, medium_aware: bool) -> Result<Reconstruction> {
-    let mut req = Request::new(Method::from_name(method, cap.kind(), &Options::default())?);
+    let mut req = Request::new(Method::named(method, &Options::default())?);
     if !medium_aware {
         req.medium = MediumAware {
             removal: MediumRemoval::Off,
             depth_search: DepthSearch::Off,
         };
     }
-    pipeline::run(cap.clone(), &req, &NoProgress)
+    murk_methods::run(cap.clone(), &req, &NoProgress)
 }
 
 /// Reconstructs every foam capture in `data` with every method, writes `out/grid.png`,

@@ -15,6 +15,7 @@
 //! let index = murk_study::run_study(std::path::Path::new("study"), &opt, &Silent).unwrap();
 //! ```
 
+pub mod cells;
 pub mod demo;
 mod figure_media;
 mod figure_real;
@@ -29,7 +30,7 @@ pub use figure_media::figure_media;
 pub use figure_real::figure_real;
 
 use murk_core::{Error, Result};
-use plan::{Plan, StudyOptions};
+use plan::{StudyOptions, StudyPlan};
 use run::{Event, Observer};
 use std::path::{Path, PathBuf};
 
@@ -72,7 +73,7 @@ impl FolderLock {
 
 /// Plans the study, makes `DIR/renders/` for the tasks' outputs, takes the folder and writes
 /// `DIR/plan.json`; the folder stays taken while the lock lives.
-pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<(Plan, FolderLock)> {
+pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<(StudyPlan, FolderLock)> {
     let plan = plan_for(dir, opt)?;
     let renders = dir.join("renders");
     murk_io::create_output_dir(&renders)?;
@@ -95,8 +96,8 @@ pub fn prepare(dir: &Path, opt: &StudyOptions) -> Result<(Plan, FolderLock)> {
 }
 
 /// The study's plan for folder `dir`, which must be a folder or not exist yet.
-fn plan_for(dir: &Path, opt: &StudyOptions) -> Result<Plan> {
-    let plan = Plan::new(opt)?;
+fn plan_for(dir: &Path, opt: &StudyOptions) -> Result<StudyPlan> {
+    let plan = StudyPlan::new(opt)?;
     if dir.exists() && !dir.is_dir() {
         return Err(Error::param(format!(
             "{}: is a file; the study needs a folder",

@@ -2,7 +2,7 @@
 //! plots, and `index.html` tying them together with the parameters and the choices made.
 
 use crate::metrics;
-use crate::plan::{Figure, Format, Plan, SceneKind};
+use crate::plan::{Figure, Format, SceneKind, StudyPlan};
 use crate::run::{CellResult, Scores};
 use murk_core::{Error, Result};
 use murk_view::{write_grid_png, write_plot_svg, FigureGrid, LinePlot, Plane, Series};
@@ -111,7 +111,7 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 }
 
 /// Writes every output into `dir`; returns the path of `index.html`.
-pub fn write(plan: &Plan, results: &[CellResult], dir: &Path) -> Result<PathBuf> {
+pub fn write(plan: &StudyPlan, results: &[CellResult], dir: &Path) -> Result<PathBuf> {
     write_csv(results, &dir.join("metrics.csv"))?;
     write_objects_csv(results, &dir.join("objects.csv"))?;
     let figures = write_figures(results, dir)?;
@@ -780,7 +780,7 @@ pub(crate) fn run_provenance() -> Vec<(&'static str, String)> {
 }
 
 /// The run's provenance, for the top of the report: what ran, where, when and for how long.
-fn provenance(plan: &Plan, results: &[CellResult]) -> Vec<(&'static str, String)> {
+fn provenance(plan: &StudyPlan, results: &[CellResult]) -> Vec<(&'static str, String)> {
     let cpu: Vec<f64> = results.iter().filter_map(|r| r.cpu_s).collect();
     let external = results.iter().filter(|r| r.cpu_s.is_none()).count();
     let mut cpu_text = format!(
@@ -869,7 +869,7 @@ figure{margin:.5em 0}.grid img{max-width:100%}\
 li{margin:.3em 0}</style>";
 
 fn write_html(
-    plan: &Plan,
+    plan: &StudyPlan,
     results: &[CellResult],
     figures: &[Switched],
     plots: &[Switched],

@@ -2,9 +2,9 @@
 //! checkpoint), then every cell is reconstructed and scored against the renderer's ground truth.
 
 use crate::metrics::{self, IouScores};
-use crate::plan::{CaptureJob, Cell, Format, Plan, SceneKind};
+use crate::plan::{CaptureJob, Cell, Format, SceneKind, StudyPlan};
 use murk_core::{Capture, Error, GroundTruth, Result, Volume};
-use murk_recon::pipeline::{self, Method, Request, VolumeSpec};
+use murk_methods::{Method, Options, Request, VolumeSpec};
 use murk_recon::{Compensation, NoProgress, PfForm, PfParams, Wavelength};
 use murk_render::{merge, RenderOptions};
 use murk_view::{views, Plane, Views};
@@ -126,7 +126,7 @@ impl Tally {
 }
 
 /// Renders every capture job whose file is missing, with all cores; returns how many tasks ran.
-pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
+pub fn render_missing(plan: &StudyPlan, dir: &Path, obs: &dyn Observer) -> Result<usize> {
     let renders = dir.join("renders");
     murk_io::create_output_dir(&renders)?;
     let missing: Vec<&CaptureJob> = plan.captures.iter().filter(|j| !captured(dir, j)).collect();
@@ -204,7 +204,7 @@ pub fn render_missing(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<usi
 }
 
 fn run_task(
-    plan: &Plan,
+    plan: &StudyPlan,
     dir: &Path,
     job: &CaptureJob,
     t: usize,
@@ -324,7 +324,7 @@ pub const AWARE: &str = "aware";
 
 /// What progress calls each job: its first cell's label (later inserts win, hence the reversal),
 /// or for a sweep the row with every albedo it renders, not the first cell's one.
-pub fn job_labels(plan: &Plan) -> HashMap<&str, String> {
+pub fn job_labels(plan: &StudyPlan) -> HashMap<&str, String> {
     plan.cells
         .iter()
         .rev()
@@ -350,7 +350,7 @@ pub fn job_labels(plan: &Plan) -> HashMap<&str, String> {
 
 /// Reads capture `id`, refusing a file that holds another render than the plan's: one copied or
 /// left there by hand would otherwise be scored as this cell's.
-fn load_capture(plan: &Plan, dir: &Path, id: &str) -> Result<Capture> {
+fn load_capture(plan: &StudyPlan, dir: &Path, id: &str) -> Result<Capture> {
     let path = dir.join(capture_path(id));
     // A damaged cache file is the study's own: rendering it again is the remedy.
     let cap = murk_io::read_capture(&path).map_err(|e| match e {
@@ -381,7 +381,7 @@ fn load_capture(plan: &Plan, dir: &Path, id: &str) -> Result<Capture> {
 }
 
 /// Reconstructs and scores every cell; the captures must exist.
-pub fn evaluate(plan: &Plan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellResult>> {
+pub fn evaluate(plan: &StudyPlan, dir: &Path, obs: &dyn Observer) -> Result<Vec<CellResult>> {
     // Captures are read when used, one at a time (a paper-scale capture is 268 MB).
     let load = |id: &str| load_capture(plan, dir, id);
     // Front views of the no-medium captures per (capture, λ): every cell of that scene compares with them.
@@ -551,9 +551,9 @@ fn aware_intensity(
     };
     let req = Request {
         volume: VolumeSpec::Given(*volume),
-        ..Request::new(Method::Pf(params))
+        ..Request::new(Method::named("pf", &Options::from_pf(&params))?)
     };
-    let rec = pipeline::run(cap.clone(), &req, &NoProgress)?;
+    let rec = murk_methods::run(cap.clone(), &req, &NoProgress)?;
     Ok(Aware {
         intensity: rec.intensity,
         estimate,
@@ -698,7 +698,7 @@ mod tests {
     /// A row of Fig. 3b renders five albedos at once: its progress names all five, not the first.
     #[test]
     fn a_sweeps_label_names_every_albedo() {
-        let plan = Plan::new(&crate::plan::StudyOptions {
+        let plan = StudyPlan::new(&crate::plan::StudyOptions {
             scale: crate::plan::Scale::Quick,
             only: vec![crate::plan::Figure::Fig3b],
             cells: vec!["μt = 2".into()],

@@ -5,7 +5,7 @@
 //! (0.00202 against 0.00257 once the renderer's random stream changed); at 96, 128 and 192 spp the
 //! order holds by 2× or more.
 
-use murk_study::plan::{Figure, Plan, Scale, StudyOptions};
+use murk_study::plan::{Figure, Scale, StudyOptions, StudyPlan};
 use murk_study::run::{self, CellResult, Scores, Silent};
 use std::path::Path;
 
@@ -24,7 +24,7 @@ fn results(dir: &Path) -> Vec<CellResult> {
         spp: Some(128),
         scenes_dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
     };
-    let plan = Plan::new(&opt).unwrap();
+    let plan = StudyPlan::new(&opt).unwrap();
     assert_eq!(plan.cells.len(), 1 + 3 + 3);
     // Fig. 3a, μt = 0.5 and μt = 2 alone, and the μt = 1 sweep over α = 0.5 and 0.83.
     let sweeps: Vec<_> = plan.captures.iter().map(|j| j.albedos.clone()).collect();

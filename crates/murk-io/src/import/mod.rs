@@ -214,7 +214,11 @@ pub fn import(path: &Path, o: &ImportOptions) -> Result<Capture> {
         ));
     }
     match &o.layout {
-        Layout::Preset(p) => presets::import(path, *p, o),
+        // The presets that carry their own wall points are read by `points`, the others as one array.
+        Layout::Preset(p) => match presets::spec(*p) {
+            Some(s) => presets::import(path, *p, &s, o),
+            None => points::import(path, *p, o),
+        },
         Layout::Generic(g) => generic(path, g, o),
     }
 }

@@ -174,7 +174,7 @@ enum Side {
 }
 
 /// A preset's array layout and published parameters.
-struct Spec {
+pub(super) struct Spec {
     var: &'static str,
     container: Container,
     /// The stored axes and the reversals that put the displayed row a and column b on murk's
@@ -198,7 +198,7 @@ struct Spec {
 const DISPLAYED: Flip = Flip { x: true, y: true };
 
 /// The layout of an array preset; `None` for the presets that carry their own wall points.
-fn spec(p: Preset) -> Option<Spec> {
+pub(super) fn spec(p: Preset) -> Option<Spec> {
     let display_abt = |var, bin_ps, side, format| Spec {
         var,
         container: Container::V5,
@@ -443,10 +443,8 @@ fn split_square(path: &Path, var: &str, shape: &[usize]) -> Result<Vec<usize>> {
     Ok(vec![n, n, nt])
 }
 
-pub(super) fn import(path: &Path, p: Preset, o: &ImportOptions) -> Result<Capture> {
-    let Some(s) = spec(p) else {
-        return super::points::import(path, p, o);
-    };
+/// Reads the array preset `p`, whose layout is `s` ([`spec`]).
+pub(super) fn import(path: &Path, p: Preset, s: &Spec, o: &ImportOptions) -> Result<Capture> {
     let file = ArrayFile::open(path)?;
     check_container(path, p, &file)?;
     let (mut shape, data) = file.require(path, s.var)?;

@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::mat5::write::{counts, doubles, file, structure};
-use crate::tal::tests::tmpdir;
+use crate::testutil::tmpdir;
 use hdf5_pure::FileBuilder;
 
 /// The bright point: left of centre (+x) and above it (+y) in murk's front view, z behind the wall.

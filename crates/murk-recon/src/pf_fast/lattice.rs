@@ -1,7 +1,7 @@
 //! From the grid's spectra to the field at the voxels: the kernel's spectrum (folded when its
 //! support is symmetric), the product and inverse transforms, and the resampling to voxel positions.
 
-use super::{c32, Plan, Workspace};
+use super::{c32, FastPlan, Workspace};
 use crate::cmul;
 use crate::fft2::{kept_lines, transpose_part};
 use crate::resample::Resampler;
@@ -78,7 +78,7 @@ fn packed_index(s: usize, mirrored: bool) -> usize {
 }
 
 /// The lines of `t` ([ky][kx], `n = [fx, fy]`) kept for `lines`, each cut to |kx| ≤ `cut`, into
-/// `out` in the order [`Plan::folded_lines`] reads them: ky = 0, then ky = s and fy − s for
+/// `out` in the order [`FastPlan::folded_lines`] reads them: ky = 0, then ky = s and fy − s for
 /// s = 1, 2, …, so that a plane keeping fewer lines reads a prefix, and each frequency's spectrum
 /// streams from one contiguous run of memory.
 pub(super) fn pack(
@@ -152,12 +152,12 @@ pub(super) fn mirror(dst: &mut [Complex32], src: &[Complex32], c: i64) {
     up.copy_from_slice(&src[first..first + up.len()]);
 }
 
-/// Kernel rows (y part) and spectrum lines (x part) handled per batch by [`Plan::folded_lines`]:
+/// Kernel rows (y part) and spectrum lines (x part) handled per batch by [`FastPlan::folded_lines`]:
 /// eight complex values fill a 64-byte cache line in each column of the transposes, and a batch's
 /// buffers stay in L1.
 pub(super) const BATCH: usize = 8;
 
-/// Where [`Plan::folded_lines`] puts each line of the kernel's spectrum × the grid's.
+/// Where [`FastPlan::folded_lines`] puts each line of the kernel's spectrum × the grid's.
 pub(super) enum Sink {
     /// Transformed back along x and written transposed into `ws.g` ([x][ky]) for x in the range.
     InverseX(Range<usize>),
@@ -165,7 +165,7 @@ pub(super) enum Sink {
     Accumulate,
 }
 
-impl Plan {
+impl FastPlan {
     /// For a symmetric support (see [`Fold`]): the kernel's spectrum at the current frequency times
     /// `h` (lines packed to |kx| ≤ `x_lines`, see [`pack`]) on the lines kept for `lines`, delivered
     /// to `sink`; the kernel's table (`ws.tcur`) is left advanced to the next frequency. Along y only
@@ -251,7 +251,7 @@ impl Plan {
     /// lines only): along x first, still in ky (resampling along x and the inverse FFT along y
     /// commute), so only nx rows, not vx, are transformed along y; then along y at the voxels, with
     /// the resamplers `r` (x, y): off the lattice a windowed sinc or a Kaiser–Bessel kernel
-    /// ([`Plan::kernels`]), on it one tap of weight 1.
+    /// ([`FastPlan::kernels`]), on it one tap of weight 1.
     pub(super) fn field_at_voxels(
         &self,
         ws: &mut Workspace,
@@ -339,7 +339,7 @@ impl Plan {
     }
 }
 
-/// How [`Plan::field_at_voxels`] puts the field into its accumulator.
+/// How [`FastPlan::field_at_voxels`] puts the field into its accumulator.
 #[derive(Clone, Copy)]
 pub(super) enum Deliver {
     /// Overwrites it.

@@ -79,7 +79,7 @@ pub struct Slab {
     pub dft_len: usize,
 }
 
-pub struct Plan {
+pub struct FastPlan {
     /// The capture's geometry (no histograms).
     cap: Capture,
     vol: Volume,
@@ -89,7 +89,7 @@ pub struct Plan {
     rx: Resampler,
     ry: Resampler,
     /// Per axis (x, y), the shorter kernels that replace `rx`/`ry` for a band frequency whose lateral
-    /// band is cut along that axis (see [`Plan::kernels`]); empty on the lattice, for confocal data
+    /// band is cut along that axis (see [`FastPlan::kernels`]); empty on the lattice, for confocal data
     /// (one resampling per plane after the frequency sum) and with [`Lateral::Full`].
     kb: [Vec<Kb>; 2],
     fft: Fft2,
@@ -101,7 +101,7 @@ pub struct Plan {
     lateral: Lateral,
 }
 
-impl Plan {
+impl FastPlan {
     /// Checks the preconditions of the fast form; the error says why it does not apply.
     pub fn new(
         cap: &Capture,
@@ -109,7 +109,7 @@ impl Plan {
         vol: &Volume,
         falloff: Falloff,
         lateral: Lateral,
-    ) -> Result<Plan> {
+    ) -> Result<FastPlan> {
         let unsupported = |why: &str| Error::Unsupported(why.into());
         let regular = |p: &murk_core::PointSet| p.regular_grid();
         let (grid, side) = match kind {
@@ -173,7 +173,7 @@ impl Plan {
         let (gx, gy) = (grid.nx + rx.len - 1, grid.ny + ry.len - 1);
         let fold = (2 * cx + 1 == gx as i64 && 2 * cy + 1 == gy as i64)
             .then(|| Fold::new(fft.fx, fft.fy, cx, cy));
-        Ok(Plan {
+        Ok(FastPlan {
             cap: cap.geometry(),
             vol: *vol,
             falloff,
@@ -196,7 +196,7 @@ impl Plan {
         self.lines_along(Y, k, dz)
     }
 
-    /// [`Plan::lines`] along `axis` (X or Y): the lines of the other axis' transform it keeps.
+    /// [`FastPlan::lines`] along `axis` (X or Y): the lines of the other axis' transform it keeps.
     fn lines_along(&self, axis: usize, k: f64, dz: f64) -> usize {
         let (step, f) = match axis {
             X => (self.grid.step_x.x, self.fft.fx),
@@ -248,7 +248,7 @@ impl Plan {
     }
 
     /// Whether the field of wavenumber `k` on planes at `dz` is read by Kaiser–Bessel kernels along
-    /// both axes (see [`Plan::kernels`]).
+    /// both axes (see [`FastPlan::kernels`]).
     #[cfg(test)]
     pub fn reads_kaiser_bessel(&self, k: f64, dz: f64) -> bool {
         self.kernels(k, dz).iter().all(Option::is_some)
@@ -773,11 +773,11 @@ impl Plan {
     }
 }
 
-/// How one band frequency's field is read (see [`Plan::reading`]).
+/// How one band frequency's field is read (see [`FastPlan::reading`]).
 struct Reading {
-    /// Per axis, the Kaiser–Bessel kernel of `Plan::kb` or `None` for the windowed sinc.
+    /// Per axis, the Kaiser–Bessel kernel of `FastPlan::kb` or `None` for the windowed sinc.
     kernels: [Option<usize>; 2],
-    /// The lines the slab's shallowest plane keeps (see [`Plan::lines`]): those of the grid's
+    /// The lines the slab's shallowest plane keeps (see [`FastPlan::lines`]): those of the grid's
     /// spectrum.
     lines: usize,
     /// The grid's spectrum is zero at kx further than this from 0 (fx/2: nowhere).
@@ -818,7 +818,7 @@ fn lock(pool: &[Mutex<Workspace>]) -> std::sync::MutexGuard<'_, Workspace> {
     pool[slot].lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// The grid's spectrum of each band frequency (see [`Plan::grid_spectra`]).
+/// The grid's spectrum of each band frequency (see [`FastPlan::grid_spectra`]).
 struct GridSpectra<'a> {
     data: &'a [Complex32],
     /// Where frequency j's spectrum starts in `data`, and past the last, where it ends.
@@ -875,7 +875,7 @@ struct Workspace {
 }
 
 impl Workspace {
-    fn new(plan: &Plan) -> Self {
+    fn new(plan: &FastPlan) -> Self {
         let (fx, fy) = (plan.fft.fx, plan.fft.fy);
         let nv = plan.vol.x.n * plan.vol.y.n;
         // Buffers of one path only (the unfolded spectrum, or the folded one's batches) stay empty

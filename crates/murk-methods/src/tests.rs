@@ -1,0 +1,297 @@
+//! The contract's tests: one plan per geometry, the knobs each method refuses, the gate and volume
+//! checks, and the table's invariants.
+
+use crate::*;
+use murk_baselines::Reflectance;
+use murk_core::{Axis, DVec3, NoProgress, Volume};
+use murk_recon::{Compensation, Lateral};
+use murk_synth::testutil::{aligned_volume, point_capture, POINT};
+use murk_synth::LayoutKind;
+
+fn capture(kind: LayoutKind, start_m: f64, devices: bool) -> murk_core::Capture {
+    point_capture(kind, start_m, devices, POINT)
+}
+
+/// One plan serves every capture of its geometry, byte for byte as planning for each; a capture of
+/// another geometry is refused.
+#[test]
+fn a_plan_serves_every_capture_of_its_geometry() {
+    let a = capture(LayoutKind::Confocal, 0.0, false);
+    let b = point_capture(
+        LayoutKind::Confocal,
+        0.0,
+        false,
+        DVec3::new(-0.1, 0.15, 0.45),
+    );
+    for name in METHODS.iter().map(|m| m.name) {
+        let method = Method::named(name, &Options::default()).unwrap();
+        let volume = VolumeSpec::Given(Volume {
+            z: Axis::new(0.3, 0.7, 9),
+            ..aligned_volume()
+        });
+        let req = Request {
+            volume,
+            ..Request::new(method)
+        };
+        let plan = ReconPlan::new(&a, &req, &NoProgress).unwrap();
+        for cap in [&a, &b] {
+            let reused = plan.run(cap.clone(), &NoProgress).unwrap();
+            let fresh = crate::run(cap.clone(), &req, &NoProgress).unwrap();
+            assert_eq!(reused.intensity, fresh.intensity, "{name}");
+            assert_eq!(reused.rows, fresh.rows, "{name}");
+            // lct, fk and cdt reconstruct on the scan's own grid and say that the volume is ignored.
+            assert_eq!(
+                reused
+                    .warnings
+                    .iter()
+                    .any(|w| w.contains("the given volume is ignored")),
+                method.own_grid(),
+                "{name}: {:?}",
+                reused.warnings
+            );
+        }
+        assert_eq!(method.name(), name);
+        let mut later = a.clone();
+        later.time.start_m += 0.01;
+        let e = plan.run(later, &NoProgress).unwrap_err().to_string();
+        assert!(
+            e.contains("differ from the ones the plan was made for"),
+            "{name}: {e}"
+        );
+    }
+    let e = Method::named("lcd", &Options::default()).unwrap_err();
+    assert!(e
+        .to_string()
+        .contains("unknown method 'lcd'; expected one of pf, pf-exact, bp"));
+}
+
+/// A knob that the named method would ignore is refused, naming the knob and the methods that read
+/// it; the same knob for a method that reads it is accepted.
+#[test]
+fn methods_refuse_knobs_they_ignore() {
+    let compensated = Options {
+        compensation: Compensation::named("paper", 1.0, Some(0.5)).unwrap(),
+        ..Options::default()
+    };
+    let snr = Options {
+        snr: Some(3.0),
+        ..Options::default()
+    };
+    let weighted = Options {
+        reflectance: Reflectance::Retroreflective,
+        ..Options::default()
+    };
+    let full = Options {
+        lateral: Lateral::Full,
+        ..Options::default()
+    };
+    for (name, o, want) in [
+        ("lct", &compensated, "compensation does not apply to lct, which would ignore it (it applies to pf and pf-exact)"),
+        ("fk", &snr, "a Wiener snr does not apply to fk, which would ignore it (it applies to lct and cdt)"),
+        ("cdt", &weighted, "a reflectance weighting does not apply to cdt"),
+        ("pf-exact", &full, "a lateral band does not apply to pf-exact"),
+    ] {
+        let e = Method::named(name, o).unwrap_err().to_string();
+        assert!(e.starts_with(want), "{name}: {e}");
+    }
+    for (name, o) in [
+        ("pf", &compensated),
+        ("pf-exact", &compensated),
+        ("lct", &snr),
+        ("cdt", &snr),
+        ("lct", &weighted),
+        ("pf", &full),
+    ] {
+        assert!(Method::named(name, o).is_ok(), "{name}");
+    }
+}
+
+/// A volume out of the window's reach is refused when planning, naming the volume; a gate set by
+/// hand after the window is refused naming the gate, and one before it is said to fade nothing.
+#[test]
+fn a_volume_or_gate_beyond_the_window_is_refused() {
+    let cap = capture(LayoutKind::Confocal, 0.0, false);
+    for name in ["pf", "bp"] {
+        let method = Method::named(name, &Options::default()).unwrap();
+        // The window ends at 5.6 m of path; a confocal voxel 4 m deep is 8 m away.
+        let far = Request {
+            volume: VolumeSpec::Given(Volume {
+                z: Axis::new(4.0, 5.0, 5),
+                ..aligned_volume()
+            }),
+            ..Request::new(method)
+        };
+        let e = ReconPlan::new(&cap, &far, &NoProgress)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("the volume lies beyond the capture's window")
+                && e.contains("8.000 m")
+                && e.contains("5.600 m"),
+            "{name}: {e}"
+        );
+        let late_gate = Request {
+            gate: Gate::At(6.0),
+            ..Request::new(method)
+        };
+        let e = crate::run(cap.clone(), &late_gate, &NoProgress)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the gate at 6.000 m opens after"), "{name}: {e}");
+        // One before the window (it starts at 0) is no error, but is said: it fades nothing.
+        let early_gate = Request {
+            gate: Gate::At(0.0),
+            ..Request::new(method)
+        };
+        let out = crate::run(cap.clone(), &early_gate, &NoProgress).unwrap();
+        assert!(
+            out.warnings.iter().any(|w| w
+                .contains("the gate at 0.000 m opens before the capture's window starts (0.000 m")),
+            "{name}: {:?}",
+            out.warnings
+        );
+        let on_time = Request {
+            gate: Gate::At(1.0),
+            ..Request::new(method)
+        };
+        let out = crate::run(cap.clone(), &on_time, &NoProgress).unwrap();
+        assert!(
+            !out.warnings.iter().any(|w| w.contains("fades nothing")),
+            "{name}"
+        );
+    }
+}
+
+/// Every knob is read by some method and every name is listed once, so that a refusal can always
+/// name where a knob applies and `--method` offers each method once.
+#[test]
+fn the_table_names_each_method_once_and_every_knob_has_a_reader() {
+    for (i, m) in METHODS.iter().enumerate() {
+        assert!(!m.help.is_empty(), "{}", m.name);
+        assert!(
+            METHODS[..i].iter().all(|n| n.name != m.name),
+            "{} twice",
+            m.name
+        );
+    }
+    for k in Knob::ALL {
+        assert!(!k.readers().is_empty(), "{k:?}");
+    }
+    let e = TOffset::parse(
+        None,
+        &Options {
+            slab: murk_baselines::SlabParams {
+                thickness_m: 0.05,
+                ..Default::default()
+            },
+            ..Options::default()
+        },
+        &Method::named("fk", &Options::default()).unwrap(),
+    )
+    .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "slab parameters are read only by cdt and by t-offset 'slab'; fk would ignore them"
+    );
+}
+
+/// The front ends' arguments at `murk reconstruct`'s defaults.
+fn default_args() -> RequestArgs {
+    RequestArgs {
+        method: "pf".into(),
+        volume: None,
+        wavelength_m: None,
+        wavefactor: None,
+        cycles: 4.0,
+        compensate: None,
+        mu_t_per_m: None,
+        albedo: None,
+        falloff: "none".into(),
+        lateral: "propagating".into(),
+        snr: None,
+        weighting: "diffuse".into(),
+        slab: murk_baselines::SlabParams::default(),
+        medium: murk_baselines::BmmParams::default(),
+        t_offset: None,
+        gate: Gate::Auto,
+        window_end: "auto".into(),
+        medium_removal: "auto".into(),
+        depth_search: "auto".into(),
+    }
+}
+
+/// The defaults make `Request::new`'s request; each knob reaches the options under its name; both
+/// wavelengths, or a compensation without μt, are refused (an unknown compensation named first).
+#[test]
+fn request_args_make_the_request() {
+    let pf = Method::named("pf", &Options::default()).unwrap();
+    assert_eq!(default_args().request().unwrap(), Request::new(pf));
+    let given = RequestArgs {
+        method: "pf-exact".into(),
+        volume: Some("-0.5:0.5:3,-0.5:0.5:3,0.4:0.6:3".into()),
+        wavefactor: Some(6.0),
+        compensate: Some("paper".into()),
+        mu_t_per_m: Some(1.0),
+        albedo: Some(0.5),
+        falloff: "inv-r".into(),
+        t_offset: Some("0.25".into()),
+        window_end: "keep".into(),
+        ..default_args()
+    };
+    let req = given.request().unwrap();
+    let o = req.method.options();
+    assert_eq!(req.method.name(), "pf-exact");
+    assert_eq!(o.wavelength, Some(murk_recon::Wavelength::WallFactor(6.0)));
+    assert_eq!(
+        o.compensation,
+        Compensation::Paper {
+            mu_t_per_m: 1.0,
+            albedo: 0.5
+        }
+    );
+    assert_eq!(o.falloff, murk_recon::Falloff::InvR);
+    assert_eq!(req.t_offset, TOffset::Metres(0.25));
+    assert_eq!(req.window_end, murk_core::window::WindowEnd::Keep);
+    assert!(matches!(req.volume, VolumeSpec::Given(v) if v.z.n == 3));
+    let none = RequestArgs {
+        compensate: Some("none".into()),
+        mu_t_per_m: Some(1.0),
+        ..default_args()
+    };
+    assert_eq!(none.options().unwrap().compensation, Compensation::None);
+    for (args, want) in [
+        (
+            RequestArgs {
+                wavelength_m: Some(0.1),
+                wavefactor: Some(4.0),
+                ..default_args()
+            },
+            "give wavelength or wavefactor, not both",
+        ),
+        (
+            RequestArgs {
+                compensate: Some("paper".into()),
+                ..default_args()
+            },
+            "compensate needs mu_t",
+        ),
+        (
+            RequestArgs {
+                compensate: Some("papr".into()),
+                ..default_args()
+            },
+            "compensate 'papr': expected",
+        ),
+        (
+            RequestArgs {
+                lateral: "some".into(),
+                ..default_args()
+            },
+            "lateral 'some': expected propagating, full",
+        ),
+    ] {
+        let e = args.request().unwrap_err().to_string();
+        assert!(e.starts_with(want), "{e}");
+    }
+}
