@@ -3,7 +3,7 @@
 
 use crate::geometry::Geometry;
 use crate::medium::Medium;
-use crate::overrides::{apply, canonical, Overrides};
+use crate::overrides::{apply, canonical, Overrides, Spelling};
 use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
 use std::path::{Path, PathBuf};
 
@@ -187,7 +187,17 @@ impl Scene {
             settings: f.render.clone(),
             source,
             resolved,
-            overrides: assignments.iter().map(|(_, _, w)| w.clone()).collect(),
+            // Recorded in the command line's words whoever gave them, so that a render from Python and
+            // the same render from the CLI write the same bytes; errors quote the user's own words.
+            overrides: Overrides {
+                spelling: Spelling::Cli,
+                ..ov.clone()
+            }
+            .assignments()
+            .map_err(bad_override)?
+            .into_iter()
+            .map(|(_, _, w)| w)
+            .collect(),
             input_files: f
                 .objects
                 .iter()
