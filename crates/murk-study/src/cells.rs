@@ -4,14 +4,14 @@
 use crate::plan::{Figure, MediumParams, SceneKind, ALBEDOS};
 
 /// One cell of a figure, as the paper lays it out.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CellSpec {
     pub figure: Figure,
     pub row: String,
     pub col: String,
     pub scene: SceneKind,
     pub medium: MediumParams,
-    /// λ as a multiple of the paper's λ0 = 4Δc.
+    /// λ as a multiple of the paper's λ0 = 4Δc ([`crate::plan::Cell::wall_factor`] gives it in Δc).
     pub lambda_factor: f64,
 }
 

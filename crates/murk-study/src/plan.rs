@@ -243,20 +243,23 @@ pub struct RenderTask {
     pub out: PathBuf,
 }
 
-/// One picture of a figure: a capture (per seed) reconstructed with one wavelength.
+/// One picture of a figure: a cell's spec with its capture jobs (its fields read through it, and
+/// `plan.json` lists them inline).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Cell {
-    pub figure: Figure,
-    pub row: String,
-    pub col: String,
-    pub scene: SceneKind,
-    pub medium: MediumParams,
-    /// λ as a multiple of the paper's λ0 = 4Δc ([`Cell::wall_factor`] gives it in Δc).
-    pub lambda_factor: f64,
+    #[serde(flatten)]
+    pub spec: CellSpec,
     /// The capture job per seed.
     pub captures: Vec<String>,
     /// The same scene without a medium, per seed (PSNR and SSIM compare against it).
     pub reference: Vec<String>,
+}
+
+impl std::ops::Deref for Cell {
+    type Target = CellSpec;
+    fn deref(&self) -> &CellSpec {
+        &self.spec
+    }
 }
 
 impl Cell {
@@ -428,15 +431,8 @@ impl StudyPlan {
                 .find(|(k, a)| *k == key && a.len() > 1)
                 .map_or_else(Vec::new, |(_, a)| a.clone())
         };
-        for CellSpec {
-            figure,
-            row,
-            col,
-            scene,
-            medium,
-            lambda_factor,
-        } in cells
-        {
+        for spec in cells {
+            let (scene, medium) = (spec.scene, spec.medium);
             let albedos = sweep_of(scene, medium);
             let captures = (0..opt.seeds)
                 .map(|s| plan.capture(opt, scene, medium, &albedos, s))
@@ -445,12 +441,7 @@ impl StudyPlan {
                 .map(|s| plan.capture(opt, scene, none, &[], s))
                 .collect::<Result<_>>()?;
             plan.cells.push(Cell {
-                figure,
-                row,
-                col,
-                scene,
-                medium,
-                lambda_factor,
+                spec,
                 captures,
                 reference,
             });
