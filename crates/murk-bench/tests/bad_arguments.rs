@@ -36,7 +36,7 @@ fn bad_arguments_are_one_line() {
     // These benchmarked nothing, or skipped y-tal, and exited 0.
     fails(
         &["--render", "--scenes", "/nonexistent", "--only", "nomatch"],
-        "--only nomatch: matches none of the scenes",
+        "--only nomatch: matches none of the cases",
     );
     fails(
         &["--tal-python", "/nonexistent", "--confocal-vs-tal"],
