@@ -9,8 +9,7 @@ fn truth(info: &str, key: &str) -> f64 {
     // The scene block holds the medium as `  mu_t = 1.0` lines; an albedo sweep's own albedo follows.
     let scene_value = info
         .lines()
-        .filter(|l| l.trim_start().starts_with(&format!("{key} =")))
-        .last()
+        .rfind(|l| l.trim_start().starts_with(&format!("{key} =")))
         .and_then(|l| l.split('=').nth(1))
         .and_then(|v| v.trim().parse().ok());
     let sweep = (key == "albedo")
