@@ -331,14 +331,14 @@ fn kernel(medium: &Medium, dt_s: f64, m: usize, ds: f64) -> Vec<f64> {
         .collect()
 }
 
-/// Tikhonov weights tried, relative to the largest eigenvalue of KᵀK, strongest first. Below
-/// 1e-5 the foam captures' virtual waves ring (their depth jumped to 6 cm for the 2 cm and 4 cm T),
-/// because the residual's floor is the model's error, not noise.
+/// Tikhonov weights tried, relative to the largest eigenvalue of KᵀK, strongest first. Below 1e-5
+/// the foam captures' virtual waves ring, because the residual's floor is the model's error, not
+/// noise (docs/reconstruction.md).
 const LAMBDAS: [f64; 7] = [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5];
 
 /// Lateral Gaussian blur of the perturbation (σ in scan steps): the diffuse round trip blurs the
-/// object over centimetres, so this removes counting noise, not detail (the 6 cm T's IoU rose from
-/// 0.14 to 0.46 with it).
+/// object over centimetres, so this removes counting noise, not detail (it is what makes the 6 cm T
+/// readable; docs/reconstruction.md).
 const SMOOTH_STEPS: f64 = 2.0;
 
 /// Scan points tapered at each edge: the scan's edges are a step in the perturbation that f-k

@@ -61,9 +61,8 @@ pub enum Lateral {
     /// product, the kernel's and the inverse's FFTs along x and their transposes on average over the
     /// band. Along each axis where the voxels sit off the wall's lattice (not for confocal data) the
     /// band is cut the same way and read by a 6–12-tap Kaiser–Bessel kernel whose spectrum the data
-    /// were divided by, instead of `Full`'s 16-tap windowed sinc: less aliasing, fewer taps. Against
-    /// `Full` the intensity differs by relL2 1.8e-4 on the synthetic Z letter (128², 142² × 30
-    /// voxels), 3.4e-4 and 6.4e-4 on the real (confocal) mannequin and letter S (docs/reconstruction.md).
+    /// were divided by, instead of `Full`'s 16-tap windowed sinc: less aliasing, fewer taps. How far it
+    /// stays from `Full` is measured in docs/reconstruction.md.
     /// Where the depth step is fine against the field's depth band, only every other plane is
     /// evaluated and the others interpolated by a 28-tap least-squares filter ("Depth planes" there).
     #[default]

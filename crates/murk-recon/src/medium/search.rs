@@ -11,9 +11,8 @@ use murk_core::{Axis, Reconstruction, Volume};
 
 /// Half the depth range kept around the best plane (m): the study's volumes span 1 m around the Z.
 pub const HALF_RANGE_M: f64 = 0.5;
-/// The search reconstructs at most this many planes over the whole reach: its cost is in its planes
-/// (a 128² × 4 096 capture: 9.5 s for the default volume's 256 planes, 5.6 s for 128), and a
-/// surface's focus spans more than a plane at that spacing (3 cm for a 2 m wall of 128 points).
+/// The search reconstructs at most this many planes over the whole reach: its cost is in its planes,
+/// and a surface's focus spans more than a plane at that spacing (docs/benchmarks.md).
 pub const SEARCH_PLANES: usize = 128;
 /// The best plane must score this many times the median plane's score; otherwise no plane stands
 /// out and the default volume stays.

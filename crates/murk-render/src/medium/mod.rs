@@ -90,9 +90,9 @@ impl Medium {
 
     /// The share of target-side draws in the phase function's lobe where a scene leaves
     /// `render.target_lobe` unset. In forward-scattering media a connection through a medium vertex
-    /// peaks where the vertex lies on the line between its neighbours. On the fog T (μt 1, α 0.5 and
-    /// 0.83), 0.9 instead of 0.5 cut CPU × error² 2–3× at g 0.7 and 0.9, and 1.1–1.2× on the paper's Z; at
-    /// g 0.3 it raised the variance (docs/renderer-sampling.md).
+    /// peaks where the vertex lies on the line between its neighbours, so strongly forward media draw
+    /// that lobe most of the time; at g 0.3 a large share raised the variance (the measurements are in
+    /// docs/renderer-sampling.md).
     pub fn default_target_lobe(&self) -> f64 {
         match self.phase {
             _ if !self.scatters() => 0.0,
