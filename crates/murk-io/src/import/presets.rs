@@ -204,6 +204,10 @@ const FK_RECTIFIED: &str = "fk (t = 0 at the wall: rectified by --tof)";
 const FK_RAW: &str =
     "fk (not rectified: t = 0 is the laser's sync, not the wall; depths read long without --tof)";
 
+/// The `scene_info` line of a scan whose t = 0 is not the wall, which `murk info`'s depth axis reads.
+pub(crate) const TIME_ZERO_NOT_WALL: &str =
+    "time_zero: not the wall (an unrectified scan: import it with --tof)";
+
 /// The layout of an array preset; `None` for the presets that carry their own wall points.
 pub(super) fn spec(p: Preset) -> Option<Spec> {
     let display_abt = |var, bin_ps, side, format| Spec {
@@ -490,6 +494,10 @@ pub(super) fn import(path: &Path, p: Preset, s: &Spec, o: &ImportOptions) -> Res
     };
     let mut extra = super::flip_line(o.flip);
     extra += s.medium;
+    if p == Preset::Fk && o.tof.is_none() {
+        extra += TIME_ZERO_NOT_WALL;
+        extra += "\n";
+    }
     if let Some(tof) = &o.tof {
         let BinWidth::Ps(bin_ps) = bin_width else {
             return Err(Error::param(

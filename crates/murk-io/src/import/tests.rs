@@ -291,16 +291,18 @@ fn fk_meas_a_b_t_and_tof() {
         }
         cap.illum = cap.sensor.clone();
     };
+    // The capture's format line and `murk info`'s depth axis.
+    let says = |cap: &Capture, format: &str, depth_axis: &str| {
+        assert!(cap.scene_info.contains(format), "{}", cap.scene_info);
+        let info = crate::describe(cap).join("\n");
+        assert!(info.contains(depth_axis), "{info}");
+    };
     for v73 in [true, false] {
         let p = dir.join("meas.mat");
         write(&p, false, v73);
         let mut cap = import(&p, &ImportOptions::preset(Preset::Fk)).unwrap();
         // Without tofgrid the capture says its t = 0 is not the wall (nlos-fk's README).
-        assert!(
-            cap.scene_info.contains("not rectified"),
-            "{}",
-            cap.scene_info
-        );
+        says(&cap, "not rectified", "depth axis: t = 0 is not the wall");
         scaled(&mut cap);
         assert_point(&cap, z, "fk");
     }
@@ -318,11 +320,7 @@ fn fk_meas_a_b_t_and_tof() {
     let mut o = ImportOptions::preset(Preset::Fk);
     o.tof = Some(tof);
     let mut cap = import(&p, &o).unwrap();
-    assert!(
-        cap.scene_info.contains("rectified by --tof"),
-        "{}",
-        cap.scene_info
-    );
+    says(&cap, "rectified by --tof", "comes from depth p/2");
     scaled(&mut cap);
     assert_point(&cap, z, "fk with tof");
     std::fs::remove_dir_all(dir).ok();
