@@ -23,10 +23,11 @@ pub enum Preset {
     /// the side is `lighting`'s x extent (0.7 m without it).
     LctTransient,
     /// Lindell et al. 2019 (f-k migration): MATLAB v7.3 or v5 `meas` (a, b, t) N × N × T, 32 ps
-    /// bins, confocal over a 2 m square, t = 0 at the wall. The scenes' `tof.mat` holds `tofgrid`
-    /// (ps per scan point, same (a, b) indexing): with it (`--tof`) each histogram moves
+    /// bins, confocal over a 2 m square, t = 0 at the laser's sync. The scenes' `tof.mat` holds
+    /// `tofgrid` (ps per scan point, same (a, b) indexing): with it (`--tof`) each histogram moves
     /// floor(tofgrid / bin) bins earlier (the reference code's circshift; murk fills the vacated
-    /// bins with zeros instead of wrapping). Row a and column b as CDT's.
+    /// bins with zeros instead of wrapping), which puts t = 0 at the wall. Row a and column b as
+    /// CDT's.
     Fk,
     /// Ahn et al. 2019 (convolutional approximations): MATLAB v5 struct `NLOSDATA` with
     /// `transient` (Nx, Ny, Nt), `l` and `s` (Nx·Ny, 3) laser and sensor wall points (point
