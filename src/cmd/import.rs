@@ -53,7 +53,8 @@ Scan sides known by file name (cdt): letter_s 0.636 m, mannequin 0.609 m, letter
 Array scans become a confocal grid at z = 0 from −side/2 to +side/2. The presets' arrays are shown by\n\
 their reference code with row a top → bottom and column b left → right; row a maps to +y → −y and\n\
 column b to +x → −x, so murk's front view (from the wall, +y up, +x left) shows the scene as the\n\
-reference does. The generic form's x and y axes run along +x and +y (reverse them with --flip).\n\
+reference does (wu2021's reference plots b upwards and a leftwards: a maps to +x, b to +y).\n\
+The generic form's x and y axes run along +x and +y (reverse them with --flip).\n\
 Ahn 2019 and Z-NLOS files keep their own wall points. docs/import.md has each dataset's details.")]
 pub struct ImportArgs {
     /// A MATLAB .mat (v5 or v7.3), HDF5 or .npy file.

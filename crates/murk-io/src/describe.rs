@@ -46,7 +46,9 @@ fn depth_axis(cap: &Capture) -> String {
     } else {
         ""
     };
-    if cap.scene_info.contains("medium_n:") {
+    if cap.scene_info.contains(crate::import::TIME_ZERO_NOT_WALL) {
+        "depth axis: t = 0 is not the wall (an unrectified scan), so depth is not path/2 here; f-k files: import with --tof".to_string()
+    } else if cap.scene_info.contains("medium_n:") {
         format!(
             "depth axis: the scene lies inside a diffusive medium at z > {wall_z:+.3} m (its surface); light diffuses there, so depth is not path/2: reconstruct with --method bmm"
         )

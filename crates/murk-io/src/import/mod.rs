@@ -24,6 +24,7 @@ use crate::mat::ArrayFile;
 use murk_core::{Capture, DVec3, Error, Limits, PointLayout, PointSet, Result, TimeAxis};
 use std::path::{Path, PathBuf};
 
+pub(crate) use presets::TIME_ZERO_NOT_WALL;
 pub use presets::{Preset, BMM_MEDIUM, BMM_SCENES, CDT_SCENES};
 
 /// The speed of light the reference codes convert bins with (their depths assume it).

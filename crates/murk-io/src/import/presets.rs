@@ -23,10 +23,11 @@ pub enum Preset {
     /// the side is `lighting`'s x extent (0.7 m without it).
     LctTransient,
     /// Lindell et al. 2019 (f-k migration): MATLAB v7.3 or v5 `meas` (a, b, t) N × N × T, 32 ps
-    /// bins, confocal over a 2 m square, t = 0 at the wall. The scenes' `tof.mat` holds `tofgrid`
-    /// (ps per scan point, same (a, b) indexing): with it (`--tof`) each histogram moves
+    /// bins, confocal over a 2 m square, t = 0 at the laser's sync. The scenes' `tof.mat` holds
+    /// `tofgrid` (ps per scan point, same (a, b) indexing): with it (`--tof`) each histogram moves
     /// floor(tofgrid / bin) bins earlier (the reference code's circshift; murk fills the vacated
-    /// bins with zeros instead of wrapping). Row a and column b as CDT's.
+    /// bins with zeros instead of wrapping), which puts t = 0 at the wall. Row a and column b as
+    /// CDT's.
     Fk,
     /// Ahn et al. 2019 (convolutional approximations): MATLAB v5 struct `NLOSDATA` with
     /// `transient` (Nx, Ny, Nt), `l` and `s` (Nx·Ny, 3) laser and sensor wall points (point
@@ -41,13 +42,14 @@ pub enum Preset {
     Xiao2024,
     /// Wu et al. 2021: MATLAB v5 `sig_in` (a, b, t) 64 × 64 × 512 (float64 or uint8), `timeRes`
     /// (bin, s), `width` (half side, m), `pulsewidth`, `radius`; 32 ps, confocal over ±0.425 m,
-    /// t = 0 at the relay wall. murk uses the file's `timeRes` and `width` where present; row a and
-    /// column b as CDT's.
+    /// t = 0 at the relay wall. murk uses the file's `timeRes` and `width` where present. Their
+    /// display is not CDT's: it plots index b upwards and index a to the left seen from the wall,
+    /// so a runs along +x and b along +y.
     Wu2021,
     /// Zhang et al. 2023 (ABP): MATLAB v7.3 `tof_data` (a, b, t) 64 × 64 × 2048 (h5py shape
     /// (2048, 64, 64)), 5 ps bins, confocal over 0.8 m, t = 0 at the wall. Their script zeroes
     /// bins 1–500 and 1200–end: murk gates the first 500; cutting the end is left to the user.
-    /// Row a and column b as CDT's.
+    /// Row a and column b as CDT's (their `Z.mat` display; they show `LT.mat` transposed).
     Abp,
     /// Galindo et al. 2019 (Zaragoza Z-NLOS): HDF5 `data` (sx, sy, bounces, t, colours) or its
     /// reverse (colours, t, bounces, sy, sx) for confocal renders, with `cameraGridPositions`,
@@ -143,7 +145,7 @@ impl Preset {
             Preset::Fk => "Lindell et al. 2019, v7.3/v5 meas (a, b, t), 32 ps, 2 m side; --tof tof.mat rectifies",
             Preset::Ahn2019 => "Ahn et al. 2019, v5 struct NLOSDATA: transient (x, y, t), l/s points, times, delta",
             Preset::Xiao2024 => "Xiao et al. 2024, v5 sig (a, b, t) 32×32×512, 32 ps, 0.82 m side (orientation assumed as cdt)",
-            Preset::Wu2021 => "Wu et al. 2021, v5 sig_in (a, b, t) 64×64×512, timeRes (s), width (half side), 32 ps, 0.85 m",
+            Preset::Wu2021 => "Wu et al. 2021, v5 sig_in (a, b, t) 64×64×512, timeRes (s), width (half side), 32 ps, 0.85 m, a along +x",
             Preset::Abp => "Zhang et al. 2023, v7.3 tof_data (a, b, t) 64×64×2048, 5 ps, 0.8 m side, first 500 bins gated",
             Preset::Znlos => "Galindo et al. 2019 Z-NLOS HDF5: confocal data + grid positions, deltaT/t0 in m",
             Preset::Bmm => "Du et al. 2022 (BMM), v5 raw_data (a, b, t) 64×64×256, 55 ps, side by file name, foam constants",
@@ -196,6 +198,16 @@ pub(super) struct Spec {
 
 /// Row a, column b: murk's x is the reversed column, y the reversed row.
 const DISPLAYED: Flip = Flip { x: true, y: true };
+
+/// f-k's raw `meas` starts at the laser's sync: its README says `tofgrid` is what puts t = 0 at
+/// the wall for every scan point (computational-imaging/nlos-fk, README.md, "Description of Files").
+const FK_RECTIFIED: &str = "fk (t = 0 at the wall: rectified by --tof)";
+const FK_RAW: &str =
+    "fk (not rectified: t = 0 is the laser's sync, not the wall; depths read long without --tof)";
+
+/// The `scene_info` line of a scan whose t = 0 is not the wall, which `murk info`'s depth axis reads.
+pub(crate) const TIME_ZERO_NOT_WALL: &str =
+    "time_zero: not the wall (an unrectified scan: import it with --tof)";
 
 /// The layout of an array preset; `None` for the presets that carry their own wall points.
 pub(super) fn spec(p: Preset) -> Option<Spec> {
@@ -250,7 +262,7 @@ pub(super) fn spec(p: Preset) -> Option<Spec> {
         },
         Preset::Fk => Spec {
             container: Container::Either,
-            ..display_abt("meas", 32.0, Side::Fixed(2.0), "fk (t = 0 at the wall)")
+            ..display_abt("meas", 32.0, Side::Fixed(2.0), FK_RECTIFIED)
         },
         Preset::Xiao2024 => display_abt(
             "sig",
@@ -258,7 +270,12 @@ pub(super) fn spec(p: Preset) -> Option<Spec> {
             Side::Fixed(0.82),
             "xiao2024 (t = 0 at the wall; orientation assumed as cdt)",
         ),
+        // Their solver works on sig_in permuted to (b, a, t) and draw3D plots b on the vertical
+        // axis, a on the one that MATLAB's default 3-D view (az −37.5°) shows leftwards from the
+        // wall side (nzhang1218/NLOS_imaging_over_1.43km, fcns/sp1400.m and fcns/draw3D.m).
         Preset::Wu2021 => Spec {
+            axes: [Dim::X, Dim::Y, Dim::T],
+            flip: Flip::default(),
             bin_var_s: Some("timeRes"),
             ..display_abt(
                 "sig_in",
@@ -478,6 +495,10 @@ pub(super) fn import(path: &Path, p: Preset, s: &Spec, o: &ImportOptions) -> Res
     };
     let mut extra = super::flip_line(o.flip);
     extra += s.medium;
+    if p == Preset::Fk && o.tof.is_none() {
+        extra += TIME_ZERO_NOT_WALL;
+        extra += "\n";
+    }
     if let Some(tof) = &o.tof {
         let BinWidth::Ps(bin_ps) = bin_width else {
             return Err(Error::param(
@@ -494,7 +515,10 @@ pub(super) fn import(path: &Path, p: Preset, s: &Spec, o: &ImportOptions) -> Res
         path,
         &Framing {
             var: s.var,
-            format: s.format,
+            format: match (p, &o.tof) {
+                (Preset::Fk, None) => FK_RAW,
+                _ => s.format,
+            },
             side_m,
             bin_width,
             gate_bins: o.gate_bins.unwrap_or(s.gate_bins),

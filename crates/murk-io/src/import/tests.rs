@@ -291,10 +291,18 @@ fn fk_meas_a_b_t_and_tof() {
         }
         cap.illum = cap.sensor.clone();
     };
+    // The capture's format line and `murk info`'s depth axis.
+    let says = |cap: &Capture, format: &str, depth_axis: &str| {
+        assert!(cap.scene_info.contains(format), "{}", cap.scene_info);
+        let info = crate::describe(cap).join("\n");
+        assert!(info.contains(depth_axis), "{info}");
+    };
     for v73 in [true, false] {
         let p = dir.join("meas.mat");
         write(&p, false, v73);
         let mut cap = import(&p, &ImportOptions::preset(Preset::Fk)).unwrap();
+        // Without tofgrid the capture says its t = 0 is not the wall (nlos-fk's README).
+        says(&cap, "not rectified", "depth axis: t = 0 is not the wall");
         scaled(&mut cap);
         assert_point(&cap, z, "fk");
     }
@@ -312,6 +320,7 @@ fn fk_meas_a_b_t_and_tof() {
     let mut o = ImportOptions::preset(Preset::Fk);
     o.tof = Some(tof);
     let mut cap = import(&p, &o).unwrap();
+    says(&cap, "rectified by --tof", "comes from depth p/2");
     scaled(&mut cap);
     assert_point(&cap, z, "fk with tof");
     std::fs::remove_dir_all(dir).ok();
@@ -371,13 +380,19 @@ fn ahn2019_struct_with_wall_points() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// Xiao 2024 (float, small negatives) and Wu 2021 (uint8, with its own timeRes and width).
+/// Xiao 2024 (float, small negatives) and Wu 2021 (uint8, with its own timeRes and width). Wu's
+/// solver plots index b upwards and index a leftwards seen from the wall (sp1400.m permutes
+/// sig_in to (b, a, t); draw3D.m plots b on the vertical axis): a runs along +x, b along +y.
 #[test]
 fn xiao2024_and_wu2021_sig_a_b_t() {
     let dir = tmpdir("imp-xw");
     let (n, nt, z) = (8, 300, 0.7);
-    let sig = |side: f64, bin_m: f64, floor: f64| {
-        let (a0, b0) = (nearest(Y0, n, side, false), nearest(X0, n, side, false));
+    let sig = |side: f64, bin_m: f64, floor: f64, displayed_row_a: bool| {
+        let (a0, b0) = if displayed_row_a {
+            (nearest(Y0, n, side, false), nearest(X0, n, side, false))
+        } else {
+            (nearest(X0, n, side, true), nearest(Y0, n, side, true))
+        };
         col_major(&[n, n, nt], move |i| {
             if (i[0], i[1]) == (a0, b0) && i[2] == bin(2.0 * z, bin_m) {
                 1.0
@@ -389,13 +404,17 @@ fn xiao2024_and_wu2021_sig_a_b_t() {
     let p = dir.join("xiao.mat");
     write_v5(
         &p,
-        &[doubles("sig", &[n, n, nt], &sig(0.82, 32.0 * PS, -0.01))],
+        &[doubles(
+            "sig",
+            &[n, n, nt],
+            &sig(0.82, 32.0 * PS, -0.01, true),
+        )],
     );
     let cap = import(&p, &ImportOptions::preset(Preset::Xiao2024)).unwrap();
     assert_point(&cap, z, "xiao2024");
 
     let (side, time_res_s) = (0.9, 16e-12);
-    let v: Vec<f64> = sig(side, time_res_s * REFERENCE_C_M_PER_S, 0.0)
+    let v: Vec<f64> = sig(side, time_res_s * REFERENCE_C_M_PER_S, 0.0, false)
         .iter()
         .map(|v| v * 255.0)
         .collect();
