@@ -1,6 +1,7 @@
 """The repository's scripts answer --help and bad arguments on their own, without running anything
 (study-table.py once read any unknown argument as "print" and started a quick study of minutes)."""
 
+import re
 import subprocess
 import sys
 
@@ -41,3 +42,14 @@ def test_every_doc_block_runs_or_says_why_not():
     assert r.returncode == 0, r.stdout
     skips = [line for line in r.stdout.splitlines() if line.startswith("SKIP")]
     assert all(line.split("): ", 1)[1].strip() for line in skips), skips
+
+
+def test_ignored_rust_tests_say_when_they_run():
+    # `cargo test` prints the reason of each ignored test: one that reads the real captures must say
+    # that .ci/run runs it where they are, not "needs …" as if they were missing on a machine that has them.
+    reasons = []
+    for f in [*ROOT.glob("tests/*.rs"), *ROOT.glob("crates/*/tests/*.rs"), *ROOT.glob("crates/*/src/**/*.rs")]:
+        reasons += [(f.relative_to(ROOT), r) for r in re.findall(r'#\[ignore = "([^"]*)"\]', f.read_text())]
+    real = [(f, r) for f, r in reasons if "shared/data/real" in r]
+    assert real, "no test reads the real captures?"
+    assert all(".ci/run runs" in r and "--ignored" in r for _, r in real), real
