@@ -8,9 +8,10 @@ PATH (so `murk` is this build). A block that cannot run in CI carries, on the li
 `<!-- doc-examples: skip: REASON -->`; it is listed with its reason, never silently passed. A block
 without a language is an error: say what it is.
 
-Usage: scripts/doc-examples.py [FILE.md ...]   (default: README.md docs/*.md)
+Usage: scripts/doc-examples.py [--list] [FILE.md ...]   (default: README.md docs/*.md)
 """
 
+import argparse
 import os
 import re
 import subprocess
@@ -58,7 +59,16 @@ def run(lang: str, code: str) -> subprocess.CompletedProcess:
 
 
 def main(argv):
-    files = [Path(a) for a in argv] or [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\nUsage:")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("files", nargs="*", metavar="FILE.md", help="default: README.md docs/*.md")
+    ap.add_argument("--list", action="store_true",
+                    help="say what each block is (run or skipped, and why) without running any")
+    a = ap.parse_args(argv)
+    files = [Path(f) for f in a.files] or [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    for md in files:
+        if not md.is_file():
+            ap.error(f"{md}: no such file")
     ran = skipped = failed = 0
     t0 = time.monotonic()
     for md in files:
@@ -76,6 +86,10 @@ def main(argv):
                       f"or text, or mark it <!-- doc-examples: skip: why -->")
                 failed += 1
                 continue
+            if a.list:
+                print(f"run  {where} ({lang})")
+                ran += 1
+                continue
             t = time.monotonic()
             try:
                 r = run(lang, code)
@@ -89,7 +103,7 @@ def main(argv):
             else:
                 print(f"FAIL {where} ({lang}, {dt:.1f} s):\n" + out[-4000:])
                 failed += 1
-    print(f"doc examples: {ran} ran, {skipped} skipped (listed above), {failed} failed, "
+    print(f"doc examples: {ran} {'would run' if a.list else 'ran'}, {skipped} skipped (listed above), {failed} failed, "
           f"{time.monotonic() - t0:.0f} s")
     return 1 if failed else 0
 

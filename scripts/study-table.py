@@ -4,9 +4,10 @@ table cannot go stale: `--check` (CI) fails when the table in the doc differs fr
 computes, `--write` replaces it. Seeded renders give identical bytes on any machine, so the table is
 the same wherever it is computed.
 
-Usage: scripts/study-table.py (--check | --write | --print) [--from STUDY_DIR]
+Usage: scripts/study-table.py [--check | --write | --print] [--from STUDY_DIR]
 """
 
+import argparse
 import csv
 import math
 import re
@@ -54,31 +55,39 @@ def table(study: Path) -> str:
 
 
 def main(argv):
-    mode = argv[0] if argv else "--print"
-    if "--from" in argv:
-        text = table(Path(argv[argv.index("--from") + 1]))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\nUsage:")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    mode = ap.add_mutually_exclusive_group()
+    mode.add_argument("--check", action="store_true", help="fail when docs/study.md's table is stale")
+    mode.add_argument("--write", action="store_true", help="replace docs/study.md's table")
+    mode.add_argument("--print", action="store_true", help="print the table (the default)")
+    ap.add_argument("--from", dest="study", metavar="STUDY_DIR", type=Path,
+                    help="read a finished quick study's folder instead of running one (minutes)")
+    a = ap.parse_args(argv)
+    doc = DOC.read_text()
+    m = re.search(re.escape(BEGIN) + r"\n(.*?)" + re.escape(END), doc, flags=re.S)
+    if m is None:
+        sys.exit(f"{DOC}: no {BEGIN} … {END} markers")
+    if a.study is not None:
+        if not (a.study / "metrics.csv").is_file():
+            ap.error(f"{a.study}: no metrics.csv (not a finished study's folder)")
+        text = table(a.study)
     else:
         with tempfile.TemporaryDirectory(prefix="murk-study-table-") as d:
             subprocess.run([str(ROOT / "target" / "release" / "murk"), "experiment", "paper", "--out", d,
                             "--scenes", str(ROOT / "scenes"), "--quiet"], check=True)
             text = table(Path(d))
-    doc = DOC.read_text()
-    m = re.search(re.escape(BEGIN) + r"\n(.*?)" + re.escape(END), doc, flags=re.S)
-    if m is None:
-        sys.exit(f"{DOC}: no {BEGIN} … {END} markers")
-    if mode == "--print":
-        print(text, end="")
-    elif mode == "--write":
+    if a.write:
         DOC.write_text(doc[:m.start(1)] + text + doc[m.end(1):])
         print(f"{DOC}: results table written")
-    elif mode == "--check":
+    elif a.check:
         if m.group(1) != text:
             print(f"{DOC}: the quick-scale results table is stale; today's code gives:\n{text}"
                   "run scripts/study-table.py --write and commit it", file=sys.stderr)
             return 1
         print(f"{DOC}: the quick-scale results table matches today's code")
     else:
-        sys.exit(__doc__)
+        print(text, end="")
     return 0
 
 

@@ -115,7 +115,7 @@ fn reconstruct(out: &Path, depth_cm: u32) -> murk_io::VolumeData {
 /// reach 1 cm: [`foam_t_perturbation_time_course`] and docs/reconstruction.md, "Why deep objects
 /// come out shallow".
 #[test]
-#[ignore = "needs ../shared/data/real/bmm_du2022"]
+#[ignore = "reads the real captures ../shared/data/real/bmm_du2022 (slow); .ci/run runs it with --ignored when that folder is there"]
 fn foam_t_found_upright() {
     let out = dir("upright");
     for (depth_cm, depth_tol_m) in [(2, 0.01), (4, 0.01), (6, 0.03)] {
@@ -165,7 +165,7 @@ fn half_space_round_trip(z: f64, t: f64) -> f64 {
 /// contrast is strongest 1–20 bins after the surface, where a 6 cm object has not yet been reached
 /// (its round trip peaks 84 bins after the surface, past the recorded data).
 #[test]
-#[ignore = "needs ../shared/data/real/bmm_du2022"]
+#[ignore = "reads the real captures ../shared/data/real/bmm_du2022 (slow); .ci/run runs it with --ignored when that folder is there"]
 fn foam_t_perturbation_time_course() {
     let out = dir("time-course");
     for (depth_cm, lo_m, hi_m) in [

@@ -599,6 +599,13 @@ fn help_teaches_and_demo_runs() {
     ] {
         assert!(d.join(f).exists(), "{f} missing");
     }
+    // The page names murk's version once, in its provenance.
+    let page = std::fs::read_to_string(d.join("index.html")).unwrap();
+    assert_eq!(
+        page.matches("murk version").count() + page.matches("murk_version").count(),
+        1,
+        "{page}"
+    );
     let (_, v) = murk_io::read_npy_f32(&d.join("volume.npy")).unwrap();
     let (vol_shape, _) = murk_io::read_npy_f32(&d.join("volume.npy")).unwrap();
     // The demo's Z is 1 m deep; depth axis 0.5..1.5 m in 51 planes → plane 25.

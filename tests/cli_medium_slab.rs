@@ -92,7 +92,7 @@ fn bad_calibration_folders_fail_naming_the_file() {
 /// The example of `murk medium --help` and docs/medium.md on the real captures: μa and μs′ near
 /// the published 0.53 /m and 262 /m (the library's test states the tolerances and why).
 #[test]
-#[ignore = "needs ../shared/data/real/cdt_lindell2020"]
+#[ignore = "reads the real calibration captures ../shared/data/real/cdt_lindell2020; .ci/run runs it with --ignored when that folder is there"]
 fn cdt_calibration_folder_through_the_cli() {
     let dir = concat!(
         env!("CARGO_MANIFEST_DIR"),

@@ -119,7 +119,7 @@ fn synthetic_foam_folder_gives_a_row_of_six_methods() {
 /// and 3.24 cm; it stays near 3 cm at 6 and 8 cm, as tests/bmm_foam.rs states), the transport mean
 /// free paths 6.26 / 12.52 / 18.78 / 25.04, and all 24 cells reconstructed.
 #[test]
-#[ignore = "needs ../shared/data/real/bmm_du2022"]
+#[ignore = "reads the real captures ../shared/data/real/bmm_du2022 (slow); .ci/run runs it with --ignored when that folder is there"]
 fn real_foam_captures() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real/bmm_du2022");
     let out = temp_dir("figure-media-real");

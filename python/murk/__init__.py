@@ -365,7 +365,7 @@ def _parts(parts) -> list:
     return list(parts)
 
 
-@dataclass
+@dataclass(repr=False)
 class Reconstruction:
     """A reconstructed volume: ``intensity[ix, iy, iz]`` (float32, C order) at voxel centres
     ``x[ix], y[iy], z[iz]`` (metres; z is the depth in front of the wall), the parameters used
@@ -377,6 +377,16 @@ class Reconstruction:
     z: np.ndarray
     params: Dict[str, str] = field(default_factory=dict)
     warnings: List[str] = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        # The dataclass's own repr printed the whole intensity array and the axes' float noise.
+        def axis(name, a):
+            return f"{name} {a[0]:.6g}..{a[-1]:.6g} m" if len(a) else f"{name} empty"
+
+        shape = " × ".join(str(n) for n in self.intensity.shape)
+        method = self.params.get("method", "?")
+        return (f"<murk.Reconstruction {method}: {shape} voxels, {axis('x', self.x)}, "
+                f"{axis('y', self.y)}, {axis('z', self.z)}>")
 
     @property
     def dims(self) -> Tuple[str, str, str]:

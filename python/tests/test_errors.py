@@ -57,6 +57,13 @@ def test_capture_repr_has_no_float_noise(tmp_path, cap):
     assert "by 0.0048 m" in r and "t from 3.5 m" in r, r
 
 
+def test_reconstruction_repr_is_one_line(cap):
+    # Not the dataclass's repr: the whole intensity array and the axes' float noise.
+    r = repr(murk.reconstruct(cap, volume=VOL))
+    assert r == ("<murk.Reconstruction Phasor Fields (fast form): 5 × 5 × 5 voxels, x -0.9..0.9 m, "
+                 "y -0.9..0.9 m, z 1.5..2.5 m>"), r
+
+
 def test_a_bad_override_is_an_input_error_not_a_format_error():
     # The scene file is fine; the caller's `set` is not.
     with pytest.raises(murk.InputError) as e:

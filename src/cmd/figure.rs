@@ -1,4 +1,4 @@
-//! `murk figure real`: the paper's real-data comparison (its Fig. 5), built by
+//! `murk figure real`: the paper's real-data comparison (its Fig. 6), built by
 //! `murk_study::figure_real`; `murk figure media`: the foam captures by every method, built by
 //! `murk_study::figure_media`.
 

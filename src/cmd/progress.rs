@@ -8,11 +8,15 @@ pub struct Bar(ProgressBar);
 /// The ETA as `{eta}` prints it, or "…" while it would be a guess: before the first unit, in the first
 /// two seconds and the first 5 % (a bar that starts with a slow unit would promise minutes).
 pub fn eta(state: &ProgressState, w: &mut dyn std::fmt::Write) {
-    if state.pos() == 0 || state.elapsed().as_secs_f64() < 2.0 || state.fraction() < 0.05 {
+    if eta_is_a_guess(state.pos(), state.elapsed().as_secs_f64(), state.fraction()) {
         let _ = w.write_str("…");
     } else {
         let _ = write!(w, "{:#}", indicatif::HumanDuration(state.eta()));
     }
+}
+
+fn eta_is_a_guess(pos: u64, elapsed_s: f64, fraction: f32) -> bool {
+    pos == 0 || elapsed_s < 2.0 || fraction < 0.05
 }
 
 impl Bar {
@@ -61,5 +65,20 @@ impl murk_recon::Progress for Bar {
 pub fn say(quiet: bool, line: impl AsRef<str>) {
     if !quiet {
         println!("{}", line.as_ref());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 3-second job whose first unit is slow once read "ETA 3m": no ETA before the first unit,
+    /// in the first two seconds or the first 5 %.
+    #[test]
+    fn eta_waits_for_evidence() {
+        assert!(eta_is_a_guess(0, 10.0, 0.0));
+        assert!(eta_is_a_guess(1, 1.9, 0.5));
+        assert!(eta_is_a_guess(1, 30.0, 0.01));
+        assert!(!eta_is_a_guess(5, 2.0, 0.05));
     }
 }

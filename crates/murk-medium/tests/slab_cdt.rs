@@ -14,7 +14,7 @@ const DIR: &str = concat!(
 /// captures gives 0.49 /m and 247 /m, 2–8 inch 0.558 and 259, a 0.3 % or 5 % level 0.569/261 and
 /// 0.550/257. The tolerances, 0.08 /m (15 %) and 13 /m (5 %), are about twice those spreads.
 #[test]
-#[ignore = "needs ../shared/data/real/cdt_lindell2020"]
+#[ignore = "reads the real calibration captures ../shared/data/real/cdt_lindell2020; .ci/run runs it with --ignored when that folder is there"]
 fn cdt_foam_matches_the_published_values() {
     let cal = read_calibration(Path::new(DIR)).unwrap();
     assert_eq!(cal.slabs.len(), 15);

@@ -83,7 +83,12 @@ pub fn demo(dir: &Path, progress: &dyn Progress) -> Result<Demo> {
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect();
-    table.extend(rec.summary(&capture.display().to_string(), cap.kind(), recon_s));
+    // The provenance above already names murk's version; the summary's own row would repeat it.
+    table.extend(
+        rec.summary(&capture.display().to_string(), cap.kind(), recon_s)
+            .into_iter()
+            .filter(|(k, _)| k != "murk_version"),
+    );
     table.insert(4, ("scene".into(), format!("planar Z letter (0.4 m) {LETTER_DEPTH_M} m behind a 1 m × 1 m wall, 64 × 64 laser points, one SPAD point at the centre, 1024 bins of 3 mm")));
     table.push((
         "synthesis + capture write seconds".into(),

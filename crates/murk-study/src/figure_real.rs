@@ -1,4 +1,4 @@
-//! The paper's real-data comparison (its Fig. 5; `murk figure real`): the five CDT captures of
+//! The paper's real-data comparison (its Fig. 6; `murk figure real`): the five CDT captures of
 //! Lindell & Wetzstein 2020 reconstructed with CDT and with confocal Phasor Fields (λ = 4Δc,
 //! 8 cycles, with λ read on the depth axis and, for comparison, on the path axis), as a PNG grid
 //! (rows CDT, PF, PF; a column per scene) and an index.html with parameters, depths and timings.
