@@ -29,7 +29,7 @@ pub struct LinePlot {
 }
 
 /// Size (pixels, or SVG user units) of the plots written here.
-pub const PLOT_SIZE: (u32, u32) = (800, 500);
+pub const PLOT_SIZE: (u32, u32) = (480, 320);
 
 /// Tableau's ten categorical colours (matplotlib's default cycle); series beyond ten reuse them.
 const COLOURS: [RGBColor; 10] = [
@@ -118,31 +118,39 @@ fn draw<DB: DrawingBackend>(
     let (x0, x1) = inside((x0, x1), plot.x_range, data_x);
     let (y0, y1) = inside((y0, y1), plot.y_range, data_y);
     // The legend lies right of the chart, so it never hides a point nor stretches an axis.
-    let labels: Vec<(usize, &str)> = plot
+    let mut labels: Vec<(usize, &str)> = plot
         .series
         .iter()
         .enumerate()
         .filter(|(_, s)| !s.label.is_empty())
         .map(|(i, s)| (i, s.label.as_str()))
         .collect();
+    // A lone series is named in the title: a legend for one line would take a third of the width.
+    let title = match labels.as_slice() {
+        [(_, only)] if plot.series.len() == 1 => format!("{} ({only})", plot.title),
+        _ => plot.title.clone(),
+    };
+    if plot.series.len() == 1 {
+        labels.clear();
+    }
     let legend_w = if labels.is_empty() {
         0
     } else {
-        let font = FontDesc::new(FontFamily::Name(FAMILY), 15.0, FontStyle::Normal);
+        let font = FontDesc::new(FontFamily::Name(FAMILY), 13.0, FontStyle::Normal);
         let widest = labels
             .iter()
             .map(|(_, l)| font.box_size(l).map_or(8 * l.len() as u32, |b| b.0))
             .max()
             .unwrap_or(0);
-        (widest + 44).min(root.dim_in_pixel().0 / 3)
+        (widest + 36).min(root.dim_in_pixel().0 / 3)
     };
     let (root, legend) = root.split_horizontally(root.dim_in_pixel().0 - legend_w);
 
     let mut chart = ChartBuilder::on(&root)
-        .caption(&plot.title, (FAMILY, 24))
-        .margin(16)
-        .x_label_area_size(52)
-        .y_label_area_size(76)
+        .caption(&title, (FAMILY, 17))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(err)?;
     chart
@@ -151,8 +159,8 @@ fn draw<DB: DrawingBackend>(
         .y_desc(plot.y_label.as_str())
         .x_label_formatter(&tick)
         .y_label_formatter(&tick)
-        .label_style((FAMILY, 14))
-        .axis_desc_style((FAMILY, 17))
+        .label_style((FAMILY, 13))
+        .axis_desc_style((FAMILY, 14))
         .light_line_style(TRANSPARENT)
         .bold_line_style(RGBColor(225, 225, 225))
         .draw()
@@ -194,11 +202,11 @@ fn draw<DB: DrawingBackend>(
     }
     for (k, (i, label)) in labels.iter().enumerate() {
         let c = COLOURS[i % COLOURS.len()];
-        let y = 60 + 24 * k as i32;
+        let y = 40 + 18 * k as i32;
         legend
             .draw(&PathElement::new(vec![(4, y), (26, y)], c.stroke_width(2)))
             .map_err(err)?;
-        let style = TextStyle::from((FAMILY, 15).into_font())
+        let style = TextStyle::from((FAMILY, 13).into_font())
             .color(&BLACK)
             .pos(Pos::new(HPos::Left, VPos::Center));
         legend
@@ -442,7 +450,11 @@ mod tests {
         );
         let wide = tick_texts(&svg(&[0.5, 1.3]));
         assert!(wide.iter().any(|x| x == "1.3" || x == "1.4"), "{wide:?}");
-        assert!(wide.iter().any(|x| x == "a long series label"));
+        // A lone series is named in the title, not in a legend.
+        assert!(
+            wide.iter().any(|x| x == "IoU (a long series label)"),
+            "{wide:?}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
