@@ -2,12 +2,13 @@
 //! from and a part render leaves as its result; where a render to a file keeps it and how often.
 
 use super::provenance::fingerprint;
-use super::run::MAX_SECONDS;
 use crate::hash::Fnv1a;
 use murk_core::{Error, Result};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
+
+const MAX_SECONDS: f64 = murk_core::Limits::MAX_SECONDS;
 
 /// The interval between checkpoint appends, from seconds (0: after every unit). Refuses negative,
 /// non-finite and longer-than-a-year values.

@@ -297,19 +297,6 @@ impl<'a> Plan<'a> {
         }
     }
 
-    /// One empty capture per albedo, each with its `scene_info`.
-    pub(super) fn empty_captures(
-        &self,
-        spp: u64,
-        seed: u64,
-        shard: Option<(usize, usize)>,
-    ) -> Vec<Capture> {
-        self.scene_infos(spp, seed, shard)
-            .into_iter()
-            .map(|info| self.empty_capture(info))
-            .collect()
-    }
-
     /// What a capture gets once all its units are in: the devices' radiometry, if the scene asks.
     pub(super) fn finish(&self, cap: &mut Capture) {
         let spec = &self.scene.capture;

@@ -3,6 +3,7 @@
 
 use super::Plan;
 use crate::scene::Scene;
+use murk_core::Capture;
 
 impl<'a> Plan<'a> {
     /// The `scene_info` of each capture this plan renders (one per albedo of a sweep): what a
@@ -23,6 +24,19 @@ impl<'a> Plan<'a> {
                     self.albedos
                 )
             })
+            .collect()
+    }
+
+    /// One empty capture per albedo, each with its `scene_info`.
+    pub(super) fn empty_captures(
+        &self,
+        spp: u64,
+        seed: u64,
+        shard: Option<(usize, usize)>,
+    ) -> Vec<Capture> {
+        self.scene_infos(spp, seed, shard)
+            .into_iter()
+            .map(|info| self.empty_capture(info))
             .collect()
     }
 

@@ -23,7 +23,7 @@ pub struct RenderOptions {
     pub checkpoint_every: Duration,
 }
 
-pub(super) const MAX_SECONDS: f64 = murk_core::Limits::MAX_SECONDS;
+const MAX_SECONDS: f64 = murk_core::Limits::MAX_SECONDS;
 const MAX_SPP: u64 = murk_core::Limits::MAX_SPP;
 
 /// A time budget for [`Plan::spp_for_budget`]: 0 < seconds ≤ one year.
