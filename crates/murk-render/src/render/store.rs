@@ -248,3 +248,68 @@ pub fn sweep_output(out: &Path, albedo: f64) -> PathBuf {
     };
     out.with_file_name(name)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Overrides;
+
+    const SCENE: &str = r#"
+[relay]
+kind = "wall"
+size = [1.0, 1.0]
+[capture]
+kind = "laser-grid"
+grid = [2, 2]
+bins = 16
+bin_width = 0.2
+[[object]]
+shape = "z-letter"
+center = [0.0, 0.0, 1.0]
+"#;
+
+    /// A fresh render removes a stale `out.ckpt` (which would not even parse) and leaves only its
+    /// capture; a resume with no checkpoint and no interval keeps none; a named checkpoint over the
+    /// output is refused before any work.
+    #[test]
+    fn stored_renders_keep_and_drop_their_checkpoint() {
+        let dir = std::env::temp_dir().join(format!("murk-stored-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = Scene::from_str(SCENE, &dir.join("s.toml"), &Overrides::default()).unwrap();
+        let out = dir.join("s.h5");
+        let ckpt = checkpoint_path(&out);
+        std::fs::write(&ckpt, b"not a checkpoint").unwrap();
+        let beside = |resume, every_s| Outputs::Beside {
+            out: &out,
+            resume,
+            every_s,
+        };
+        let fresh = StoredRender::new(&scene, None, None, beside(false, 60.0)).unwrap();
+        assert_eq!(fresh.checkpoint(), Some(ckpt.as_path()));
+        let never = AtomicBool::new(false);
+        let caps = fresh
+            .run(&fresh.options(2, 1, None), &|_, _| {}, &never)
+            .unwrap();
+        assert!(
+            !ckpt.exists(),
+            "the stale or the render's own checkpoint outlived it"
+        );
+        assert_eq!(murk_io::read_capture(&out).unwrap().h, caps[0].h);
+
+        let resumed = StoredRender::new(&scene, None, None, beside(true, 0.0)).unwrap();
+        assert_eq!(resumed.checkpoint(), None);
+
+        let over = Outputs::Named {
+            out: Some(&out),
+            checkpoint: Some(&out),
+            every_s: 0.0,
+        };
+        let e = StoredRender::new(&scene, None, None, over).err().unwrap();
+        assert!(
+            e.to_string()
+                .ends_with("the checkpoint and the output are the same file"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
