@@ -9,6 +9,7 @@
 //! mutant is written to `tests/fuzz-regressions/<input>/` and replayed by every later run: commit it
 //! with the fix.
 
+use murk_render::hash::{fnv1a, Fnv1a};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;
@@ -296,9 +297,10 @@ fn readers_survive_mutated_inputs() {
             })
             .unwrap_or_default();
         cases.sort();
-        let mut rng = Rng(name.bytes().fold(0x6d75_726b, |h, b| {
-            (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
-        }));
+        let seed_hash = name
+            .bytes()
+            .fold(Fnv1a::with_basis(0x6d75_726b), |h, b| h.word(u64::from(b)));
+        let mut rng = Rng(seed_hash.finish());
         cases.extend((0..mutants).map(|i| (format!("mutant {i}"), mutate(&seed, &mut rng))));
         for (i, (label, bytes)) in cases.iter().enumerate() {
             // The scene reads its mesh paths relative to its folder; the mutants live elsewhere.
@@ -311,9 +313,7 @@ fn readers_survive_mutated_inputs() {
             if let Err(why) = verdict {
                 let keep = regressions_dir(name);
                 std::fs::create_dir_all(&keep).unwrap();
-                let h = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-                    (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
-                });
+                let h = fnv1a(bytes.iter().copied());
                 let kept = keep.join(format!("{h:016x}.{ext}"));
                 std::fs::write(&kept, bytes).unwrap();
                 failures.push(format!(

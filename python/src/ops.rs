@@ -4,7 +4,7 @@
 use crate::capture::{Capture, Source};
 use crate::{compute, thread_count, to_py, Ticker};
 use murk_core::{DVec3, TimeAxis};
-use murk_render::{Overrides, Plan, RenderOptions, Scene};
+use murk_render::{Outputs, Overrides, Scene, StoredRender};
 use murk_study::plan::{Figure, Scale, StudyOptions};
 use murk_study::run::{Event, Observer};
 use murk_synth::{synthesize, CaptureLayout, SynthOptions, Synthesis};
@@ -95,63 +95,22 @@ impl RenderArgs {
         }
     }
 
-    /// The render of `scene`: plain, or a sweep over `albedos`.
-    fn plan<'s>(&self, scene: &'s Scene) -> murk_core::Result<Plan<'s>> {
-        Plan::with_albedos(scene, self.albedos.as_deref())
+    /// The render of `scene` (read from `path` unless given as `text`): plain, or a sweep over
+    /// `albedos`, its outputs and checkpoint refused before any work where `murk render` would.
+    fn stored<'s>(&self, path: &Path, scene: &'s Scene) -> murk_core::Result<StoredRender<'s>> {
+        let outputs = Outputs::Named {
+            out: self.out.as_deref(),
+            checkpoint: self.checkpoint.as_deref(),
+            every_s: self.checkpoint_every,
+        };
+        let file = self.text.is_none().then_some(path);
+        StoredRender::new(scene, file, self.albedos.as_deref(), outputs)
     }
 
-    fn options(&self, scene: &Scene) -> murk_core::Result<RenderOptions> {
-        Ok(RenderOptions {
-            spp: self.spp.unwrap_or(scene.settings.spp),
-            seed: self.seed,
-            shard: self.shard,
-            checkpoint: self.checkpoint.clone(),
-            checkpoint_every: murk_render::checkpoint_interval(self.checkpoint_every)?,
-        })
+    /// The spp of a render of `scene`: the given one, else the scene's.
+    fn spp(&self, scene: &Scene) -> u64 {
+        self.spp.unwrap_or(scene.settings.spp)
     }
-}
-
-/// The files a render of `args` writes, refused before any work if one cannot be written, is the
-/// scene file itself or a mesh it reads, or is the checkpoint (which is removed once the captures
-/// are written).
-fn checked_outputs(
-    path: &Path,
-    scene: &Scene,
-    args: &RenderArgs,
-) -> murk_core::Result<Vec<PathBuf>> {
-    let outs = args.out.as_deref().map_or(Vec::new(), |out| {
-        murk_render::render_outputs(out, args.albedos.as_deref())
-    });
-    let file: Vec<&Path> = args
-        .text
-        .is_none()
-        .then_some(path)
-        .into_iter()
-        .chain(scene.input_files.iter().map(PathBuf::as_path))
-        .collect();
-    if let Some(c) = args.checkpoint.as_deref() {
-        if let Some(input) = file.iter().find(|f| murk_io::same_target(f, c)) {
-            return Err(murk_core::Error::param(format!(
-                "{}: the checkpoint would replace the input {}",
-                c.display(),
-                input.display()
-            )));
-        }
-    }
-    for out in &outs {
-        murk_io::check_h5_output(out, &file)?;
-        if let Some(c) = args
-            .checkpoint
-            .as_deref()
-            .filter(|c| murk_io::same_target(c, out))
-        {
-            return Err(murk_core::Error::param(format!(
-                "{}: the checkpoint and the output are the same file",
-                c.display()
-            )));
-        }
-    }
-    Ok(outs)
 }
 
 /// A Monte Carlo render of a scene, as `murk render` does it: one capture, or one per albedo of
@@ -168,15 +127,12 @@ pub fn render(
 ) -> PyResult<Vec<Capture>> {
     let caps = compute(py, progress, threads, |t: &Ticker| {
         let loaded = args.scene(&scene)?;
-        let outs = checked_outputs(&scene, &loaded, &args)?;
-        let caps = args.plan(&loaded)?.render_stored(
-            &args.options(&loaded)?,
-            &outs,
-            &|path, cap| murk_io::write_capture(path, cap),
+        let stored = args.stored(&scene, &loaded)?;
+        stored.run(
+            &stored.options(args.spp(&loaded), args.seed, args.shard),
             &|done, total| t.count(done as u64, total as u64),
             t.stop(),
-        )?;
-        Ok(caps)
+        )
     })?;
     Ok(caps.into_iter().map(|cap| Capture { cap }).collect())
 }
@@ -193,9 +149,10 @@ pub fn render_part(
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
     compute(py, progress, threads, |t: &Ticker| {
-        let scene = args.scene(&scene)?;
-        args.plan(&scene)?.render_part(
-            &args.options(&scene)?,
+        let loaded = args.scene(&scene)?;
+        let stored = args.stored(&scene, &loaded)?;
+        stored.plan().render_part(
+            &stored.options(args.spp(&loaded), args.seed, args.shard),
             &|done, total| t.count(done as u64, total as u64),
             t.stop(),
         )
@@ -216,8 +173,10 @@ pub fn check_render(
     threads.map(thread_count).transpose()?;
     compute(py, None, None, |_| {
         let loaded = args.scene(&scene)?;
-        checked_outputs(&scene, &loaded, &args)?;
-        args.plan(&loaded)?.check(&args.options(&loaded)?)
+        let stored = args.stored(&scene, &loaded)?;
+        stored
+            .plan()
+            .check(&stored.options(args.spp(&loaded), args.seed, args.shard))
     })
 }
 
@@ -240,9 +199,11 @@ pub fn assemble(
     parts: Vec<PathBuf>,
 ) -> PyResult<Vec<Capture>> {
     let caps = compute(py, None, None, |_| {
-        let scene = args.scene(&scene)?;
-        args.plan(&scene)?
-            .assemble_all(args.options(&scene)?.spp, args.seed, &parts)
+        let loaded = args.scene(&scene)?;
+        let stored = args.stored(&scene, &loaded)?;
+        stored
+            .plan()
+            .assemble_all(args.spp(&loaded), args.seed, &parts)
     })?;
     Ok(caps.into_iter().map(|cap| Capture { cap }).collect())
 }

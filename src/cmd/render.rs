@@ -2,14 +2,11 @@
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use murk_render::{
-    checkpoint_path, merge, output_checkpoint, render_outputs, Overrides, Plan, RenderOptions,
-    Scene,
-};
+use murk_render::{checkpoint_path, merge, Outputs, Overrides, Scene, StoredRender};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 #[derive(Args)]
 #[command(after_help = "Examples:\n  \
@@ -128,40 +125,21 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         ..Overrides::default()
     };
     let scene = Scene::load(&a.scene, &ov)?;
-    // The scene file and the meshes it reads are inputs that no output may replace.
-    let inputs: Vec<&Path> = std::iter::once(a.scene.as_path())
-        .chain(scene.input_files.iter().map(PathBuf::as_path))
-        .collect();
-    let outs = render_outputs(&a.out, a.albedos.as_deref());
-    for out in &outs {
-        murk_io::check_h5_output(out, &inputs)?;
-    }
+    let outputs = Outputs::Beside {
+        out: &a.out,
+        resume: a.resume,
+        every_s: a.checkpoint_every,
+    };
+    let stored = StoredRender::new(&scene, Some(&a.scene), a.albedos.as_deref(), outputs)?;
     if let Some(t) = &a.truth {
-        let taken: Vec<&Path> = inputs
-            .iter()
-            .copied()
-            .chain(outs.iter().map(PathBuf::as_path))
-            .collect();
-        murk_io::check_h5_output(t, &taken)?;
+        murk_io::check_h5_output(t, &stored.taken())?;
         anyhow::ensure!(
-            !outs.iter().any(|o| murk_io::same_target(o, t)),
+            !stored.outputs().iter().any(|o| murk_io::same_target(o, t)),
             "{}: --truth and the capture name the same file",
             t.display()
         );
     }
-    // The checkpoint is replaced or removed as the render goes, so it must not be an input (the
-    // truth cannot be: it is named .h5).
-    let ckpt = checkpoint_path(&a.out);
-    if let Some(input) = inputs.iter().find(|i| murk_io::same_target(i, &ckpt)) {
-        anyhow::bail!(
-            "{}: is the render's checkpoint for --out {}; choose another output",
-            input.display(),
-            a.out.display()
-        );
-    }
-    // The plan checks a sweep's albedos before anything is written.
-    let plan = Plan::with_albedos(&scene, a.albedos.as_deref())?;
-    crate::cmd::pool(a.threads)?.install(|| render(&a, &plan, &outs, quiet))?;
+    crate::cmd::pool(a.threads)?.install(|| render(&a, &stored, quiet))?;
     // After the render, so that a refused or failed one leaves no file but its checkpoint.
     if let Some(t) = &a.truth {
         murk_io::write_truth_h5(t, &scene.ground_truth())?;
@@ -169,7 +147,8 @@ pub fn run(a: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow::Result<()> {
+fn render(a: &RenderArgs, stored: &StoredRender, quiet: bool) -> anyhow::Result<()> {
+    let plan = stored.plan();
     let spp = match (a.spp, a.time_budget) {
         (Some(s), _) => s,
         (None, Some(b)) => plan.spp_for_budget(b, a.shard)?,
@@ -183,10 +162,9 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
             ckpt_path.display()
         );
     }
-    let ckpt = output_checkpoint(&a.out, a.resume, a.checkpoint_every)?;
     if !quiet {
-        let note = match &ckpt {
-            Some((path, _)) => crate::cmd::Interrupted {
+        let note = match stored.checkpoint() {
+            Some(path) => crate::cmd::Interrupted {
                 stopped: format!(
                     "interrupted: {} keeps the finished work units; the same command with --resume goes on from them",
                     path.display()
@@ -206,13 +184,6 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
         };
         let _ = crate::cmd::ON_INTERRUPT.set(note);
     }
-    let opt = RenderOptions {
-        spp,
-        seed: a.seed,
-        shard: a.shard,
-        checkpoint: ckpt.as_ref().map(|c| c.0.clone()),
-        checkpoint_every: ckpt.map_or(Duration::MAX, |c| c.1),
-    };
     let units = plan.shard_units(a.shard).len();
     let bar = ProgressBar::new(units as u64);
     if quiet || !std::io::stderr().is_terminal() {
@@ -244,10 +215,8 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
     };
     let t0 = Instant::now();
     crate::cmd::RENDERING.store(true, Ordering::SeqCst);
-    let rendered = plan.render_stored(
-        &opt,
-        outs,
-        &|out, cap| murk_io::write_capture(out, cap),
+    let rendered = stored.run(
+        &stored.options(spp, a.seed, a.shard),
         &|done, _| {
             reused.get_or_init(|| say_reused(done));
             bar.set_position(done as u64)
@@ -265,7 +234,9 @@ fn render(a: &RenderArgs, plan: &Plan, outs: &[PathBuf], quiet: bool) -> anyhow:
             "murk: {} points × {spp} spp in {secs:.2} s ({:.2} M paths/s) → {}",
             points,
             paths / secs / 1e6,
-            outs.iter()
+            stored
+                .outputs()
+                .iter()
                 .map(|o| o.display().to_string())
                 .collect::<Vec<_>>()
                 .join(", ")

@@ -215,7 +215,7 @@ impl Object {
                 .flat_map(|v| v.to_array())
                 .flat_map(|c| c.to_bits().to_le_bytes())
         });
-        crate::render::fingerprint_bytes(bits)
+        crate::hash::fnv1a(bits)
     }
 }
 

@@ -14,6 +14,7 @@
 
 pub mod bench;
 mod geometry;
+pub mod hash;
 mod integrator;
 mod medium;
 mod overrides;
@@ -26,8 +27,9 @@ pub use integrator::{Endpoint, Sampler, Tracer};
 pub use medium::{Grid, Height, Homogeneous, Kind as MediumKind, Medium, Phase};
 pub use overrides::{Overrides, Spelling};
 pub use render::{
-    check_shard, checkpoint_interval, checkpoint_path, fingerprint, merge, output_checkpoint,
-    render_key, render_outputs, scene_info, sweep_output, time_budget, Plan, RenderOptions,
+    check_shard, checkpoint_interval, checkpoint_path, fingerprint, merge, render_key,
+    render_outputs, scene_info, sweep_output, time_budget, Outputs, Plan, RenderOptions,
+    StoredRender,
 };
 pub use scene::{
     CaptureDef, CaptureKindDef, CaptureSpec, MediumDef, MediumKindDef, ObjectDef, Relay, RelayDef,

@@ -1,6 +1,8 @@
 //! Determinism (threads, shards, resume) and one-line errors for bad scene files.
 
-use murk_render::{merge, Overrides, Plan, RenderOptions, Scene};
+use murk_render::{
+    checkpoint_path, merge, Outputs, Overrides, Plan, RenderOptions, Scene, StoredRender,
+};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -814,4 +816,47 @@ fn stored_renders_drop_their_checkpoint_only_once_written() {
     let small = plan.spp_for_budget(0.01, None).unwrap();
     let large = plan.spp_for_budget(10.0, None).unwrap();
     assert!(large > 10 * small, "{small} vs {large}");
+}
+
+/// A fresh `StoredRender` removes a stale `out.ckpt` (one that would not even parse) and leaves only
+/// its capture; a resume with no checkpoint and no interval keeps none; a named checkpoint over the
+/// output is refused before any work.
+#[test]
+fn stored_renders_keep_and_drop_their_checkpoint() {
+    use std::sync::atomic::AtomicBool;
+    let s = scene();
+    let dir = std::env::temp_dir().join(format!("murk-stored-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("s.h5");
+    let ckpt = checkpoint_path(&out);
+    std::fs::write(&ckpt, b"not a checkpoint").unwrap();
+    let beside = |resume, every_s| Outputs::Beside {
+        out: &out,
+        resume,
+        every_s,
+    };
+    let fresh = StoredRender::new(&s, None, None, beside(false, 60.0)).unwrap();
+    assert_eq!(fresh.checkpoint(), Some(ckpt.as_path()));
+    let never = AtomicBool::new(false);
+    let caps = fresh
+        .run(&fresh.options(2, 1, None), &|_, _| {}, &never)
+        .unwrap();
+    assert!(!ckpt.exists(), "a checkpoint outlived the stored capture");
+    assert_eq!(murk_io::read_capture(&out).unwrap().h, caps[0].h);
+
+    let resumed = StoredRender::new(&s, None, None, beside(true, 0.0)).unwrap();
+    assert_eq!(resumed.checkpoint(), None);
+
+    let over = Outputs::Named {
+        out: Some(&out),
+        checkpoint: Some(&out),
+        every_s: 0.0,
+    };
+    let e = StoredRender::new(&s, None, None, over).err().unwrap();
+    assert!(
+        e.to_string()
+            .ends_with("the checkpoint and the output are the same file"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -6,7 +6,7 @@ use crate::plan::{CaptureJob, Cell, Format, SceneKind, StudyPlan};
 use murk_core::{Capture, Error, GroundTruth, Result, Volume};
 use murk_methods::{Method, Options, Request, VolumeSpec};
 use murk_recon::{Compensation, NoProgress, PfForm, PfParams, Wavelength};
-use murk_render::{merge, RenderOptions};
+use murk_render::{merge, Outputs, StoredRender};
 use murk_view::{views, Plane, Views};
 use rustfft::num_complex::Complex32;
 use std::collections::HashMap;
@@ -214,18 +214,17 @@ fn run_task(
     let task = &job.tasks[t];
     let scene = crate::plan::load_scene(&plan.scenes_dir, job.scene, &job.set)?;
     let out = dir.join(&task.out);
-    let opt = RenderOptions {
-        spp: job.spp,
-        seed: job.seed,
-        shard: task.shard,
-        checkpoint: Some(murk_render::checkpoint_path(&out)),
-        checkpoint_every: Duration::from_secs(30),
+    // Every task resumes its checkpoint, appended every 30 s.
+    let outputs = Outputs::Beside {
+        out: &out,
+        resume: true,
+        every_s: 30.0,
     };
+    let file = plan.scenes_dir.join(job.scene.file());
+    let stored = StoredRender::new(&scene, Some(&file), job.sweep(), outputs)?;
     let never = AtomicBool::new(false);
-    murk_render::Plan::with_albedos(&scene, job.sweep())?.render_stored(
-        &opt,
-        &job.outputs(&out),
-        &|path, cap| murk_io::write_capture(path, cap),
+    stored.run(
+        &stored.options(job.spp, job.seed, task.shard),
         &|done, total| {
             tally.tick();
             obs.event(Event::Units { done, total })

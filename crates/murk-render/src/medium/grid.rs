@@ -66,7 +66,7 @@ impl Grid {
     pub fn fingerprint(&self) -> u64 {
         let dims = self.dims.into_iter().flat_map(|d| (d as u64).to_le_bytes());
         let cells = self.density.iter().flat_map(|v| v.to_le_bytes());
-        crate::render::fingerprint_bytes(dims.chain(cells))
+        crate::hash::fnv1a(dims.chain(cells))
     }
 
     /// The cell holding `p` along each axis (points on or past the box's faces in its outer cells).
