@@ -8,20 +8,9 @@ use murk_core::{Capture, Error, Result};
 /// (relay, capture layout, time axis, the medium's extent) is used. The model is homogeneous: a
 /// heterogeneous medium's kind and density are dropped, and its box is fitted by one μt, α and g.
 pub fn medium_only(cap: &Capture) -> Result<String> {
-    let text = stored_scene(&cap.scene_info).ok_or_else(|| {
-        Error::param(
-            "the capture carries no scene description (scene_info.scene, which murk render writes): the medium's forward model needs the relay, the capture layout and the medium's extent; captures from other sources are not supported yet",
-        )
-    })?;
-    let mut table: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| Error::param(format!("scene_info.scene: {}", e.message())))?;
+    let mut table = stored_table(cap)?;
     table.remove("object");
-    let Some(toml::Value::Table(medium)) = table.get_mut("medium") else {
-        return Err(Error::param(
-            "scene_info.scene has no [medium] table: the extent of the medium is unknown",
-        ));
-    };
+    let medium = medium_table(&mut table)?;
     // The medium's own values are the table's to set; placeholders keep captures of one geometry
     // with different media on one table (and keep the truth out of the estimate).
     medium.insert("mu_t".into(), toml::Value::Float(1.0));
@@ -31,6 +20,27 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
         medium.remove(key);
     }
     toml::to_string(&table).map_err(|e| Error::param(format!("scene_info.scene: {e}")))
+}
+
+/// The scene TOML that `murk render` stored in the capture's `scene_info`, parsed.
+pub(crate) fn stored_table(cap: &Capture) -> Result<toml::Table> {
+    let text = stored_scene(&cap.scene_info).ok_or_else(|| {
+        Error::param(
+            "the capture carries no scene description (scene_info.scene, which murk render writes): the medium's forward model needs the relay, the capture layout and the medium's extent; captures from other sources are not supported yet",
+        )
+    })?;
+    text.parse()
+        .map_err(|e: toml::de::Error| Error::param(format!("scene_info.scene: {}", e.message())))
+}
+
+/// The `[medium]` table of a stored scene.
+pub(crate) fn medium_table(table: &mut toml::Table) -> Result<&mut toml::Table> {
+    match table.get_mut("medium") {
+        Some(toml::Value::Table(medium)) => Ok(medium),
+        _ => Err(Error::param(
+            "scene_info.scene has no [medium] table: the extent of the medium is unknown",
+        )),
+    }
 }
 
 /// The block under `scene: |` in `scene_info` (YAML literal block, indented by two spaces).
