@@ -53,17 +53,7 @@ fn fails(d: &Path, scene: &Path, needles: &[&str]) {
         "1",
         "--quiet",
     ];
-    let (code, _, err) = cli::murk(&args);
-    assert_ne!(code, 0, "{args:?} succeeded");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "expected one line, got:\n{err}");
-    assert!(
-        lines[0].starts_with("murk: error: ") && !err.contains("panicked"),
-        "{err}"
-    );
-    for n in needles {
-        assert!(lines[0].contains(n), "'{n}' not in: {}", lines[0]);
-    }
+    fails_with(&args, needles);
     assert!(!out.exists());
 }
 

@@ -56,6 +56,24 @@ fn stored_scene(scene_info: &str) -> Option<String> {
     (!body.is_empty()).then(|| body.join("\n"))
 }
 
+/// A small confocal capture whose `scene_info` is `info`, for the tests of the stored scene.
+#[cfg(test)]
+pub(crate) fn capture_with_info(info: &str) -> Capture {
+    Capture {
+        scene_info: info.to_string(),
+        ..murk_core::Capture::confocal(
+            murk_core::PointSet::wall_grid(murk_core::DVec3::ZERO, 1.0, 1.0, 2, 2),
+            murk_core::TimeAxis {
+                start_m: 0.0,
+                bin_width_m: 0.01,
+                bins: 4,
+            },
+            vec![0.0; 16],
+            String::new(),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -66,19 +84,7 @@ mod tests {
         let text = stored_scene(info).unwrap();
         assert!(text.starts_with("[medium]\nmu_t = 1.0\nkind = \"grid\"\n"));
         assert!(!text.contains("albedo: 0.5"));
-        let cap = Capture {
-            scene_info: info.to_string(),
-            ..murk_core::Capture::confocal(
-                murk_core::PointSet::wall_grid(murk_core::DVec3::ZERO, 1.0, 1.0, 2, 2),
-                murk_core::TimeAxis {
-                    start_m: 0.0,
-                    bin_width_m: 0.01,
-                    bins: 4,
-                },
-                vec![0.0; 16],
-                String::new(),
-            )
-        };
+        let cap = capture_with_info(info);
         let only = medium_only(&cap).unwrap();
         assert!(only.contains("[medium]") && only.contains("[relay]") && !only.contains("object"));
         // The model is homogeneous: the grid and its file are gone.

@@ -113,19 +113,7 @@ fn two_layers_match_a_line_integral() {
 fn the_box_is_the_stored_scenes() {
     let file = grid_file("stored", [1, 1, 2], &[2.0, 0.25]);
     let info = "generator: murk render\nscene: |\n  [medium]\n  kind = \"grid\"\n  density = \"plume.npy\"\n  mu_t = 1.0\n  min = [-1.5, -1.5, 0]\n  max = [1.5, 1.5, 1.6]\n";
-    let cap = murk_core::Capture {
-        scene_info: info.into(),
-        ..murk_core::Capture::confocal(
-            murk_core::PointSet::wall_grid(DVec3::ZERO, 1.0, 1.0, 2, 2),
-            murk_core::TimeAxis {
-                start_m: 0.0,
-                bin_width_m: 0.01,
-                bins: 4,
-            },
-            vec![0.0; 16],
-            String::new(),
-        )
-    };
+    let cap = crate::scene::capture_with_info(info);
     let g = GridDensity::for_capture(&cap, &file).unwrap();
     // Straight up through both layers and out of the box's top.
     let up = g.density_length_m(DVec3::ZERO, DVec3::new(0.0, 0.0, 2.0));
