@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 #[path = "common/cli.rs"]
 mod cli;
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("murk-cli-density-{}", std::process::id()));
+/// A fresh folder for the test `name` (the tests run in parallel).
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("murk-cli-density-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
@@ -52,23 +53,13 @@ fn fails(d: &Path, scene: &Path, needles: &[&str]) {
         "1",
         "--quiet",
     ];
-    let (code, _, err) = cli::murk(&args);
-    assert_ne!(code, 0, "{args:?} succeeded");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "expected one line, got:\n{err}");
-    assert!(
-        lines[0].starts_with("murk: error: ") && !err.contains("panicked"),
-        "{err}"
-    );
-    for n in needles {
-        assert!(lines[0].contains(n), "'{n}' not in: {}", lines[0]);
-    }
+    fails_with(&args, needles);
     assert!(!out.exists());
 }
 
 #[test]
 fn bad_density_grids_are_one_line_naming_the_file() {
-    let d = dir();
+    let d = dir("render");
     let grid = |name: &str| format!("kind = \"grid\"\ndensity = \"{name}\"");
     let write = |name: &str, shape: &[usize], v: &[f32]| {
         murk_io::write_npy_f32(&d.join(name), shape, v).unwrap();
@@ -131,5 +122,95 @@ fn bad_density_grids_are_one_line_naming_the_file() {
         all.extend(needles);
         fails(&d, &s, &all);
     }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Runs `murk` with `args` and asserts a clean one-line failure containing every `needle`.
+fn fails_with(args: &[&str], needles: &[&str]) {
+    let (code, _, err) = cli::murk(args);
+    assert_ne!(code, 0, "{args:?} succeeded");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "expected one line, got:\n{err}");
+    assert!(
+        lines[0].starts_with("murk: error: ") && !err.contains("panicked"),
+        "{err}"
+    );
+    for n in needles {
+        assert!(lines[0].contains(n), "'{n}' not in: {}", lines[0]);
+    }
+}
+
+/// `murk reconstruct --medium-density`: a bad grid is one line naming it, the flag without the
+/// compensation and μt it is read by is refused, and a good grid reconstructs.
+#[test]
+fn reconstruct_reads_the_density_for_the_compensation() {
+    let d = dir("reconstruct");
+    murk_io::write_npy_f32(
+        &d.join("good.npy"),
+        &[2, 2, 2],
+        &[0.5, 0.5, 0.5, 0.5, 2.0, 2.0, 2.0, 2.0],
+    )
+    .unwrap();
+    let mut nan = vec![0.5f32; 8];
+    nan[5] = f32::NAN;
+    murk_io::write_npy_f32(&d.join("nan.npy"), &[2, 2, 2], &nan).unwrap();
+    // The scene's 2 × 2 sensor grid is too coarse for Phasor Fields' wavelength: 8 × 8.
+    let s = scene(&d, "grid.toml", "kind = \"grid\"\ndensity = \"good.npy\"");
+    let text = std::fs::read_to_string(&s)
+        .unwrap()
+        .replace("grid = [2, 2]", "grid = [8, 8]");
+    std::fs::write(&s, text).unwrap();
+    let cap = d.join("grid.h5");
+    let (code, _, err) = cli::murk(&[
+        "render",
+        s.to_str().unwrap(),
+        "--out",
+        cap.to_str().unwrap(),
+        "--spp",
+        "2",
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let out = d.join("v.npy");
+    let file = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let recon = |extra: &[&str]| -> Vec<String> {
+        let mut a = vec![
+            "reconstruct".to_string(),
+            file("grid.h5"),
+            "--out".into(),
+            out.to_str().unwrap().into(),
+            "--quiet".into(),
+        ];
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    fn run(a: &[String]) -> Vec<&str> {
+        a.iter().map(String::as_str).collect()
+    }
+    let nan_args = recon(&[
+        "--compensate",
+        "ballistic",
+        "--mu-t",
+        "1",
+        "--medium-density",
+        &file("nan.npy"),
+    ]);
+    fails_with(&run(&nan_args), &["nan.npy", "density[1, 0, 1] = NaN"]);
+    let alone = recon(&["--medium-density", &file("good.npy")]);
+    fails_with(
+        &run(&alone),
+        &["--medium-density is read by --compensate with --mu-t"],
+    );
+    let good = recon(&[
+        "--compensate",
+        "ballistic",
+        "--mu-t",
+        "1",
+        "--medium-density",
+        &file("good.npy"),
+    ]);
+    let (code, _, err) = cli::murk(&run(&good));
+    assert_eq!(code, 0, "{err}");
+    assert!(out.exists());
     std::fs::remove_dir_all(&d).unwrap();
 }

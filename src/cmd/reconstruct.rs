@@ -99,6 +99,11 @@ pub struct ReconstructArgs {
     /// --medium-removal model.
     #[arg(long)]
     pub albedo: Option<f64>,
+    /// The density grid (.npy, the scene's `density`) of a capture's heterogeneous medium, for
+    /// --compensate: the attenuation is integrated along each leg through σt = density × --mu-t over
+    /// the medium's box of the scene the capture stores, instead of μt times the leg's length.
+    #[arg(long, value_name = "FILE.npy")]
+    pub medium_density: Option<PathBuf>,
     /// Amplitude factor per leg.
     #[arg(long, value_enum, default_value = "none")]
     pub falloff: FalloffArg,
@@ -277,6 +282,12 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
             );
         }
     }
+    if a.medium_density.is_some() {
+        anyhow::ensure!(
+            a.compensate.is_some() && a.mu_t_per_m.is_some(),
+            "--medium-density is read by --compensate with --mu-t (σt where the density is 1); give both"
+        );
+    }
     let cap = murk_io::read_capture(&a.file)?;
     let kind = cap.kind();
     let needs_estimate = (a.compensate.is_some() && a.mu_t_per_m.is_none())
@@ -299,10 +310,25 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     let req = a.request()?;
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
-    let mut out = murk_methods::run_with(cap, &req, predicted, &bar)
+    let density = match &a.medium_density {
+        Some(file) => Some(
+            murk_medium::density::GridDensity::for_capture(&cap, file)
+                .with_context(|| format!("{}: --medium-density", a.file.display()))?,
+        ),
+        None => None,
+    };
+    let given = murk_methods::MediumGiven { predicted, density };
+    let mut out = murk_methods::run_given(cap, &req, &given, &bar)
         .with_context(|| a.file.display().to_string())?;
     out.rows
         .extend(compensated_with.map(|line| ("compensated with".to_string(), line)));
+    out.rows.extend(a.medium_density.as_ref().map(|file| {
+        let line = format!(
+            "σt = density × μt along each leg, density from {}",
+            file.display()
+        );
+        ("compensated along".to_string(), line)
+    }));
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
     for w in out.warnings.iter().filter(|_| !quiet) {

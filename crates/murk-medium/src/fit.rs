@@ -169,8 +169,12 @@ fn num(v: f64) -> String {
 /// near the wall, and a fit needs the bins. Without a plane, 30 % into the window.
 pub fn scene_onset_m(cap: &Capture) -> Result<f64> {
     let method = Method::named("pf", &Options::default())?;
-    let (_, found) =
-        murk_methods::search_depth(cap, &Request::new(method), None, &murk_core::NoProgress)?;
+    let (_, found) = murk_methods::search_depth(
+        cap,
+        &Request::new(method),
+        &murk_methods::MediumGiven::default(),
+        &murk_core::NoProgress,
+    )?;
     let (start, span) = (cap.time.start_m, cap.time.end_m() - cap.time.start_m);
     let plane = found.filter(|(f, _)| f.volume.is_some()).map(|(f, _)| {
         let v = murk_methods::default_volume(cap).map(|v| murk_core::Volume {

@@ -8,6 +8,7 @@
 //! interpolating in that table ([`fit`]). A table is built once per geometry and serves any number of
 //! captures of it (the study fits every cell from one table).
 
+pub mod density;
 pub mod fit;
 pub mod model;
 pub mod posterior;

@@ -8,20 +8,9 @@ use murk_core::{Capture, Error, Result};
 /// (relay, capture layout, time axis, the medium's extent) is used. The model is homogeneous: a
 /// heterogeneous medium's kind and density are dropped, and its box is fitted by one μt, α and g.
 pub fn medium_only(cap: &Capture) -> Result<String> {
-    let text = stored_scene(&cap.scene_info).ok_or_else(|| {
-        Error::param(
-            "the capture carries no scene description (scene_info.scene, which murk render writes): the medium's forward model needs the relay, the capture layout and the medium's extent; captures from other sources are not supported yet",
-        )
-    })?;
-    let mut table: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| Error::param(format!("scene_info.scene: {}", e.message())))?;
+    let mut table = stored_table(cap)?;
     table.remove("object");
-    let Some(toml::Value::Table(medium)) = table.get_mut("medium") else {
-        return Err(Error::param(
-            "scene_info.scene has no [medium] table: the extent of the medium is unknown",
-        ));
-    };
+    let medium = medium_table(&mut table)?;
     // The medium's own values are the table's to set; placeholders keep captures of one geometry
     // with different media on one table (and keep the truth out of the estimate).
     medium.insert("mu_t".into(), toml::Value::Float(1.0));
@@ -31,6 +20,27 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
         medium.remove(key);
     }
     toml::to_string(&table).map_err(|e| Error::param(format!("scene_info.scene: {e}")))
+}
+
+/// The scene TOML that `murk render` stored in the capture's `scene_info`, parsed.
+pub(crate) fn stored_table(cap: &Capture) -> Result<toml::Table> {
+    let text = stored_scene(&cap.scene_info).ok_or_else(|| {
+        Error::param(
+            "the capture carries no scene description (scene_info.scene, which murk render writes): the medium's forward model needs the relay, the capture layout and the medium's extent; captures from other sources are not supported yet",
+        )
+    })?;
+    text.parse()
+        .map_err(|e: toml::de::Error| Error::param(format!("scene_info.scene: {}", e.message())))
+}
+
+/// The `[medium]` table of a stored scene.
+pub(crate) fn medium_table(table: &mut toml::Table) -> Result<&mut toml::Table> {
+    match table.get_mut("medium") {
+        Some(toml::Value::Table(medium)) => Ok(medium),
+        _ => Err(Error::param(
+            "scene_info.scene has no [medium] table: the extent of the medium is unknown",
+        )),
+    }
 }
 
 /// The block under `scene: |` in `scene_info` (YAML literal block, indented by two spaces).
@@ -46,6 +56,24 @@ fn stored_scene(scene_info: &str) -> Option<String> {
     (!body.is_empty()).then(|| body.join("\n"))
 }
 
+/// A small confocal capture whose `scene_info` is `info`, for the tests of the stored scene.
+#[cfg(test)]
+pub(crate) fn capture_with_info(info: &str) -> Capture {
+    Capture {
+        scene_info: info.to_string(),
+        ..murk_core::Capture::confocal(
+            murk_core::PointSet::wall_grid(murk_core::DVec3::ZERO, 1.0, 1.0, 2, 2),
+            murk_core::TimeAxis {
+                start_m: 0.0,
+                bin_width_m: 0.01,
+                bins: 4,
+            },
+            vec![0.0; 16],
+            String::new(),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -56,19 +84,7 @@ mod tests {
         let text = stored_scene(info).unwrap();
         assert!(text.starts_with("[medium]\nmu_t = 1.0\nkind = \"grid\"\n"));
         assert!(!text.contains("albedo: 0.5"));
-        let cap = Capture {
-            scene_info: info.to_string(),
-            ..murk_core::Capture::confocal(
-                murk_core::PointSet::wall_grid(murk_core::DVec3::ZERO, 1.0, 1.0, 2, 2),
-                murk_core::TimeAxis {
-                    start_m: 0.0,
-                    bin_width_m: 0.01,
-                    bins: 4,
-                },
-                vec![0.0; 16],
-                String::new(),
-            )
-        };
+        let cap = capture_with_info(info);
         let only = medium_only(&cap).unwrap();
         assert!(only.contains("[medium]") && only.contains("[relay]") && !only.contains("object"));
         // The model is homogeneous: the grid and its file are gone.

@@ -2,18 +2,18 @@
 //! capture whose early bins are a medium's response, the whole reach is first reconstructed coarsely
 //! and the depths where the signal focuses best are kept.
 
-use crate::plan::{edge_m, ReconPlan, GATE_MARGIN_EDGES};
+use crate::plan::{edge_m, MediumGiven, ReconPlan, GATE_MARGIN_EDGES};
 use crate::{Gate, Request, VolumeSpec};
 use murk_core::window::shortest_path_m;
 use murk_core::{Axis, Capture, Error, Progress, Result, Volume};
-use murk_recon::medium::{self, detect::Signature, removal, DepthSearch, MediumRemoval};
+use murk_recon::medium::{self, detect::Signature, DepthSearch, MediumRemoval};
 
 /// `req` with the volume the depth search chose, and what it found with its line for the summary;
 /// `req` unchanged where no search applies.
 pub fn search_depth(
     cap: &Capture,
     req: &Request,
-    predicted: Option<&removal::Predicted>,
+    given: &MediumGiven,
     progress: &dyn Progress,
 ) -> Result<(Request, Option<(medium::search::Found, String)>)> {
     let applies = req.volume == VolumeSpec::Default
@@ -40,9 +40,7 @@ pub fn search_depth(
         volume: VolumeSpec::Given(coarse),
         ..*req
     };
-    let whole = ReconPlan::new(cap, &whole_req, progress)?
-        .with_predicted(predicted.cloned())
-        .run(cap.clone(), progress)?;
+    let whole = ReconPlan::given(cap, &whole_req, given, progress)?.run(cap.clone(), progress)?;
     // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
     // planes it leaves fully open are searched.
     let open_m = match req.gate {

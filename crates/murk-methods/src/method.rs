@@ -3,7 +3,8 @@
 use crate::table::{Knob, MethodSpec, Setup, METHODS};
 use murk_baselines::{BmmParams, Pulse, Reflectance, SlabParams};
 use murk_core::{Capture, CaptureKind, Error, Progress, Reconstructor, Result, Volume};
-use murk_recon::{Compensation, Falloff, Lateral, PfParams, Wavelength};
+use murk_recon::{Compensation, Falloff, Lateral, PathDensity, PfParams, Wavelength};
+use std::sync::Arc;
 
 /// The knobs the methods read, by name: what `murk reconstruct`'s flags and Python's keywords fill.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -143,12 +144,23 @@ impl Method {
         &self,
         geometry: &Capture,
         volume: Option<&Volume>,
+        density: Option<&Arc<dyn PathDensity>>,
         progress: &dyn Progress,
     ) -> Result<Box<dyn Reconstructor>> {
+        if density.is_some()
+            && !(self.reads(Knob::Compensation) && Knob::Compensation.is_set(&self.options))
+        {
+            return Err(Error::param(format!(
+                "a medium density is read only by the compensation ({}), and {} has none to apply it to",
+                Knob::Compensation.readers(),
+                self.name()
+            )));
+        }
         (self.spec.plan)(&Setup {
             geometry,
             options: &self.options,
             volume,
+            density,
             progress,
         })
     }

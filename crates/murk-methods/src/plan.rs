@@ -9,6 +9,17 @@ use murk_core::window::{
 };
 use murk_core::{Capture, Error, Progress, Reconstruction, Reconstructor, Result};
 use murk_recon::medium::{detect::Signature, removal, MediumRemoval};
+use murk_recon::PathDensity;
+use std::sync::Arc;
+
+/// What the caller knows of the capture's medium besides the request: the response that
+/// [`MediumRemoval::Model`] subtracts, and the density that the compensation integrates along each
+/// leg (murk-medium makes both).
+#[derive(Clone, Default)]
+pub struct MediumGiven {
+    pub predicted: Option<removal::Predicted>,
+    pub density: Option<Arc<dyn PathDensity>>,
+}
 
 /// Ramp length (bins) at either end of the window for the methods without a pulse, chosen on a cut
 /// real capture (docs/window-ends.md).
@@ -51,6 +62,16 @@ impl ReconPlan {
     /// Plans `req` for captures of `cap`'s geometry. The methods whose plan takes long (the LCT's and
     /// CDT's kernel spectra) report it to `progress` as a bar of its own and stop when it asks.
     pub fn new(cap: &Capture, req: &Request, progress: &dyn Progress) -> Result<ReconPlan> {
+        ReconPlan::given(cap, req, &MediumGiven::default(), progress)
+    }
+
+    /// As [`ReconPlan::new`], with what the caller knows of the medium.
+    pub fn given(
+        cap: &Capture,
+        req: &Request,
+        given: &MediumGiven,
+        progress: &dyn Progress,
+    ) -> Result<ReconPlan> {
         let m = &req.method;
         let mut geometry = cap.geometry();
         geometry.validate_geometry()?;
@@ -98,7 +119,7 @@ impl ReconPlan {
             (Gate::Auto, None) | (Gate::Off, _) => None,
             (Gate::At(p), _) => Some(p),
         };
-        let method = m.plan(&geometry, volume.as_ref(), progress)?;
+        let method = m.plan(&geometry, volume.as_ref(), given.density.as_ref(), progress)?;
         // Said with the result, so that the CLI and Python both report it.
         let ignored_volume =
             (matches!(req.volume, VolumeSpec::Given(_)) && m.own_grid()).then(|| {
@@ -118,13 +139,8 @@ impl ReconPlan {
             on_volume: !m.own_grid(),
             geometry,
             method,
-            predicted: None,
+            predicted: given.predicted.clone(),
         })
-    }
-
-    /// The plan with the medium response that [`MediumRemoval::Model`] subtracts.
-    pub fn with_predicted(self, predicted: Option<removal::Predicted>) -> ReconPlan {
-        ReconPlan { predicted, ..self }
     }
 
     /// Reconstructs `cap`, which must have the geometry the plan was made for.
@@ -242,10 +258,22 @@ pub fn run_with(
     predicted: Option<removal::Predicted>,
     progress: &dyn Progress,
 ) -> Result<Reconstruction> {
-    let (req, searched) = search_depth(&cap, req, predicted.as_ref(), progress)?;
-    let mut out = ReconPlan::new(&cap, &req, progress)?
-        .with_predicted(predicted)
-        .run(cap, progress)?;
+    let given = MediumGiven {
+        predicted,
+        density: None,
+    };
+    run_given(cap, req, &given, progress)
+}
+
+/// As [`run`], with what the caller knows of the medium.
+pub fn run_given(
+    cap: Capture,
+    req: &Request,
+    given: &MediumGiven,
+    progress: &dyn Progress,
+) -> Result<Reconstruction> {
+    let (req, searched) = search_depth(&cap, req, given, progress)?;
+    let mut out = ReconPlan::given(&cap, &req, given, progress)?.run(cap, progress)?;
     out.rows
         .extend(searched.map(|(_, line)| ("depth search".to_string(), line)));
     Ok(out)

@@ -8,7 +8,8 @@ use murk_baselines::{
     LctParams, LctPlan,
 };
 use murk_core::{Capture, Error, Progress, Reconstructor, Result, Volume};
-use murk_recon::{PfForm, PfPlan};
+use murk_recon::{PathDensity, PfForm, PfPlan};
+use std::sync::Arc;
 
 /// A knob of [`Options`] that some methods read. A method given a knob it does not read refuses it,
 /// naming the methods that do: a compensation that lct silently dropped looked applied.
@@ -88,6 +89,8 @@ pub struct Setup<'a> {
     pub geometry: &'a Capture,
     pub options: &'a Options,
     pub volume: Option<&'a Volume>,
+    /// The medium's density along the compensation's legs (read with [`Knob::Compensation`]).
+    pub density: Option<&'a Arc<dyn PathDensity>>,
     pub progress: &'a dyn Progress,
 }
 
@@ -213,10 +216,11 @@ pub const METHODS: &[MethodSpec] = &[
 /// Phasor Fields in `form`, with the options' wavelength (else the default for the capture's kind).
 fn pf(s: &Setup, form: PfForm) -> Result<Box<dyn Reconstructor>> {
     let params = s.options.pf(s.geometry.kind());
-    Ok(Box::new(PfPlan::new(
+    Ok(Box::new(PfPlan::new_along(
         s.geometry,
         s.volume()?,
         &params,
         form,
+        s.density.cloned(),
     )?))
 }

@@ -2,6 +2,13 @@
 
 use murk_core::{DVec3, Error, Result};
 
+/// How much of a medium a straight path crosses: ∫ density ds from `from` to `to`, in metres of
+/// density 1, so that μt times it is the optical depth. A heterogeneous medium's compensation reads
+/// it along each leg (docs/media-heterogeneous.md); without one every metre counts as density 1.
+pub trait PathDensity: Send + Sync {
+    fn density_length_m(&self, from: DVec3, to: DVec3) -> f64;
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Compensation {
     None,
@@ -61,23 +68,44 @@ impl Compensation {
     /// Gain for voxel `v`; `point` is the paper's x_c, `aperture` the centroid of the gridded side.
     /// For confocal data distances are depths (v.z).
     pub fn gain(&self, v: DVec3, point: DVec3, aperture: DVec3, confocal: bool) -> f64 {
+        self.gain_along(v, point, aperture, confocal, None)
+    }
+
+    /// As [`Compensation::gain`], with the attenuation integrated along each leg through `density`
+    /// (μt × [`PathDensity::density_length_m`]) where one is given; the paper's α·d term stays
+    /// geometric. Confocal legs run from the wall point (v.x, v.y, 0) to `v`.
+    pub fn gain_along(
+        &self,
+        v: DVec3,
+        point: DVec3,
+        aperture: DVec3,
+        confocal: bool,
+        density: Option<&dyn PathDensity>,
+    ) -> f64 {
+        let from = if confocal {
+            DVec3::new(v.x, v.y, 0.0)
+        } else {
+            point
+        };
         let d = if confocal {
             v.z.max(0.0)
         } else {
             (v - point).length()
         };
+        // Metres of density 1 along the leg from `a` to `v` (its length d_a without a density).
+        let leg = |a: DVec3, d_a: f64| density.map_or(d_a, |g| g.density_length_m(a, v));
         let k = match *self {
             Compensation::None => return 1.0,
             Compensation::Paper { mu_t_per_m, albedo } => {
                 // α is undefined without a medium; K ≡ 1 then.
                 let alpha = if mu_t_per_m == 0.0 { 0.0 } else { albedo };
-                (1.0 - alpha * (-d * alpha).exp()) * (d * mu_t_per_m).exp()
+                (1.0 - alpha * (-d * alpha).exp()) * (leg(from, d) * mu_t_per_m).exp()
             }
             Compensation::Ballistic { mu_t_per_m } => {
                 let legs = if confocal {
-                    2.0 * d
+                    2.0 * leg(from, d)
                 } else {
-                    d + (v - aperture).length()
+                    leg(from, d) + leg(aperture, (v - aperture).length())
                 };
                 (2.0 * mu_t_per_m * legs).exp()
             }

@@ -36,13 +36,14 @@ mod phase;
 mod resample;
 pub mod spectrum;
 
-pub use compensation::Compensation;
+pub use compensation::{Compensation, PathDensity};
 pub use params::{nyquist_factor, Falloff, Lateral, PfForm, PfParams, Wavelength};
 pub use pf_fast::Slab;
 
 use murk_core::{Capture, CaptureKind, DVec3, Error, Reconstruction, Result, Volume};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex32;
+use std::sync::Arc;
 
 pub use murk_core::{NoProgress, Progress};
 
@@ -172,12 +173,26 @@ pub struct PfPlan {
     window: spectrum::Window,
     /// The fast form's plan; `None` when the exact form is asked for or the fast one does not apply.
     fast: Option<pf_fast::FastPlan>,
+    /// The medium's density along the compensation's legs; `None`: density 1 everywhere.
+    density: Option<Arc<dyn PathDensity>>,
     warnings: Vec<String>,
 }
 
 impl PfPlan {
     /// Checks `params` against the geometry of `cap` and plans the evaluation in `form`.
     pub fn new(cap: &Capture, volume: &Volume, params: &PfParams, form: PfForm) -> Result<PfPlan> {
+        PfPlan::new_along(cap, volume, params, form, None)
+    }
+
+    /// As [`PfPlan::new`], with the compensation integrating the attenuation through `density`
+    /// along each leg ([`Compensation::gain_along`]).
+    pub fn new_along(
+        cap: &Capture,
+        volume: &Volume,
+        params: &PfParams,
+        form: PfForm,
+        density: Option<Arc<dyn PathDensity>>,
+    ) -> Result<PfPlan> {
         cap.validate_geometry()?;
         volume.validate()?;
         if !(params.cycles.is_finite() && params.cycles > 0.0) {
@@ -246,7 +261,11 @@ impl PfPlan {
                 }
             }
         };
-        warnings.extend(clamped_gain_warning(cap, volume, params.compensation));
+        let along = Along {
+            compensation: params.compensation,
+            density: density.as_deref(),
+        };
+        warnings.extend(clamped_gain_warning(cap, volume, along));
         Ok(PfPlan {
             geometry: cap.geometry(),
             volume: *volume,
@@ -256,6 +275,7 @@ impl PfPlan {
             spacing_m,
             window,
             fast,
+            density,
             warnings,
         })
     }
@@ -323,7 +343,15 @@ impl PfPlan {
         }
         Ok(Reconstruction {
             volume: self.volume,
-            intensity: intensity(cap, &self.volume, &f.values, self.params.compensation),
+            intensity: intensity_along(
+                cap,
+                &self.volume,
+                &f.values,
+                Along {
+                    compensation: self.params.compensation,
+                    density: self.density.as_deref(),
+                },
+            ),
             rows,
             warnings: f.info.warnings,
         })
@@ -365,41 +393,65 @@ pub fn intensity(
     field: &[Complex32],
     compensation: Compensation,
 ) -> Vec<f32> {
-    if compensation == Compensation::None {
-        return field.par_iter().map(|u| u.norm_sqr()).collect();
-    }
-    let confocal = cap.kind() == CaptureKind::Confocal;
-    let (point, aperture) = compensation_points(cap);
-    field
-        .par_iter()
-        .enumerate()
-        .map(|(i, u)| {
+    let along = Along {
+        compensation,
+        density: None,
+    };
+    intensity_along(cap, volume, field, along)
+}
+
+/// A compensation with the medium's density along its legs (`None`: density 1 everywhere).
+#[derive(Clone, Copy)]
+pub struct Along<'a> {
+    pub compensation: Compensation,
+    pub density: Option<&'a dyn PathDensity>,
+}
+
+impl Along<'_> {
+    /// The gain at every voxel of `volume` for captures of `cap`'s geometry, in C order.
+    fn gains(
+        &self,
+        cap: &Capture,
+        volume: &Volume,
+    ) -> impl IndexedParallelIterator<Item = f64> + '_ {
+        let confocal = cap.kind() == CaptureKind::Confocal;
+        let (point, aperture) = compensation_points(cap);
+        let volume = *volume;
+        (0..volume.len()).into_par_iter().map(move |i| {
             let (ix, iy, iz) = volume.unravel(i);
             let v = volume.centre(ix, iy, iz);
-            (u.norm_sqr() as f64 * compensation.gain(v, point, aperture, confocal)) as f32
+            self.compensation
+                .gain_along(v, point, aperture, confocal, self.density)
         })
+    }
+}
+
+/// As [`intensity`], with the compensation's attenuation integrated through `along`'s density.
+pub fn intensity_along(
+    cap: &Capture,
+    volume: &Volume,
+    field: &[Complex32],
+    along: Along,
+) -> Vec<f32> {
+    if along.compensation == Compensation::None {
+        return field.par_iter().map(|u| u.norm_sqr()).collect();
+    }
+    field
+        .par_iter()
+        .zip(along.gains(cap, volume))
+        .map(|(u, k)| (u.norm_sqr() as f64 * k) as f32)
         .collect()
 }
 
-/// A warning when `compensation`'s gain reaches its cap at some voxels of `volume`: there the
+/// A warning when `along`'s gain reaches its cap at some voxels of `volume`: there the
 /// intensity is scaled by the cap, not by the gain the formula gives, so depths are not comparable.
-fn clamped_gain_warning(
-    cap: &Capture,
-    volume: &Volume,
-    compensation: Compensation,
-) -> Option<String> {
-    if compensation == Compensation::None {
+fn clamped_gain_warning(cap: &Capture, volume: &Volume, along: Along) -> Option<String> {
+    if along.compensation == Compensation::None {
         return None;
     }
-    let confocal = cap.kind() == CaptureKind::Confocal;
-    let (point, aperture) = compensation_points(cap);
-    let clamped = (0..volume.len())
-        .into_par_iter()
-        .filter(|&i| {
-            let (ix, iy, iz) = volume.unravel(i);
-            compensation.gain(volume.centre(ix, iy, iz), point, aperture, confocal)
-                >= Compensation::MAX_GAIN
-        })
+    let clamped = along
+        .gains(cap, volume)
+        .filter(|&k| k >= Compensation::MAX_GAIN)
         .count();
     (clamped > 0).then(|| {
         format!(
