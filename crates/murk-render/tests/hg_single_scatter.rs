@@ -142,9 +142,14 @@ fn reference(xl: DVec3, xs: DVec3, g: f64, (l0, l1): (f64, f64)) -> f64 {
     })
 }
 
-/// The medium techniques of the first segment: the defaults (free flight and target-side draws), and
-/// with equiangular and time-window distances added, as `z-letter.toml` and `t-wall-medium.toml` use.
-const TECHNIQUES: [&str; 2] = ["", "equiangular = true\nfirst_time_samples = 4"];
+/// The medium techniques of the first segment: the defaults (free flight and target-side draws), with
+/// equiangular and time-window distances added, as `z-letter.toml` and `t-wall-medium.toml` use, and
+/// with phase-angle distances on both sides.
+const TECHNIQUES: [&str; 3] = [
+    "",
+    "equiangular = true\nfirst_time_samples = 4",
+    "phase_distances = 2\ntarget_phase_distances = 0.5",
+];
 
 /// Renders `xl`, `xs` for every g of `GS` with each of `TECHNIQUES` and compares the sums over `windows`
 /// (bin ranges) with the quadrature: each within `TOL_WINDOW`, and each g ≠ 0 relative to g = 0 within
