@@ -130,6 +130,10 @@ impl<'a> Tracer<'a> {
                 .as_ref()
                 .map_or(0.0, Medium::default_target_lobe)
         });
+        let phase_default = scene
+            .medium
+            .as_ref()
+            .map_or((0, 0.0), Medium::default_phase_distances);
         let object_draws = if hidden.total > 0.0 {
             set.object_draws
         } else {
@@ -144,8 +148,8 @@ impl<'a> Tracer<'a> {
             rr_depth,
             object_draws,
             target_lobe,
-            phase_distances: set.phase_distances.unwrap_or(0),
-            target_phase_distances: set.target_phase_distances.unwrap_or(0.0),
+            phase_distances: set.phase_distances.unwrap_or(phase_default.0),
+            target_phase_distances: set.target_phase_distances.unwrap_or(phase_default.1),
             hidden_bounds: {
                 let b = scene.geometry.bounds();
                 // Rounding of the leg's end points; none to cover when there is no geometry (empty box).
