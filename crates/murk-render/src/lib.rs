@@ -6,9 +6,10 @@
 //! of the other side (the laser spot is a point emitter, the SPAD point a point sensor),
 //! hidden-geometry sampling of the first direction mixed with cosine sampling (one-sample MIS with the
 //! exact mixture pdf), free-flight (delta tracking in heterogeneous media) and Henyey–Greenstein
-//! sampling, target-side sampling of medium vertices from the wall points, and (opt-in) equiangular and
-//! stratified time-window distances toward the wall points on every medium segment, all combined with
-//! free flight by the balance heuristic; Russian roulette (surfaces only) and a depth cap.
+//! sampling, target-side sampling of medium vertices from the wall points, phase-angle distances in
+//! strongly forward media (the connection's scattering angle drawn after the phase function), and
+//! (opt-in) equiangular and stratified time-window distances toward the wall points on every medium
+//! segment, all combined with free flight by the balance heuristic; Russian roulette (surfaces only) and a depth cap.
 //! For many laser points and one SPAD point paths start at the laser points (reciprocity), so every
 //! vertex makes one connection instead of one per laser point.
 

@@ -490,6 +490,40 @@ fn target_lobe_keeps_the_expectation() {
     );
 }
 
+/// Phase-angle distances on every segment (`phase_distances`) keep every histogram's expectation: the
+/// fog T in strongly forward fog (g = 0.9), none against two draws per segment and target; sums agree
+/// within 5 % (seed noise of one sum: ~1 %) and the difference stays within the seed noise.
+#[test]
+fn phase_distances_keep_the_expectation() {
+    assert_setting_keeps_the_expectation(
+        "grid = [2, 2]",
+        |n| format!("phase_distances = {n}"),
+        &format!("{FOG}\ng = 0.9"),
+        (0, 2),
+        (240_000, 71),
+        0.05,
+        ("without phase-angle distances", "with them"),
+    );
+}
+
+/// Target-side distances drawn in the phase angle (`target_phase_distances`) keep every histogram's
+/// expectation: the fog T at g = 0.9 and at g = −0.7 (the lobe backwards), equiangular alone against
+/// half the draws in the phase angle; as `phase_distances_keep_the_expectation`.
+#[test]
+fn target_phase_distances_keep_the_expectation() {
+    for (g, seed) in [(0.9, 81), (-0.7, 91)] {
+        assert_setting_keeps_the_expectation(
+            "grid = [2, 2]",
+            |tenths| format!("target_phase_distances = {}", tenths as f64 / 10.0),
+            &format!("{FOG}\ng = {g}"),
+            (0, 5),
+            (240_000, seed),
+            0.05,
+            ("equiangular target-side distances", "phase-angle ones"),
+        );
+    }
+}
+
 /// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 64 000-spp reference
 /// (expected 3.9 with the reference's own noise; accepted: 3.2–5.0).
 #[test]

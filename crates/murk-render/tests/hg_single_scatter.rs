@@ -25,7 +25,7 @@ const Z0: f64 = 0.001;
 const BIN: f64 = 0.05;
 const BINS: usize = 42;
 /// g = 0 (index 1) is the isotropic baseline the anisotropic cases are also compared with; g = 0.7 and 0.9
-/// take the forward phase lobe of the target-side draws by default.
+/// take the forward phase lobe of the target-side draws and the phase-angle distances by default.
 const GS: [f64; 4] = [0.7, 0.0, -0.7, 0.9];
 /// Several times the seed spread of one window's sum at the spp used (measured spread: docs/study.md).
 const TOL_WINDOW: f64 = 0.03;
@@ -142,9 +142,15 @@ fn reference(xl: DVec3, xs: DVec3, g: f64, (l0, l1): (f64, f64)) -> f64 {
     })
 }
 
-/// The medium techniques of the first segment: the defaults (free flight and target-side draws), and
-/// with equiangular and time-window distances added, as `z-letter.toml` and `t-wall-medium.toml` use.
-const TECHNIQUES: [&str; 2] = ["", "equiangular = true\nfirst_time_samples = 4"];
+/// The medium techniques of the first segment: free flight and target-side draws, with equiangular and
+/// time-window distances added, as `z-letter.toml` and `t-wall-medium.toml` use, and with phase-angle
+/// distances on both sides (the default at g ≥ 0.6). Each set draws alike at every g (phase-angle
+/// distances at g = 0 too, uniform in angle there), so that the ratio to g = 0 keeps its correlated noise.
+const TECHNIQUES: [&str; 3] = [
+    "phase_distances = 0\ntarget_phase_distances = 0",
+    "equiangular = true\nfirst_time_samples = 4\nphase_distances = 0\ntarget_phase_distances = 0",
+    "phase_distances = 2\ntarget_phase_distances = 0.5",
+];
 
 /// Renders `xl`, `xs` for every g of `GS` with each of `TECHNIQUES` and compares the sums over `windows`
 /// (bin ranges) with the quadrature: each within `TOL_WINDOW`, and each g ≠ 0 relative to g = 0 within

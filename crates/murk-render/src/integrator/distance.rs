@@ -86,6 +86,82 @@ impl Equiangular {
     }
 }
 
+/// Density of a distance along a ray segment toward one target point, in the scattering angle ψ that a
+/// connection from the drawn point to the target turns through (cos ψ = ray · direction to the target):
+/// the wrapped Cauchy density ∝ 1/(1 + ρ² − 2ρ cos ψ) in ψ. Equiangular distances are uniform in ψ
+/// (ψ is the equiangular angle plus π/2), so the 1/r² of the connection cancels here as there, and
+/// what is left of its integrand is the phase function p(cos ψ). Henyey–Greenstein's own integral over ψ
+/// is elliptic; this one inverts in closed form, and with ρ from [`Phase::cauchy_rho`] its second
+/// moment against HG is within 9 % of sampling HG exactly at |g| ≤ 0.95 (uniform ψ: 4.9× at g 0.7, 17×
+/// at 0.9).
+/// The target must lie off the ray's line.
+pub(super) struct PhaseAngular {
+    tc: f64,
+    d: f64,
+    rho: f64,
+    k: f64,
+    /// k·tan(ψa/2) = tan Φa, with Φ = atan(k·tan(ψ/2)) the variable that is uniform, and Φb − Φa.
+    tan_a: f64,
+    span: f64,
+}
+
+impl PhaseAngular {
+    pub(super) fn new(
+        o: DVec3,
+        dir: DVec3,
+        target: DVec3,
+        (a, b): (f64, f64),
+        rho: f64,
+    ) -> Option<Self> {
+        let v = target - o;
+        let tc = v.dot(dir);
+        let d = (v.length_squared() - tc * tc).max(0.0).sqrt();
+        if d <= 1e-7 {
+            return None;
+        }
+        let k = (1.0 + rho) / (1.0 - rho);
+        // tan(ψ/2) at distance t, without cancellation on either side of the foot tc.
+        let half = |t: f64| {
+            let x = tc - t;
+            let r = (d * d + x * x).sqrt();
+            if x >= 0.0 {
+                d / (r + x)
+            } else {
+                (r - x) / d
+            }
+        };
+        let (ta, tb) = (k * half(a), k * half(b));
+        // Φb − Φa from its tangent, as for equiangular: both lie in [0, π/2).
+        let span = atan2_upper(tb - ta, 1.0 + ta * tb);
+        (span > 0.0).then_some(PhaseAngular {
+            tc,
+            d,
+            rho,
+            k,
+            tan_a: ta,
+            span,
+        })
+    }
+
+    pub(super) fn sample(&self, u: f64) -> (f64, f64) {
+        let (sn, cs) = (u * self.span).sin_cos();
+        // tan(Φa + φ) by the addition formula (Φa + φ < π/2: its denominator is positive), then
+        // t = tc − d·cot ψ with cot ψ = (1 − τ²)/(2τ), τ = tan(ψ/2).
+        let tau = (self.tan_a * cs + sn) / (cs - self.tan_a * sn) / self.k;
+        let t = self.tc - self.d * (1.0 - tau * tau) / (2.0 * tau);
+        (t, self.pdf(t))
+    }
+
+    pub(super) fn pdf(&self, t: f64) -> f64 {
+        // dΦ/dψ = (1 − ρ²)/(2(1 + ρ² − 2ρ cos ψ)) and dψ/dt = d/r², cos ψ = (tc − t)/r.
+        let x = self.tc - t;
+        let r2 = self.d * self.d + x * x;
+        let r = r2.sqrt();
+        let rho = self.rho;
+        (1.0 - rho * rho) * self.d / (2.0 * self.span * r * (r * (1.0 + rho * rho) - 2.0 * rho * x))
+    }
+}
+
 /// Time-window-aware distance sampling for one target: the connected path length through the point at
 /// distance t, L(t) = t + |o + t·ω − target|, is drawn uniformly over the part of the capture window the
 /// segment can reach, so late bins (the object window behind fog) get as many medium vertices as early
@@ -144,6 +220,8 @@ impl TimeWindow {
 pub(super) struct Toward {
     pub(super) equi: Option<Equiangular>,
     pub(super) time: Option<TimeWindow>,
+    /// The phase-angle distances ([`PhaseAngular`]) and how many of them.
+    pub(super) phase: Option<(PhaseAngular, u32)>,
     /// Target-side draws from the segment's start toward this target (`target_draws`), for the
     /// target-side density of each vertex drawn on the segment.
     pub(super) target_draws: f64,
@@ -152,7 +230,38 @@ pub(super) struct Toward {
 impl Toward {
     /// Sum of the connection-technique densities at distance t.
     pub(super) fn pdf(&self, t: f64) -> f64 {
-        self.equi.as_ref().map_or(0.0, |e| e.pdf(t)) + self.time.as_ref().map_or(0.0, |e| e.pdf(t))
+        self.equi.as_ref().map_or(0.0, |e| e.pdf(t))
+            + self.time.as_ref().map_or(0.0, |e| e.pdf(t))
+            + self
+                .phase
+                .as_ref()
+                .map_or(0.0, |(e, n)| *n as f64 * e.pdf(t))
+    }
+}
+
+/// The distance of a target-side draw along its direction, toward the path vertex: equiangular, or a
+/// mixture of it with the phase-angle distances (their share second).
+pub(super) struct TargetDistance {
+    equi: Equiangular,
+    phase: Option<(PhaseAngular, f64)>,
+}
+
+impl TargetDistance {
+    /// The distance for `u`; `choose` gives the number that picks the technique (drawn only where
+    /// there is a mixture, so other scenes keep their random streams).
+    pub(super) fn sample(&self, u: f64, choose: impl FnOnce() -> f64) -> (f64, f64) {
+        let t = match &self.phase {
+            Some((p, q)) if choose() < *q => p.sample(u).0,
+            _ => self.equi.sample(u).0,
+        };
+        (t, self.pdf(t))
+    }
+
+    pub(super) fn pdf(&self, t: f64) -> f64 {
+        match &self.phase {
+            Some((p, q)) => (1.0 - q) * self.equi.pdf(t) + q * p.pdf(t),
+            None => self.equi.pdf(t),
+        }
     }
 }
 
@@ -181,6 +290,10 @@ impl Tracer<'_> {
                 .equiangular
                 .then(|| Equiangular::new(x, d, tgt.p, m01.0, m01.1))
                 .flatten(),
+            phase: (self.phase_distances > 0)
+                .then(|| PhaseAngular::new(x, d, tgt.p, m01, m.phase.cauchy_rho()))
+                .flatten()
+                .map(|e| (e, self.phase_distances)),
             time: (n_time > 0 && m.ior == 1.0)
                 .then(|| {
                     TimeWindow::new(
@@ -210,11 +323,29 @@ impl Tracer<'_> {
         }
         let hit = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
         match m.clip(tgt.p, wl, hit) {
-            Some((a, b)) if tl >= a && tl <= b => {
-                Equiangular::new(tgt.p, wl, x, a, b).map_or(0.0, |e| p_dir * e.pdf(tl) / tl2)
-            }
+            Some((a, b)) if tl >= a && tl <= b => self
+                .target_distance(m, (tgt.p, wl), x, (a, b))
+                .map_or(0.0, |e| p_dir * e.pdf(tl) / tl2),
             _ => 0.0,
         }
+    }
+
+    /// The distance sampler of a target-side draw along `o + t·dir`, t ∈ `ab`, toward the path vertex
+    /// `x`: equiangular, mixed with phase-angle distances (`target_phase_distances`) where they are on.
+    fn target_distance(
+        &self,
+        m: &Medium,
+        (o, dir): (DVec3, DVec3),
+        x: DVec3,
+        ab: (f64, f64),
+    ) -> Option<TargetDistance> {
+        let equi = Equiangular::new(o, dir, x, ab.0, ab.1)?;
+        let q = self.target_phase_distances;
+        let phase = (q > 0.0)
+            .then(|| PhaseAngular::new(o, dir, x, ab, m.phase.cauchy_rho()))
+            .flatten()
+            .map(|e| (e, q));
+        Some(TargetDistance { equi, phase })
     }
 
     /// The axis of the target-side phase lobe toward `x`, where that lobe is drawn at all.
@@ -312,10 +443,10 @@ impl Tracer<'_> {
         let Some((a, b)) = m.clip(tgt.p, wl, hit_l) else {
             return;
         };
-        let Some(eq) = Equiangular::new(tgt.p, wl, from.x, a, b) else {
+        let Some(dist) = self.target_distance(m, (tgt.p, wl), from.x, (a, b)) else {
             return;
         };
-        let (tl, peq) = eq.sample(u);
+        let (tl, peq) = dist.sample(u, || s.next());
         if !(tl >= a && tl <= b && peq > 0.0) {
             return;
         }
@@ -372,5 +503,82 @@ impl Tracer<'_> {
         let opl = from.opl + t + tl + m.extra_path_m((t - m0) + (tl - a)) + tgt.extra_m;
         // The target-side vertex scatters once more than the path that reached `from`.
         self.splat(out, k, opl, (value, from.scat + 1), s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PhaseAngular;
+    use crate::medium::Phase;
+    use murk_core::DVec3;
+
+    /// The phase-angle distances invert their own density: for u on a grid, the density integrated
+    /// (Simpson, 4 000 steps) from the segment's start to the drawn distance is u within 1e-6, on
+    /// segments before, across and past the target's foot, for forward, isotropic and backward lobes.
+    #[test]
+    fn phase_angular_sample_inverts_its_density() {
+        let (o, dir) = (DVec3::new(0.1, -0.2, 0.3), DVec3::new(1.0, 2.0, 2.0) / 3.0);
+        let target = DVec3::new(0.9, 0.7, 1.9);
+        for g in [0.9, 0.7, 0.0, -0.7] {
+            let rho = Phase::new(g).cauchy_rho();
+            for ab in [(0.0, 1.5), (0.0, 6.0), (2.2, 5.0), (0.01, 0.3)] {
+                let e = PhaseAngular::new(o, dir, target, ab, rho).expect("target off the line");
+                let cdf = |t: f64| {
+                    let n = 4000;
+                    let h = (t - ab.0) / n as f64;
+                    (0..=n)
+                        .map(|i| {
+                            let w = if i == 0 || i == n {
+                                1.0
+                            } else {
+                                2.0 + 2.0 * (i % 2) as f64
+                            };
+                            w * e.pdf(ab.0 + i as f64 * h)
+                        })
+                        .sum::<f64>()
+                        * h
+                        / 3.0
+                };
+                let mut last = ab.0;
+                for i in 0..=20 {
+                    let u = i as f64 / 20.0;
+                    let (t, pdf) = e.sample(u);
+                    assert!(
+                        t >= last - 1e-12 && t <= ab.1 + 1e-9,
+                        "g {g} {ab:?} u {u}: t {t}"
+                    );
+                    assert!((pdf - e.pdf(t)).abs() <= 1e-12 * pdf);
+                    assert!(
+                        (cdf(t) - u).abs() < 1e-6,
+                        "g {g} {ab:?} u {u}: cdf {}",
+                        cdf(t)
+                    );
+                    last = t;
+                }
+            }
+        }
+    }
+
+    /// The fit of ρ keeps the wrapped Cauchy density close to Henyey–Greenstein's over ψ ∈ [0, π]: the
+    /// second moment of p/q under q (1 for an exact fit) stays below 1.1 at |g| = 0.3–0.95, where
+    /// uniform ψ (equiangular) gives 1.4–36 (1.09 at 0.95 with the fit; 1.12 with ρ = g(1.6 − 0.6|g|)).
+    #[test]
+    fn cauchy_fit_tracks_hg() {
+        use std::f64::consts::PI;
+        for g in [0.3, 0.7, 0.9, 0.95, -0.7] {
+            let rho = Phase::new(g).cauchy_rho();
+            let n = 200_000;
+            let h = PI / n as f64;
+            let psi = |i: usize| (i as f64 + 0.5) * h;
+            let hg = |x: f64| Phase::new(g).eval(x.cos());
+            let wc = |x: f64| 1.0 / (1.0 + rho * rho - 2.0 * rho * x.cos());
+            let (zp, zq): (f64, f64) = (0..n).fold((0.0, 0.0), |s, i| {
+                (s.0 + hg(psi(i)) * h, s.1 + wc(psi(i)) * h)
+            });
+            let m2: f64 = (0..n)
+                .map(|i| (hg(psi(i)) / zp).powi(2) / (wc(psi(i)) / zq) * h)
+                .sum();
+            assert!(m2 < 1.1, "g {g}: second moment {m2}");
+        }
     }
 }

@@ -77,6 +77,10 @@ pub struct Tracer<'a> {
     object_draws: u32,
     /// Share of target-side directions drawn in the phase function's lobe (`target_dir_pdf`).
     target_lobe: f64,
+    /// Phase-angle distances per segment and target (`PhaseAngular`), and the share of target-side
+    /// distances drawn so.
+    phase_distances: u32,
+    target_phase_distances: f64,
     /// The hidden geometry's bounds, grown by a margin: a leg outside them meets nothing.
     hidden_bounds: crate::geometry::Aabb,
     /// The last (spp, lattice generator) pair `trace` used.
@@ -126,6 +130,10 @@ impl<'a> Tracer<'a> {
                 .as_ref()
                 .map_or(0.0, Medium::default_target_lobe)
         });
+        let phase_default = scene
+            .medium
+            .as_ref()
+            .map_or((0, 0.0), Medium::default_phase_distances);
         let object_draws = if hidden.total > 0.0 {
             set.object_draws
         } else {
@@ -140,6 +148,8 @@ impl<'a> Tracer<'a> {
             rr_depth,
             object_draws,
             target_lobe,
+            phase_distances: set.phase_distances.unwrap_or(phase_default.0),
+            target_phase_distances: set.target_phase_distances.unwrap_or(phase_default.1),
             hidden_bounds: {
                 let b = scene.geometry.bounds();
                 // Rounding of the leg's end points; none to cover when there is no geometry (empty box).
@@ -482,12 +492,16 @@ impl<'a> Tracer<'a> {
                         );
                         for k in 0..targets.len() {
                             let n_time = seg[k].time.as_ref().map_or(0, |e| e.n);
-                            // Draw 0 is equiangular, draws 1..=n_time the time window's strata.
-                            for j in 0..=n_time {
+                            let n_phase = seg[k].phase.as_ref().map_or(0, |e| e.1);
+                            // Draw 0 is equiangular, draws 1..=n_time the time window's strata, the
+                            // rest phase-angle distances.
+                            for j in 0..=n_time + n_phase {
                                 let draw = if j == 0 {
                                     seg[k].equi.as_ref().map(|e| e.sample(s.next()))
-                                } else {
+                                } else if j <= n_time {
                                     seg[k].time.as_ref().map(|e| e.sample(j - 1, s.next()))
+                                } else {
+                                    seg[k].phase.as_ref().map(|e| e.0.sample(s.next()))
                                 };
                                 let Some((t, pdf)) = draw else { continue };
                                 if !(t >= m0 && t <= m1 && pdf > 0.0) {

@@ -102,6 +102,18 @@ impl Medium {
         }
     }
 
+    /// The phase-angle distances where a scene leaves `render.phase_distances` and
+    /// `render.target_phase_distances` unset: draws per segment and target, and the share of target-side
+    /// distances drawn so. In strongly forward media a connection's phase value through the vertex
+    /// varies a thousandfold along a segment, which equiangular distances ignore; below g 0.6 they were
+    /// not measured (docs/renderer-sampling.md).
+    pub fn default_phase_distances(&self) -> (u32, f64) {
+        match self.phase {
+            Phase::HenyeyGreenstein { g } if g >= 0.6 && self.scatters() => (2, 0.5),
+            _ => (0, 0.0),
+        }
+    }
+
     /// The optical depth ∫σt along all of `segs`, exactly.
     #[inline]
     fn optical_depth(&self, segs: &[Segment]) -> f64 {

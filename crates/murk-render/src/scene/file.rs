@@ -153,6 +153,13 @@ pub struct RenderDef {
     /// connections through a vertex peak where the vertex lies between the target and the path.
     /// Default: 0.5 where the phase function is Henyey–Greenstein with g ≥ 0.3, else 0.
     pub target_lobe: Option<f64>,
+    /// Medium distances per segment and target drawn in the scattering angle that the connection to the
+    /// target turns through, after the phase function (MIS-combined with the other distances). Default:
+    /// 2 where the phase function is Henyey–Greenstein with g ≥ 0.6, else 0.
+    pub phase_distances: Option<u32>,
+    /// Share of the target-side draws' distances drawn so toward the path vertex, instead of
+    /// equiangular, in [0, 1]. Default: 0.5 where g ≥ 0.6, else 0.
+    pub target_phase_distances: Option<f64>,
     /// Side (in grid points) of the tiles of traced points that share their paths past the first hidden
     /// vertex, where a medium scatters and every traced point has the same targets (see the integrator);
     /// at most 16. 0 or 1: off.
@@ -178,6 +185,8 @@ impl Default for RenderDef {
             target_split: 64,
             target_split_radius_m: 0.5,
             target_lobe: None,
+            phase_distances: None,
+            target_phase_distances: None,
             share_tile: 4,
             trace_from: TraceFrom::Auto,
         }

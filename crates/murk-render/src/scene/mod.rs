@@ -170,6 +170,18 @@ impl Scene {
         if f.render.target_lobe.is_none() && lobe > 0.0 {
             resolved.push_str(&format!("\nrender.target_lobe_default = {lobe}"));
         }
+        // Likewise its default phase-angle distances.
+        let (n, share) = medium
+            .as_ref()
+            .map_or((0, 0.0), Medium::default_phase_distances);
+        if f.render.phase_distances.is_none() && n > 0 {
+            resolved.push_str(&format!("\nrender.phase_distances_default = {n}"));
+        }
+        if f.render.target_phase_distances.is_none() && share > 0.0 {
+            resolved.push_str(&format!(
+                "\nrender.target_phase_distances_default = {share}"
+            ));
+        }
         let geometry = Geometry::new(objects);
         if geometry.is_empty() && !medium.as_ref().is_some_and(Medium::scatters) {
             return Err(bad(

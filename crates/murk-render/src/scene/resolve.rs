@@ -235,6 +235,7 @@ impl RenderDef {
             ),
             ("render.target_split", s.target_split),
             ("render.object_draws", s.object_draws),
+            ("render.phase_distances", s.phase_distances.unwrap_or(0)),
         ] {
             if n > 4096 {
                 return Err(bad(field, format!("must be at most 4096, got {n}")));
@@ -256,6 +257,15 @@ impl RenderDef {
             return Err(bad(
                 "render.target_lobe",
                 format!("must be in [0, 1), got {p}"),
+            ));
+        }
+        if let Some(p) = s
+            .target_phase_distances
+            .filter(|p| !(0.0..=1.0).contains(p))
+        {
+            return Err(bad(
+                "render.target_phase_distances",
+                format!("must be in [0, 1], got {p}"),
             ));
         }
         if let Some(p) = s.first_vertex_survival.filter(|p| !(*p > 0.0 && *p <= 1.0)) {
