@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
-"""The quick-scale results table of docs/study.md, from a fresh run of this build's study, so that the
-table cannot go stale: `--check` (CI) fails when the table in the doc differs from what today's code
-computes, `--write` replaces it. Seeded renders give identical bytes on any machine, so the table is
-the same wherever it is computed.
+"""The results tables of docs/study.md, from a run of this build's study, so that they cannot go
+stale: `--check` (CI) fails when the quick table in the doc differs from what today's code computes,
+`--write` replaces it. Seeded renders give identical bytes on any machine, so a table is the same
+wherever it is computed. The paper-scale table (CPU-hours) is written only from a finished paper-scale
+study's folder: `--scale paper --from DIR --write`.
 
-Usage: scripts/study-table.py [--check | --write | --print] [--from STUDY_DIR]
+Usage: scripts/study-table.py [--check | --write | --print] [--scale quick|paper] [--from STUDY_DIR]
 """
 
 import argparse
 import csv
+import json
 import math
 import re
 import subprocess
@@ -18,7 +20,13 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "study.md"
-BEGIN, END = "<!-- results:quick:begin (scripts/study-table.py --write) -->", "<!-- results:quick:end -->"
+
+
+def markers(scale: str) -> tuple:
+    """The comments that bracket `scale`'s table in docs/study.md."""
+    flags = "--write" if scale == "quick" else "--scale paper --from DIR --write"
+    return (f"<!-- results:{scale}:begin (scripts/study-table.py {flags}) -->",
+            f"<!-- results:{scale}:end -->")
 
 
 def show(v: float) -> str:
@@ -61,9 +69,14 @@ def main(argv):
     mode.add_argument("--check", action="store_true", help="fail when docs/study.md's table is stale")
     mode.add_argument("--write", action="store_true", help="replace docs/study.md's table")
     mode.add_argument("--print", action="store_true", help="print the table (the default)")
+    ap.add_argument("--scale", choices=("quick", "paper"), default="quick",
+                    help="which table (paper: only with --from)")
     ap.add_argument("--from", dest="study", metavar="STUDY_DIR", type=Path,
-                    help="read a finished quick study's folder instead of running one (minutes)")
+                    help="read a finished study's folder instead of running a quick one (minutes)")
     a = ap.parse_args(argv)
+    if a.scale == "paper" and a.study is None:
+        ap.error("--scale paper needs --from STUDY_DIR (a paper-scale study takes CPU-hours)")
+    BEGIN, END = markers(a.scale)
     doc = DOC.read_text()
     m = re.search(re.escape(BEGIN) + r"\n(.*?)" + re.escape(END), doc, flags=re.S)
     if m is None:
@@ -71,6 +84,9 @@ def main(argv):
     if a.study is not None:
         if not (a.study / "metrics.csv").is_file():
             ap.error(f"{a.study}: no metrics.csv (not a finished study's folder)")
+        ran = json.loads((a.study / "plan.json").read_text()).get("scale")
+        if ran != a.scale:
+            ap.error(f"{a.study}: a {ran}-scale study, not {a.scale}")
         text = table(a.study)
     else:
         with tempfile.TemporaryDirectory(prefix="murk-study-table-") as d:
@@ -82,10 +98,10 @@ def main(argv):
         print(f"{DOC}: results table written")
     elif a.check:
         if m.group(1) != text:
-            print(f"{DOC}: the quick-scale results table is stale; today's code gives:\n{text}"
+            print(f"{DOC}: the {a.scale}-scale results table is stale; today's code gives:\n{text}"
                   "run scripts/study-table.py --write and commit it", file=sys.stderr)
             return 1
-        print(f"{DOC}: the quick-scale results table matches today's code")
+        print(f"{DOC}: the {a.scale}-scale results table matches today's code")
     else:
         print(text, end="")
     return 0
