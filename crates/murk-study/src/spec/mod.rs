@@ -1,7 +1,17 @@
-//! The figures' cells as specs: each figure's rows and columns, the scene and medium each renders
-//! and the wavelength it is reconstructed with, before the plan gives them their capture jobs.
+//! The paper's figures as specs, one module per figure: its cells (rows and columns, the scene and
+//! medium each renders and the wavelength it is reconstructed with, before the plan gives them their
+//! capture jobs) and its findings (the paper's claims those cells test, each with its numbers and a
+//! verdict computed from them).
 
-use crate::plan::{Figure, MediumParams, SceneKind, ALBEDOS};
+mod fig3a;
+mod fig3b;
+mod fig3c;
+mod fig4;
+mod fig5;
+
+use crate::format::{show, stat};
+use crate::plan::{Figure, MediumParams, SceneKind};
+use crate::run::{CellResult, Scores};
 
 /// One cell of a figure, as the paper lays it out.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -30,6 +40,12 @@ fn fog(mu_t_per_m: f64, albedo: f64, g: f64) -> MediumParams {
     }
 }
 
+/// A best-threshold IoU from which the Z counts as found (the reduced study's test uses the same).
+pub const FOUND_IOU: f64 = 0.2;
+
+/// What a figure's module makes its cells with: row, column, scene, medium and λ factor.
+type Cell<'a> = dyn Fn(String, String, SceneKind, MediumParams, f64) -> CellSpec + 'a;
+
 impl Figure {
     /// The figure's cells, row by row.
     pub fn cells(self) -> Vec<CellSpec> {
@@ -41,58 +57,67 @@ impl Figure {
             medium,
             lambda_factor,
         };
-        let z = SceneKind::ZLetter;
         match self {
-            // The Z letter without a medium.
-            Figure::Fig3a => vec![cell("no medium".into(), String::new(), z, NO_MEDIUM, 1.0)],
-            // μt by albedo, isotropic.
-            Figure::Fig3b => [0.5, 1.0, 2.0]
-                .into_iter()
-                .flat_map(|mu_t| {
-                    ALBEDOS.map(|a| {
-                        let (r, c) = (format!("μt = {mu_t}"), format!("α = {a}"));
-                        cell(r, c, z, fog(mu_t, a, 0.0), 1.0)
-                    })
-                })
-                .collect(),
-            // g by albedo at μt = 1.
-            Figure::Fig3c => [0.7, 0.0, -0.7]
-                .into_iter()
-                .flat_map(|g| {
-                    ALBEDOS.map(|a| {
-                        let (r, c) = (format!("g = {g}"), format!("α = {a}"));
-                        cell(r, c, z, fog(1.0, a, g), 1.0)
-                    })
-                })
-                .collect(),
-            // The wavelength at μt = 1, α = 0.83.
-            Figure::Fig4 => [1.0, 2.0, 3.0]
-                .into_iter()
-                .map(|k| {
-                    let c = if k == 1.0 {
-                        "λ = λ0".to_string()
-                    } else {
-                        format!("λ = {k}λ0")
-                    };
-                    cell(String::new(), c, z, fog(1.0, 0.83, 0.0), k)
-                })
-                .collect(),
-            // The shelf scene without a medium and at two μt.
-            Figure::Fig5 => [0.0, 1.0, 1.5]
-                .into_iter()
-                .map(|mu_t| {
-                    let c = if mu_t == 0.0 {
-                        "no medium".to_string()
-                    } else {
-                        format!("μt = {mu_t}")
-                    };
-                    let m = MediumParams {
-                        mu_t_per_m: mu_t,
-                        ..NO_MEDIUM
-                    };
-                    cell(String::new(), c, SceneKind::Shelf, m, 1.0)
-                })
-                .collect(),
+            Figure::Fig3a => fig3a::cells(&cell),
+            Figure::Fig3b => fig3b::cells(&cell),
+            Figure::Fig3c => fig3c::cells(&cell),
+            Figure::Fig4 => fig4::cells(&cell),
+            Figure::Fig5 => fig5::cells(&cell),
         }
     }
+
+    /// What this run shows against each claim of the paper that the figure's `cells` (this run's
+    /// results of its cells, in the plan's order) can test, one sentence each with its numbers (the
+    /// paper's K, mean over seeds) and a verdict computed from them: a claim that does not reproduce
+    /// is stated as plainly as one that does. Claims whose cells did not run are left out.
+    pub fn findings(self, cells: &[&CellResult]) -> Vec<String> {
+        match self {
+            Figure::Fig3a => fig3a::findings(cells),
+            Figure::Fig3b => fig3b::findings(cells),
+            Figure::Fig3c => fig3c::findings(cells),
+            Figure::Fig4 => fig4::findings(cells),
+            Figure::Fig5 => fig5::findings(cells),
+        }
+    }
+}
+
+/// A cell's score under the paper's K, mean over seeds (NaN where it was not scored so).
+fn paper(r: &CellResult, get: fn(&Scores) -> f64) -> f64 {
+    r.by_compensation
+        .iter()
+        .find(|(name, ..)| *name == "paper")
+        .map_or(f64::NAN, |(_, scores, _)| stat(scores, get).0)
+}
+
+fn iou(r: &CellResult) -> f64 {
+    paper(r, |s| s.iou.best)
+}
+
+fn hf(r: &CellResult) -> f64 {
+    paper(r, |s| s.hf_share)
+}
+
+fn ssim(r: &CellResult) -> f64 {
+    paper(r, |s| s.ssim)
+}
+
+fn verdict(holds: bool) -> &'static str {
+    if holds {
+        "holds"
+    } else {
+        "does not hold"
+    }
+}
+
+/// `value (key)` of each cell, comma-separated. Three significant digits, so that close values
+/// (high-frequency shares of 1e-5 to 0.1) show which is larger.
+fn list(
+    rs: &[&CellResult],
+    value: &dyn Fn(&CellResult) -> f64,
+    key: &dyn Fn(&CellResult) -> String,
+) -> String {
+    rs.iter()
+        .map(|r| format!("{} ({})", show(value(r)), key(r)))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
