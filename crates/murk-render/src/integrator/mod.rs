@@ -196,7 +196,7 @@ impl<'a> Tracer<'a> {
     /// `bins`), unnormalised. With more than one origin (a tile), what each path adds past its first
     /// hidden vertex is shared by all of them (`share_tail`). Each bin holds one value per entry of
     /// `ratios`, the albedos of a sweep over the medium's own, side by side: a contribution whose path
-    /// scattered k times in the medium adds ratios[j]^k times itself to value j (a plain render has
+    /// scattered k times in the medium adds `ratios[j]^k` times itself to value j (a plain render has
     /// the one ratio 1).
     pub fn trace(
         &self,
