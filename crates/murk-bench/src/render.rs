@@ -36,7 +36,7 @@ pub struct Mitransient<'a> {
 }
 
 impl Case {
-    /// Which entries of a [hist][bin] (or [x][y][bin]) array of `n` values the error is taken over.
+    /// Which entries of a `[hist][bin]` (or `[x][y][bin]`) array of `n` values the error is taken over.
     fn mask(&self, time: &TimeAxis, n: usize) -> Vec<bool> {
         window_mask(
             time,
@@ -229,7 +229,7 @@ fn anisotropy(scenes: &Scenes, runs: usize, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// mitransient's relL2 (over `mask`, murk's mask of the case: mitransient's [x][y][bin] transient has the
+/// mitransient's relL2 (over `mask`, murk's mask of the case: mitransient's `[x][y][bin]` transient has the
 /// layout of murk's histograms; against its own 100 000-spp reference, the reference's noise taken out
 /// as for murk) and CPU seconds of its warm 10 000-spp render, measured by running mitransient_bench.py
 /// now.
