@@ -500,8 +500,8 @@ def estimate_medium(
 
     text = _murk.estimate_medium(
         capture if isinstance(capture, Capture) else _path(capture, "capture"),
-        ",".join(fit), float(mu_t), float(albedo), float(g), until, threads,
-        _progress(progress, "medium"),
+        dict(fit=",".join(fit), mu_t=float(mu_t), albedo=float(albedo), g=float(g), until=until),
+        threads, _progress(progress, "medium"),
     )
     return json.loads(text)
 

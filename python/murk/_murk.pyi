@@ -130,6 +130,15 @@ def assemble(scene: str, args: _RenderArgs, parts: Sequence[str]) -> Capture: ..
 def study_plan(out: str, args: _StudyArgs) -> List[dict]: ...
 def run_study(out: str, args: _StudyArgs, threads: Optional[int], progress: _Progress) -> str: ...
 def methods() -> List[Tuple[str, str]]: ...
+class _MediumArgs(TypedDict):
+    fit: str
+    mu_t: float
+    albedo: float
+    g: float
+    until: Optional[float]
+
+def estimate_medium(capture: Union[Capture, str], args: _MediumArgs, threads: Optional[int],
+                    progress: _Progress) -> str: ...
 def reconstruct(capture: Union[Capture, str], args: _ReconstructArgs, threads: Optional[int],
                 progress: _Progress,
                 ) -> Tuple[npt.NDArray[np.float32], List[npt.NDArray[np.float64]],

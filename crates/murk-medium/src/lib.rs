@@ -7,6 +7,36 @@
 //! an albedo sweep ([`table`]), and the capture's ring-averaged medium response is fitted by
 //! interpolating in that table ([`fit`]). A table is built once per geometry and serves any number of
 //! captures of it (the study fits every cell from one table).
+//!
+//! ```
+//! use murk_core::{DVec3, TimeAxis};
+//! use murk_medium::{estimate, EstimateOptions, FitParams, Outcome};
+//! use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
+//!
+//! // Fit μt and α (as `murk medium --fit mu_t,albedo` spells them); g keeps `fixed`'s value.
+//! let opt = EstimateOptions {
+//!     fit: FitParams::parse("mu_t,albedo")?,
+//!     ..EstimateOptions::default()
+//! };
+//! // A clear capture: a point 0.5 m behind a 1 m wall, no medium in front of it.
+//! let layout = CaptureLayout {
+//!     kind: LayoutKind::Confocal,
+//!     wall_size_m: 1.0,
+//!     grid: 8,
+//!     point: DVec3::ZERO,
+//!     time: TimeAxis { start_m: 0.0, bin_width_m: 0.01, bins: 200 },
+//!     laser_xyz: None,
+//!     sensor_xyz: None,
+//! };
+//! let mut cap = layout.empty_capture()?;
+//! let point = Target::Point { pos: DVec3::new(0.0, 0.0, 0.5), albedo: 1.0 };
+//! add_first_bounce(&mut cap, &point.scatterers()?, &SynthOptions::default())?;
+//! // No light before the scene's own: no medium is detected, and nothing is rendered to say so.
+//! let outcome = estimate(&cap, &opt, &|_, _| {})?;
+//! assert!(matches!(outcome, Outcome::NoMedium(_)));
+//! assert!(outcome.to_json().starts_with("{\"medium\": false"));
+//! # Ok::<(), murk_core::Error>(())
+//! ```
 
 pub mod density;
 pub mod fit;

@@ -1,6 +1,21 @@
 //! The study of Luesia et al. as a plan of independent render tasks, their reconstructions, metrics
 //! against the renderer's ground truth, figures and an HTML report.
 //!
+//! Each of the paper's figures is a spec ([`spec`]): its cells and the findings the report states.
+//!
+//! ```
+//! use murk_study::plan::Figure;
+//!
+//! // Fig. 3b sweeps three μt by five albedos of the Z letter in fog.
+//! let cells = Figure::Fig3b.cells();
+//! assert_eq!(cells.len(), 15);
+//! assert_eq!((cells[0].row.as_str(), cells[0].col.as_str()), ("μt = 0.5", "α = 0.15"));
+//! // Without results, no claim can be judged.
+//! assert!(Figure::Fig3b.findings(&[]).is_empty());
+//! ```
+//!
+//! The whole study, quick scale (renders for minutes):
+//!
 //! ```no_run
 //! use murk_study::{plan::{Scale, StudyOptions}, run::Silent};
 //! let opt = StudyOptions {
@@ -15,15 +30,16 @@
 //! let index = murk_study::run_study(std::path::Path::new("study"), &opt, &Silent).unwrap();
 //! ```
 
-pub mod cells;
 pub mod demo;
 mod figure_media;
 mod figure_real;
 mod figures;
+mod format;
 pub mod metrics;
 pub mod plan;
 pub mod report;
 pub mod run;
+pub mod spec;
 
 pub use demo::demo;
 pub use figure_media::figure_media;

@@ -1,7 +1,7 @@
 //! The study as data: figure cells (what to reconstruct and compare) over render tasks (what to
 //! simulate), each task keyed by the fingerprint of its resolved scene so finished work is found again.
 
-use crate::cells::{CellSpec, NO_MEDIUM};
+use crate::spec::{CellSpec, NO_MEDIUM};
 use murk_core::{Error, Result};
 use murk_render::{fingerprint, render_outputs, Overrides, Scene};
 use serde::{Deserialize, Serialize};

@@ -2,6 +2,21 @@
 //! figure grids laid out like a paper's figures ([`grid`], PNG) and line plots of metrics ([`plot`],
 //! SVG or PNG). Text is drawn with DejaVu Sans, embedded in the crate (see `fonts/LICENSE`), so
 //! nothing depends on the fonts installed on the machine. Every file is written atomically.
+//!
+//! ```
+//! use murk_core::Volume;
+//!
+//! // One bright voxel at x = +1 m, y = 0, z = 1.5 m in a 3 × 3 × 5 volume.
+//! let vol = Volume::parse("-1:1:3,-1:1:3,0.5:1.5:5")?;
+//! let mut intensity = vec![0f32; vol.len()];
+//! intensity[vol.index(2, 1, 4)] = 1.0;
+//! let v = murk_view::views(&vol, &intensity);
+//! // The front view looks from the wall into the scene with +y up, so +x is the left column.
+//! assert_eq!((v.front.width, v.front.height), (3, 3));
+//! assert_eq!(v.front.values[3], 1.0);
+//! assert_eq!(v.depth.values[3], 1.5);
+//! # Ok::<(), murk_core::Error>(())
+//! ```
 
 pub mod grid;
 pub mod pictures;

@@ -46,8 +46,9 @@ pub struct Scene {
     pub settings: RenderDef,
     /// The scene file's text, or the resolved TOML where overrides apply; recorded in `scene_info`.
     pub source: String,
-    /// The resolved scene as sorted `key = value` lines (`canonical`), then a fingerprint of each
-    /// mesh's triangles and of a density grid: what a checkpoint and a study's task key compare.
+    /// The resolved scene as sorted `key = value` lines (this module's `canonical`), then a
+    /// fingerprint of each mesh's triangles and of a density grid: what a checkpoint and a study's
+    /// task key compare.
     pub resolved: String,
     /// The overrides as the user wrote them (`--set medium.g=0.7`, `--grid 32`).
     pub overrides: Vec<String>,

@@ -1,49 +1,14 @@
-//! From the grid's spectra to the field at the voxels: the kernel's spectrum (folded when its
+//! The CPU executor's inner steps, from the grid's spectra to the field at the voxels: the kernel's spectrum (folded when its
 //! support is symmetric), the product and inverse transforms, and the resampling to voxel positions.
 
-use super::{c32, FastPlan, Workspace};
+use super::Workspace;
 use crate::cmul;
 use crate::fft2::{kept_lines, transpose_part};
+use crate::pf_fast::FastPlan;
 use crate::resample::Resampler;
 use murk_core::simd::wide;
-use rustfft::num_complex::{Complex32, Complex64};
+use rustfft::num_complex::Complex32;
 use std::ops::Range;
-
-/// A kernel K(|dx|, |dy|) whose support is symmetric about its centre (volume columns spanning the
-/// wall lattice symmetrically) has K̂(N − k) = e^{4πi·k·c/N}·K̂(k) along each axis, so only the
-/// non-negative frequencies k ≤ N/2 need transforming: about half the row and column FFTs. The
-/// phases for k > N/2 are folded into the data's spectra once, and the kernel's spectrum is unfolded
-/// by mirroring.
-pub(super) struct Fold {
-    /// The data's factor per spectrum entry ([ky][kx]): both axes' phases and the inverse FFT's
-    /// 1/(fx·fy), applied in one product per frequency.
-    pub(super) phases: Vec<Complex32>,
-}
-
-impl Fold {
-    pub(super) fn new(fx: usize, fy: usize, cx: i64, cy: i64) -> Fold {
-        let axis = |n: usize, c: i64| -> Vec<Complex64> {
-            (0..n)
-                .map(|k| {
-                    if k <= n / 2 {
-                        Complex64::new(1.0, 0.0)
-                    } else {
-                        let turns = 2.0 * ((n - k) as i64 * c) as f64 / n as f64;
-                        Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * turns)
-                    }
-                })
-                .collect()
-        };
-        let (px, py) = (axis(fx, cx), axis(fy, cy));
-        let norm = 1.0 / (fx * fy) as f64;
-        Fold {
-            phases: py
-                .iter()
-                .flat_map(|y| px.iter().map(move |x| c32(x * y * norm)))
-                .collect(),
-        }
-    }
-}
 
 /// Number of distinct |q − c| for q ∈ [0, len).
 pub(super) fn reach(c: i64, len: usize) -> usize {
