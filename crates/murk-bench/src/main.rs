@@ -365,7 +365,7 @@ fn paper_case(
         times.iter().map(|t| (t * 1000.0).round() / 1000.0).collect::<Vec<_>>(),
         synth_s,
         p[2],
-        murk_render::bench::peak_rss_mib().unwrap_or(f64::NAN)
+        murk_core::process::peak_rss_mib().unwrap_or(f64::NAN)
     ));
     Ok(())
 }

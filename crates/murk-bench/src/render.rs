@@ -6,9 +6,11 @@ use crate::median;
 use crate::say;
 use crate::{json_line, json_numbers, Scratch};
 use anyhow::{bail, Context};
+use murk_core::process::peak_rss_mib;
 use murk_core::TimeAxis;
-use murk_render::bench::{peak_rss_mib, rel_l2, split_rel_l2, timed_render, window_mask};
+use murk_render::bench::timed_render;
 use murk_render::{Overrides, Plan, Scene};
+use murk_study::render_error::{rel_l2, split_rel_l2, window_mask};
 use std::path::Path;
 use std::process::Command;
 

@@ -27,6 +27,7 @@ mod input;
 mod limits;
 mod named;
 mod points;
+pub mod process;
 mod progress;
 mod reconstruction;
 pub mod report;

@@ -37,6 +37,7 @@ mod figures;
 mod format;
 pub mod metrics;
 pub mod plan;
+pub mod render_error;
 pub mod report;
 pub mod run;
 pub mod spec;

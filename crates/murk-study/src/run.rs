@@ -101,13 +101,13 @@ impl Tally {
         Tally {
             path,
             before_s,
-            cpu0_s: murk_render::bench::cpu_seconds(),
+            cpu0_s: murk_core::process::cpu_seconds(),
             written: std::sync::Mutex::new(Instant::now()),
         }
     }
 
     fn write(&self) -> Result<()> {
-        let (Some(a), Some(b)) = (self.cpu0_s, murk_render::bench::cpu_seconds()) else {
+        let (Some(a), Some(b)) = (self.cpu0_s, murk_core::process::cpu_seconds()) else {
             return Ok(());
         };
         murk_io::write_atomic(&self.path, |w| {
@@ -426,8 +426,8 @@ pub fn evaluate(plan: &StudyPlan, dir: &Path, obs: &dyn Observer) -> Result<Vec<
         let mut pair_errors = Vec::new();
         for pair in cell.captures.chunks_exact(2) {
             let (a, b) = (load(&pair[0])?, load(&pair[1])?);
-            let mask = murk_render::bench::window_mask(&a.time, a.h.len(), fmt.object_window_m);
-            pair_errors.push(murk_render::bench::split_rel_l2(&a.h, &b.h, &mask));
+            let mask = crate::render_error::window_mask(&a.time, a.h.len(), fmt.object_window_m);
+            pair_errors.push(crate::render_error::split_rel_l2(&a.h, &b.h, &mask));
         }
         for (seed, (id, ref_id)) in cell.captures.iter().zip(&cell.reference).enumerate() {
             let cap = load(id)?;

@@ -1,11 +1,12 @@
 //! Efficiency benchmark: object-window relative L2 error against a long reference render, CPU time and
 //! paths per CPU-second, median of several seeds (the protocol of docs/benchmarks.md).
 //!
-//! `cargo run --release -p murk-render --example bench_error -- SCENE.toml SPP REF_SPP RUNS [WIN_START WIN_END]`
+//! `cargo run --release -p murk-study --example bench_error -- SCENE.toml SPP REF_SPP RUNS [WIN_START WIN_END]`
 
 use murk_core::median;
-use murk_render::bench::{rel_l2, timed_render, window_mask};
+use murk_render::bench::timed_render;
 use murk_render::{Overrides, Plan, Scene};
+use murk_study::render_error::{rel_l2, window_mask};
 use std::path::Path;
 
 fn main() {
