@@ -49,7 +49,7 @@ fn aware_finding(results: &[CellResult]) -> Option<String> {
         .count();
     let failed: usize = fogged.iter().map(|r| r.aware_notes.len()).sum();
     Some(format!(
-        "Medium-aware (murk's own addition, not the paper's): reconstructed without being told the medium, it scores an IoU at least that of the paper's PF + K (which is told μt and α) in {} of {} cells with a medium, and an SSIM at least as high in {}; its estimate of μt and α (g free) is within 10 % of the truth in {} of them{}. Per cell: metrics.csv, rows `aware`, columns est_mu_t, est_albedo, est_g.",
+        "Medium-aware (murk's own addition, not the paper's): reconstructed without being told the medium, it scores an IoU at least that of the paper's PF + K (which is told μt and α) in {} of {} cells with a medium, and an SSIM at least as high in {}; its estimate of μt and α (g free) is within 10 % of the truth in {} of them{}. Per cell: metrics.csv, the rows whose compensation is aware, columns est_mu_t, est_albedo, est_g.",
         at_least(|s| s.iou.best),
         fogged.len(),
         at_least(|s| s.ssim),

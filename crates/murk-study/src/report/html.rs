@@ -21,7 +21,7 @@ const CHOICES: &[&str] = &[
     "Albedo sweeps: the five cells of a row of Fig. 3b or 3c are one render whose paths serve every albedo (the renderer's sampling does not depend on the albedo in fog); each capture equals, to float rounding, a render of that albedo alone with the same seed. The CPU column gives each cell a fifth of its row's render.",
     "Fig. 3b: the paper shows one cell twice; we render every μt × α cell.",
     "Fig. 4: the paper's file names suggest 4λ0 for its third column; its caption says 3λ0, which we use. Its λ0 is the paper scale's 4Δc = 0.0625 m at both scales, so that λ keeps the paper's ratio to the 0.8 m letter; at quick scale that is 2Δc, the 64² grid's Nyquist limit, so the λ0 picture is noisier than Fig. 3's (which keep 4Δc of their own grid).",
-    "Compensation: every cell is scored without compensation, with the paper's K(x_v) as printed (α·d mixes units) and with the physical ballistic gain e^{2μt(d_ill + d_cam)}; the switch above the figures chooses which the figures, plots and tables show (the Findings use the paper's K).",
+    "Compensation: every cell is scored without compensation, with the paper's K(xᵥ) as printed (α·d mixes units) and with the physical ballistic gain exp(2 μt (d_ill + d_cam)); the switch above the figures chooses which the figures, plots and tables show (the Findings use the paper's K).",
     "Medium-aware: every cell is also scored as murk reconstructs without being told the medium: the medium estimated from the cell's own capture (murk medium, all of μt, α and g free), its response removed, the gate and window end of murk reconstruct, and the paper's K with the estimate; metrics.csv gives the estimate beside the truth (est_mu_t, est_albedo, est_g).",
     "Metrics: IoU of the front maximum projection thresholded at the best and at Otsu's threshold against the renderer's ground-truth mask (the Z; in the room, everything but the room's walls); depth error = median over that mask of the brightest voxel's depth minus the true depth; PSNR and SSIM of the normalised front projection against the same scene without medium at the same λ; CNR of the mask against the rest; high-frequency share = spectral energy above half Nyquist.",
     "Shelf objects: a pixel's surface is its column's nearest local maximum that reaches half of the column's brightest voxel, where that brightest voxel is at least twice the column's mean (a flat column has none); an object is detected when more than half of its pixels have their surface within two voxels of the object's true depth, and its depth error is the median over its pixels. Not the brightest voxel: the virtual aperture sees around a small object, so the shelf's back panel can be brighter in the object's own column.",
@@ -45,7 +45,7 @@ murkSwitch();
 
 const STYLE: &str = "<style>#controls{position:sticky;top:0;background:#f4f4f4;border-bottom:1px solid #bbb;padding:.4em .6em;z-index:1}\
 figure{margin:.5em 0}.grid img{max-width:100%}\
-.plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(330px,1fr));gap:4px}.plots img{width:100%}\
+.plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(380px,1fr));gap:4px}.plots img{width:100%}\
 li{margin:.3em 0}</style>";
 
 pub(super) fn write_html(
@@ -158,7 +158,7 @@ pub(super) fn write_html(
             f.bins,
             show(f.bin_width_m),
             show(f.start_m),
-            f.volume
+            volume_words(&f.volume)
         );
     }
     h.push_str("</table>\n<h2>Numbers per cell (mean ± spread over seeds)</h2>\n<table id=\"metrics\"><thead><tr><th>figure</th><th>row</th><th>column</th><th>tail share</th><th>CPU s</th><th>render error</th>");
@@ -228,4 +228,22 @@ pub(super) fn write_html(
     let path = dir.join("index.html");
     murk_io::write_atomic(&path, |w| w.write_all(h.as_bytes()).map_err(io(&path)))?;
     Ok(path)
+}
+
+/// A volume spec (`x0:x1:nx,…`) as the report writes numbers: voxels, then each axis's span in
+/// metres; the spec itself where it does not parse.
+fn volume_words(spec: &str) -> String {
+    let Ok(v) = murk_core::Volume::parse(spec) else {
+        return spec.to_string();
+    };
+    let span = |a: &murk_core::Axis| format!("{} to {} m", show(a.start), show(a.end));
+    format!(
+        "{} × {} × {} voxels (x {}, y {}, z {})",
+        v.x.n,
+        v.y.n,
+        v.z.n,
+        span(&v.x),
+        span(&v.y),
+        span(&v.z)
+    )
 }

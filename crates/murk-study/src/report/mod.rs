@@ -111,8 +111,8 @@ pub(super) fn default_method(methods: &[&'static str]) -> &'static str {
 pub(super) fn method_label(name: &str) -> String {
     match name {
         "none" => "no compensation".into(),
-        "paper" => "paper's K(x_v)".into(),
-        "ballistic" => "ballistic gain e^{2μt(d_ill + d_cam)}".into(),
+        "paper" => "paper's K(xᵥ)".into(),
+        "ballistic" => "ballistic gain exp(2 μt (d_ill + d_cam))".into(),
         crate::run::AWARE => "medium-aware (estimated medium removed, K with the estimate)".into(),
         other => other.into(),
     }

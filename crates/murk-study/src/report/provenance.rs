@@ -30,10 +30,11 @@ pub(super) fn provenance(plan: &StudyPlan, results: &[CellResult]) -> Vec<(&'sta
     let cpu: Vec<f64> = results.iter().filter_map(|r| r.cpu_s).collect();
     let external = results.iter().filter(|r| r.cpu_s.is_none()).count();
     let mut cpu_text = format!(
-        "{} CPU-hours of rendering ({} s) over {} cells",
+        "{} CPU-hours of rendering ({} s) over {} {}",
         show(cpu.iter().sum::<f64>() / 3600.0),
         show(cpu.iter().sum::<f64>()),
-        cpu.len()
+        cpu.len(),
+        plural(cpu.len(), "cell")
     );
     if external > 0 {
         let _ = write!(
@@ -46,7 +47,12 @@ pub(super) fn provenance(plan: &StudyPlan, results: &[CellResult]) -> Vec<(&'sta
         2,
         (
             "scale",
-            format!("{} ({} seeds)", plan.scale.name(), plan.seeds),
+            format!(
+                "{} ({} {})",
+                plan.scale.name(),
+                plan.seeds,
+                plural(plan.seeds as usize, "seed")
+            ),
         ),
     );
     rows.insert(4, ("CPU time", cpu_text));
@@ -91,4 +97,13 @@ fn machine() -> String {
         .unwrap_or_else(|| std::env::consts::ARCH.into());
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     format!("{host}: {cpu}, {cores} cores available")
+}
+
+/// `word`, with an s unless there is one.
+fn plural(n: usize, word: &str) -> String {
+    if n == 1 {
+        word.to_string()
+    } else {
+        format!("{word}s")
+    }
 }
