@@ -5,7 +5,8 @@
 Three subcommands:
 
   density OUT.npy          writes the two-layer density: (nx, ny, nz) = (1, 1, 5) over the T scene's medium
-                           box, density 2 in the cell next to the wall (z < 0.501 m) and 0.5 behind it.
+                           box, density 2 in the cell next to the wall (z < 0.501 m) and 0.5 behind it
+                           (--layers changes the layers).
   render --medium M ...    renders the same scene with mitransient (M = homogeneous or grid) and saves its
                            transient (rows = y, columns = x, time, channel) as .npy.
   compare ...              reads murk's HDF5 captures and mitransient's .npy files (one per seed), fixes the
@@ -14,7 +15,8 @@ Three subcommands:
 mitransient has no laser sampling in its volumetric integrator, so the laser spot is a 5 mm square area
 light on the wall centre and the sensor leg is dropped with camera_unwarp (as in
 /work/shared/reference/mitransient_bench.py --mode vol --medium). Its max_depth 10 counts the wall vertex
-and the emitter, so it allows 8 hidden vertices, murk's max_depth 8. Needs the mitransient venv
+and the emitter, so it allows 8 hidden vertices, murk's max_depth 8. mitransient 1.3.1 drops the length of
+null collisions from a path's time, so grid renders need the one-line patch given in the doc. Needs the mitransient venv
 (mitransient 1.3.1, mitsuba 3.9.1) for `render`, numpy and h5py for `compare`.
 """
 
@@ -26,26 +28,27 @@ import numpy as np
 
 BOX_MIN = (-1.5, -1.5, 0.001)
 BOX_MAX = (1.5, 1.5, 2.5)
-LAYERS = (2.0, 0.5, 0.5, 0.5, 0.5)  # density along z, wall side first
+LAYERS = "2,0.5,0.5,0.5,0.5"  # default density of the layers along z, wall side first
 LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 
 
-def density_grid():
+def density_grid(layers):
     """murk's layout: (nx, ny, nz), x slowest, cell [0, 0, 0] at the box's min corner."""
-    return np.asarray(LAYERS, dtype=np.float32).reshape(1, 1, len(LAYERS))
+    values = [float(v) for v in layers.split(",")]
+    return np.asarray(values, dtype=np.float32).reshape(1, 1, len(values))
 
 
 def cmd_density(a):
-    np.save(a.out, density_grid())
+    np.save(a.out, density_grid(a.layers))
 
 
-def medium_dict(mi, kind, mu_t, albedo, g):
+def medium_dict(mi, kind, layers, mu_t, albedo, g):
     """The medium inside the box. Mitsuba's VolumeGrid is indexed (z, y, x, channel), and gridvolume's
     to_world maps the unit cube onto the box; 'nearest' keeps murk's constant-per-cell density."""
     phase = {"type": "hg", "g": g}
     if kind == "homogeneous":
         return {"type": "homogeneous", "sigma_t": mu_t, "albedo": albedo, "phase": phase}
-    zyx = np.ascontiguousarray(density_grid().transpose(2, 1, 0)[..., None])
+    zyx = np.ascontiguousarray(density_grid(layers).transpose(2, 1, 0)[..., None])
     size = [hi - lo for lo, hi in zip(BOX_MIN, BOX_MAX)]
     T = mi.ScalarTransform4f
     return {
@@ -101,7 +104,7 @@ def cmd_render(a):
                   "emitter": {"type": "area", "radiance": 1000.0}},
         "medium": {"type": "cube", "bsdf": {"type": "null"},
                    "to_world": T().translate(centre) @ T().scale(half),
-                   "interior": medium_dict(mi, a.medium, a.mu_t, 0.5, 0.0)},
+                   "interior": medium_dict(mi, a.medium, a.layers, a.mu_t, 0.5, 0.0)},
         "integrator": {"type": "murk_check_prbvolpath", "camera_unwarp": True, "hide_emitters": True,
                        "temporal_filter": "box", "max_depth": 10, "rr_depth": 5},
     })
@@ -167,8 +170,11 @@ def main(argv):
     sub = p.add_subparsers(dest="cmd", required=True)
     d = sub.add_parser("density", help="write the two-layer density grid for murk")
     d.add_argument("out")
+    layers_help = "comma-separated densities of equal layers along z, wall side first"
+    d.add_argument("--layers", default=LAYERS, help=layers_help)
     r = sub.add_parser("render", help="render the T scene with mitransient")
     r.add_argument("--medium", choices=["homogeneous", "grid"], required=True)
+    r.add_argument("--layers", default=LAYERS, help=layers_help + " (with --medium grid)")
     r.add_argument("--mu-t", dest="mu_t", type=float, default=1.0, help="μt (1/m) where the density is 1")
     r.add_argument("--res", type=int, default=16, help="sensor grid res × res")
     r.add_argument("--bins", type=int, default=1024, help="3 mm bins from path 0")
