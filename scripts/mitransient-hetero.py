@@ -1,0 +1,196 @@
+#!/usr/bin/env python3
+"""Checks murk's heterogeneous (grid) medium against mitransient's `transient_prbvolpath` on the T scene
+(scenes/t-wall-medium.toml). docs/media-heterogeneous.md has the recipe and the results.
+
+Three subcommands:
+
+  density OUT.npy          writes the two-layer density: (nx, ny, nz) = (1, 1, 5) over the T scene's medium
+                           box, density 2 in the cell next to the wall (z < 0.501 m) and 0.5 behind it
+                           (--layers changes the layers).
+  render --medium M ...    renders the same scene with mitransient (M = homogeneous or grid) and saves its
+                           transient (rows = y, columns = x, time, channel) as .npy.
+  compare ...              reads murk's HDF5 captures and mitransient's .npy files (one per seed), fixes the
+                           unit constant a0 from the homogeneous pair and prints the comparison table.
+
+mitransient has no laser sampling in its volumetric integrator, so the laser spot is a 5 mm square area
+light on the wall centre and the sensor leg is dropped with camera_unwarp (as in
+/work/shared/reference/mitransient_bench.py --mode vol --medium). Its max_depth 10 counts the wall vertex
+and the emitter, so it allows 8 hidden vertices, murk's max_depth 8. mitransient 1.3.1 drops the length of
+null collisions from a path's time, so grid renders need the one-line patch given in the doc. Needs the mitransient venv
+(mitransient 1.3.1, mitsuba 3.9.1) for `render`, numpy and h5py for `compare`.
+"""
+
+import argparse
+import os
+import sys
+
+import numpy as np
+
+BOX_MIN = (-1.5, -1.5, 0.001)
+BOX_MAX = (1.5, 1.5, 2.5)
+LAYERS = "2,0.5,0.5,0.5,0.5"  # default density of the layers along z, wall side first
+LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
+
+
+def density_grid(layers):
+    """murk's layout: (nx, ny, nz), x slowest, cell [0, 0, 0] at the box's min corner."""
+    values = [float(v) for v in layers.split(",")]
+    return np.asarray(values, dtype=np.float32).reshape(1, 1, len(values))
+
+
+def cmd_density(a):
+    np.save(a.out, density_grid(a.layers))
+
+
+def medium_dict(mi, kind, layers, mu_t, albedo, g):
+    """The medium inside the box. Mitsuba's VolumeGrid is indexed (z, y, x, channel), and gridvolume's
+    to_world maps the unit cube onto the box; 'nearest' keeps murk's constant-per-cell density."""
+    phase = {"type": "hg", "g": g}
+    if kind == "homogeneous":
+        return {"type": "homogeneous", "sigma_t": mu_t, "albedo": albedo, "phase": phase}
+    zyx = np.ascontiguousarray(density_grid(layers).transpose(2, 1, 0)[..., None])
+    size = [hi - lo for lo, hi in zip(BOX_MIN, BOX_MAX)]
+    T = mi.ScalarTransform4f
+    return {
+        "type": "heterogeneous",
+        "sigma_t": {
+            "type": "gridvolume",
+            "grid": mi.VolumeGrid(zyx),
+            "filter_type": "nearest",
+            "to_world": T().translate(list(BOX_MIN)) @ T().scale(size),
+        },
+        "scale": mu_t,
+        "albedo": albedo,
+        "phase": phase,
+    }
+
+
+def cmd_render(a):
+    os.environ.setdefault("DRJIT_LIBLLVM_PATH", LLVM)
+    import mitsuba as mi
+
+    mi.set_variant("llvm_ad_mono")
+    import drjit as dr
+    from mitransient.integrators.transient_prbvolpath import TransientPRBVolpathIntegrator
+
+    class Unwarped(TransientPRBVolpathIntegrator):
+        # mitransient refuses camera_unwarp with an nlos_capture_meter; the unwarp itself is generic.
+        def check_transient_(self, scene, sensor):
+            pass
+
+    mi.register_integrator("murk_check_prbvolpath", lambda props: Unwarped(props))
+    T = mi.ScalarTransform4f
+    white = {"type": "diffuse", "reflectance": 1.0}
+
+    def facing_wall(cx, cy, hx, hy):
+        # a rectangle is [-1, 1]² at z = 0 facing +z; turned to face the wall at z = 1 m
+        to_world = T().translate([cx, cy, 1.0]) @ T().rotate([0, 1, 0], 180) @ T().scale([hx, hy, 1.0])
+        return {"type": "rectangle", "to_world": to_world, "bsdf": white}
+
+    centre = [(lo + hi) / 2 for lo, hi in zip(BOX_MIN, BOX_MAX)]
+    half = [(hi - lo) / 2 for lo, hi in zip(BOX_MIN, BOX_MAX)]
+    film = {"type": "transient_hdr_film", "width": a.res, "height": a.res, "temporal_bins": a.bins,
+            "bin_width_opl": 0.003, "start_opl": 0.0, "rfilter": {"type": "box"}}
+    sensor = {"type": "nlos_capture_meter", "sensor_origin": [0.0, 0.0, 0.5], "film": film,
+              "sampler": {"type": "independent", "sample_count": a.spp}}
+    scene = mi.load_dict({
+        "type": "scene",
+        "wall": {"type": "rectangle", "to_world": T().scale([0.5, 0.5, 1.0]), "bsdf": white,
+                 "nlos_sensor": sensor},
+        "bar": facing_wall(0.0, 0.20, 0.25, 0.05),
+        "stem": facing_wall(0.0, -0.05, 0.05, 0.20),
+        "laser": {"type": "rectangle", "bsdf": {"type": "diffuse", "reflectance": 0.0},
+                  "to_world": T().translate([0, 0, 0.0005]) @ T().scale([0.0025, 0.0025, 1]),
+                  "emitter": {"type": "area", "radiance": 1000.0}},
+        "medium": {"type": "cube", "bsdf": {"type": "null"},
+                   "to_world": T().translate(centre) @ T().scale(half),
+                   "interior": medium_dict(mi, a.medium, a.layers, a.mu_t, 0.5, 0.0)},
+        "integrator": {"type": "murk_check_prbvolpath", "camera_unwarp": True, "hide_emitters": True,
+                       "temporal_filter": "box", "max_depth": 10, "rr_depth": 5},
+    })
+    _, transient = scene.integrator().render(scene, seed=a.seed, spp=a.spp)
+    dr.eval(transient)
+    np.save(a.out, np.array(transient).astype(np.float32))
+
+
+def murk_profile(path):
+    """Pixel-summed time profile of a murk capture (H is time × x × y)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return np.asarray(f["H"], dtype=np.float64).sum(axis=(1, 2))
+
+
+def mit_profile(path):
+    """Pixel-summed time profile of a mitransient transient (y × x × time × channel)."""
+    return np.load(path).astype(np.float64)[..., 0].sum(axis=(0, 1))
+
+
+def windows_of(profiles, windows, bin_m):
+    """Per seed, the sum over each window [lo, hi) m."""
+    out = []
+    for p in profiles:
+        out.append([p[int(round(lo / bin_m)):int(round(hi / bin_m))].sum() for lo, hi in windows])
+    return np.asarray(out)
+
+
+def mean_se(x):
+    return x.mean(axis=0), x.std(axis=0, ddof=1) / np.sqrt(len(x))
+
+
+def cmd_compare(a):
+    windows = [tuple(float(v) for v in w.split("-")) for w in a.windows]
+    norm_window = tuple(float(v) for v in a.norm_window.split("-"))
+    sums = {}
+    for key, files, read in (("murk_hom", a.murk_hom, murk_profile), ("mit_hom", a.mit_hom, mit_profile),
+                             ("murk_het", a.murk_het, murk_profile), ("mit_het", a.mit_het, mit_profile)):
+        sums[key] = windows_of([read(f) for f in files], windows + [norm_window], a.bin_m)
+    stats = {k: mean_se(v) for k, v in sums.items()}
+    (mh, mh_se), (th, th_se) = stats["murk_hom"], stats["mit_hom"]
+    a0 = mh[-1] / th[-1]
+    a0_rel = np.hypot(mh_se[-1] / mh[-1], th_se[-1] / th[-1])
+    print(f"a0 = murk/mitransient over {a.norm_window} m, homogeneous: {a0:.4f} ± {a0 * a0_rel:.4f}")
+    print("| window (m) | mitransient rel. SE hom / het | murk rel. SE hom / het "
+          "| hom ratio/a0 | het ratio/a0 | het / hom |")
+    print("|---|---|---|---|---|---|")
+    for i, (lo, hi) in enumerate(windows):
+        rel = {k: s[1][i] / s[0][i] for k, s in stats.items()}
+        r = {m: stats["murk_" + m][0][i] / stats["mit_" + m][0][i] / a0 for m in ("hom", "het")}
+        r_se = {m: r[m] * np.hypot(rel["murk_" + m], rel["mit_" + m]) for m in ("hom", "het")}
+        dbl = r["het"] / r["hom"]
+        dbl_se = dbl * np.sqrt(sum(v ** 2 for v in rel.values()))
+        print(f"| {lo:g}–{hi:g} | {rel['mit_hom']:.2%} / {rel['mit_het']:.2%} "
+              f"| {rel['murk_hom']:.2%} / {rel['murk_het']:.2%} "
+              f"| {r['hom']:.4f} ± {r_se['hom']:.4f} | {r['het']:.4f} ± {r_se['het']:.4f} "
+              f"| {dbl:.4f} ± {dbl_se:.4f} |")
+
+
+def main(argv):
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="cmd", required=True)
+    d = sub.add_parser("density", help="write the two-layer density grid for murk")
+    d.add_argument("out")
+    layers_help = "comma-separated densities of equal layers along z, wall side first"
+    d.add_argument("--layers", default=LAYERS, help=layers_help)
+    r = sub.add_parser("render", help="render the T scene with mitransient")
+    r.add_argument("--medium", choices=["homogeneous", "grid"], required=True)
+    r.add_argument("--layers", default=LAYERS, help=layers_help + " (with --medium grid)")
+    r.add_argument("--mu-t", dest="mu_t", type=float, default=1.0, help="μt (1/m) where the density is 1")
+    r.add_argument("--res", type=int, default=16, help="sensor grid res × res")
+    r.add_argument("--bins", type=int, default=1024, help="3 mm bins from path 0")
+    r.add_argument("--spp", type=int, required=True)
+    r.add_argument("--seed", type=int, required=True)
+    r.add_argument("--out", required=True)
+    c = sub.add_parser("compare", help="print the comparison table")
+    for name in ("murk-hom", "mit-hom", "murk-het", "mit-het"):
+        c.add_argument("--" + name, dest=name.replace("-", "_"), nargs="+", required=True,
+                       help="one file per seed (murk: .h5, mitransient: .npy)")
+    c.add_argument("--windows", nargs="+", default=["0.3-0.9", "0.9-1.9", "1.98-2.7", "2.7-3.07"])
+    c.add_argument("--norm-window", dest="norm_window", default="0.6-3.07")
+    c.add_argument("--bin-m", dest="bin_m", type=float, default=0.003)
+    a = p.parse_args(argv[1:])
+    {"density": cmd_density, "render": cmd_render, "compare": cmd_compare}[a.cmd](a)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
