@@ -27,19 +27,34 @@ pub(crate) fn run_provenance() -> Vec<(&'static str, String)> {
 
 /// The run's provenance, for the top of the report: what ran, where, when and for how long.
 pub(super) fn provenance(plan: &StudyPlan, results: &[CellResult]) -> Vec<(&'static str, String)> {
-    let cpu: Vec<f64> = results.iter().filter_map(|r| r.cpu_s).collect();
-    let external = results.iter().filter(|r| r.cpu_s.is_none()).count();
+    // Cells that share their captures (Fig. 3c's g = 0 row is Fig. 3b's μt = 1 row, Fig. 4's three
+    // λ one capture) count them once.
+    let mut seen = std::collections::HashSet::new();
+    let distinct: Vec<&CellResult> = results
+        .iter()
+        .filter(|r| seen.insert(r.cell.captures.clone()))
+        .collect();
+    let counted = |timed: bool| -> usize {
+        distinct
+            .iter()
+            .filter(|r| r.cpu_s.is_some() == timed)
+            .map(|r| r.cell.captures.len())
+            .sum()
+    };
+    let cpu_s: f64 = distinct.iter().filter_map(|r| r.cpu_s).sum();
+    let (ours, external) = (counted(true), counted(false));
     let mut cpu_text = format!(
-        "{} CPU-hours of rendering ({} s) over {} {}",
-        show(cpu.iter().sum::<f64>() / 3600.0),
-        show(cpu.iter().sum::<f64>()),
-        cpu.len(),
-        plural(cpu.len(), "cell")
+        "{} CPU-hours of rendering ({} s) for {} {}",
+        show(cpu_s / 3600.0),
+        show(cpu_s),
+        ours,
+        plural(ours, "capture")
     );
     if external > 0 {
         let _ = write!(
             cpu_text,
-            "; {external} cells rendered by an external executor, not counted"
+            "; {external} {} rendered by an external executor, not counted",
+            plural(external, "capture")
         );
     }
     let mut rows = run_provenance();
