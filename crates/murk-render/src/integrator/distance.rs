@@ -92,8 +92,8 @@ impl Equiangular {
 /// (ψ is the equiangular angle plus π/2), so the 1/r² of the connection cancels here as there, and
 /// what is left of its integrand is the phase function p(cos ψ). Henyey–Greenstein's own integral over ψ
 /// is elliptic; this one inverts in closed form, and with ρ from [`Phase::cauchy_rho`] its second
-/// moment against HG is within 9 % of sampling HG exactly at |g| ≤ 0.95 (uniform ψ: 4.9× at g 0.7, 17×
-/// at 0.9).
+/// moment against HG stays near that of sampling HG exactly, where uniform ψ's grows with g (the
+/// figures are in docs/renderer-sampling.md).
 /// The target must lie off the ray's line.
 pub(super) struct PhaseAngular {
     tc: f64,
@@ -560,8 +560,8 @@ mod tests {
     }
 
     /// The fit of ρ keeps the wrapped Cauchy density close to Henyey–Greenstein's over ψ ∈ [0, π]: the
-    /// second moment of p/q under q (1 for an exact fit) stays below 1.1 at |g| = 0.3–0.95, where
-    /// uniform ψ (equiangular) gives 1.4–36 (1.09 at 0.95 with the fit; 1.12 with ρ = g(1.6 − 0.6|g|)).
+    /// second moment of p/q under q (1 for an exact fit) stays below 1.1 at |g| = 0.3–0.95, far below
+    /// uniform ψ's (equiangular; docs/renderer-sampling.md).
     #[test]
     fn cauchy_fit_tracks_hg() {
         use std::f64::consts::PI;

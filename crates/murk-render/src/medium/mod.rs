@@ -105,7 +105,7 @@ impl Medium {
     /// The phase-angle distances where a scene leaves `render.phase_distances` and
     /// `render.target_phase_distances` unset: draws per segment and target, and the share of target-side
     /// distances drawn so. In strongly forward media a connection's phase value through the vertex
-    /// varies a thousandfold along a segment, which equiangular distances ignore; below g 0.6 they were
+    /// varies by orders of magnitude along a segment, which equiangular distances ignore; below g 0.6 they were
     /// not measured (docs/renderer-sampling.md).
     pub fn default_phase_distances(&self) -> (u32, f64) {
         match self.phase {

@@ -33,8 +33,8 @@ impl Phase {
 
     /// The concentration ρ of the wrapped Cauchy density ∝ 1/(1 + ρ² − 2ρ cos ψ) over scattering angles
     /// ψ that importance-samples this phase function's density in ψ best (the phase-angle distances):
-    /// a fit of the ρ that minimises the second moment of p/q under q (1 where q = p), which keeps it
-    /// below 1.09 at |g| ≤ 0.95 (the optimum's: 1.07). Isotropic: 0 (uniform in ψ).
+    /// a fit of the ρ that minimises the second moment of p/q under q (1 where q = p), close to the
+    /// optimum's at |g| ≤ 0.95 (docs/renderer-sampling.md). Isotropic: 0 (uniform in ψ).
     pub fn cauchy_rho(&self) -> f64 {
         match *self {
             Phase::Isotropic => 0.0,

@@ -206,7 +206,7 @@ impl<'a> Plan<'a> {
             .collect();
         // A tile of more than one point has product pairing: its points share their targets.
         let targets = self.targets(points[0]);
-        // f32 sums: a tile of 8 × 8 points with 4 096 bins then holds 1 MB instead of 2, and the shared
+        // f32 sums: a tile's accumulator takes half the memory of f64's, and the shared
         // tails' scattered adds miss the cache less (docs/renderer-sampling.md); their rounding stays
         // near 1e-6 of each bin at thousands of spp, far below the Monte Carlo error.
         let mut acc = vec![0.0f32; self.unit_len()];
