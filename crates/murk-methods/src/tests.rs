@@ -114,6 +114,11 @@ fn methods_refuse_knobs_they_ignore() {
             &full,
             "a lateral band does not apply to pf-exact".into(),
         ),
+        (
+            "dlct",
+            &weighted,
+            "a reflectance weighting does not apply to dlct".into(),
+        ),
     ] {
         let e = Method::named(name, o).unwrap_err().to_string();
         assert!(e.starts_with(&want), "{name}: {e}");
@@ -124,6 +129,7 @@ fn methods_refuse_knobs_they_ignore() {
         ("pf-exact", &compensated),
         ("lct", &snr),
         ("cdt", &snr),
+        ("dlct", &snr),
         ("lct", &weighted),
         ("pf", &full),
     ] {
