@@ -191,7 +191,8 @@ pub struct SlabArgs {
     /// Refractive index.
     #[arg(long, default_value_t = 1.12)]
     pub slab_n: f64,
-    /// Wiener signal-to-noise ratio (cdt default 1e4; lct default 0.1).
+    /// Wiener signal-to-noise ratio of the methods that read it (default: the method's own, e.g. cdt 1e4,
+    /// lct 0.1).
     #[arg(long)]
     pub snr: Option<f64>,
     /// LCT's radiometric weighting of the measurements: diffuse scenes fall off as t⁴, retroreflective
