@@ -106,8 +106,8 @@ def _progress(progress: Progress, label: str):
                          f"{progress!r}")
     from tqdm.auto import tqdm
 
-    # One bar per stage: a method whose plan reports progress (lct, cdt) starts a second one, with
-    # another total, for its run.
+    # One bar per stage: a method whose plan reports progress (e.g. lct, cdt) starts a second one,
+    # with another total, for its run.
     bar = None
 
     def update(done, total):
@@ -438,8 +438,8 @@ def reconstruct(
     threads: Optional[int] = None,
     progress: Progress = None,
 ) -> Reconstruction:
-    """Reconstructs a capture with any method of ``murk reconstruct`` (pf, pf-exact, bp, fbp, lct,
-    fk, cdt, bmm); the keywords are its flags and take the same values, and the volume is the one
+    """Reconstructs a capture with any method of ``murk reconstruct`` (those ``murk.methods()``
+    lists); the keywords are its flags and take the same values, and the volume is the one
     its ``--out x.npy`` writes, byte for byte. bmm's medium: ``medium_n``, ``medium_musp`` (μs′,
     1/m), ``medium_mua`` (μa, 1/m); unset ones come from the capture, else the BMM foam's.
 
@@ -449,7 +449,7 @@ def reconstruct(
 
     >>> rec = murk.reconstruct("z.h5", volume="-0.99:0.99:73,-0.99:0.99:59,1.5:2.5:73")
     >>> rec.params["wavelength_m"], rec.intensity.max()
-    >>> fk = murk.reconstruct(cap, "fk")     # confocal captures: lct, fk, cdt, bmm on their own grid
+    >>> fk = murk.reconstruct(cap, "fk")     # confocal methods ("own volume") on their own grid
     """
     intensity, axes, rows, warnings = _murk.reconstruct(
         capture if isinstance(capture, Capture) else _path(capture, "capture"),

@@ -55,9 +55,9 @@ murk reconstruct fog.h5 --out v.npy --compensate paper --mu-t 1.0 --albedo 0.5\n
 murk reconstruct fog.h5 --out v.npy --medium-removal off --depth-search off   # as before the medium-aware path\n  \
 murk reconstruct letter_s.h5 --method cdt --out cdt.h5 --png cdt/\n  \
 murk reconstruct letter_s.h5 --method pf --wavefactor 8 --cycles 8 --t-offset slab --out pf.h5\n\n\
-Methods pf, pf-exact, bp and fbp reconstruct on --volume. lct, fk and cdt need a confocal capture on a regular\n\
-grid and reconstruct on their own grid (the scan points × depth k·Δs′/2; cdt and its defaults: 128 depths over\n\
-1 m); they ignore --volume and write their true x, y, z axes.\n\n\
+Methods reconstruct on --volume, except those whose help above says \"own volume\": they need a confocal capture\n\
+on a regular grid and reconstruct on their own grid (the scan points × depth k·Δs′/2; cdt and its defaults: 128\n\
+depths over 1 m); they ignore --volume and write their true x, y, z axes.\n\n\
 Volumes: --volume x0:x1:nx,y0:y1:ny,z0:z1:nz gives nx voxel centres from x0 to x1 inclusive (metres; z is the\n\
 depth in front of the wall at z = 0). Default: the wall grid's extent and spacing in x and y, depth from 0.1 m to\n\
 as deep as the capture's time window reaches. Output arrays have shape [nx, ny, nz], float32 |U|²·K, C order."
@@ -191,7 +191,8 @@ pub struct SlabArgs {
     /// Refractive index.
     #[arg(long, default_value_t = 1.12)]
     pub slab_n: f64,
-    /// Wiener signal-to-noise ratio (cdt default 1e4; lct default 0.1).
+    /// Wiener signal-to-noise ratio of the methods that read it (default: the method's own, e.g. cdt 1e4,
+    /// lct 0.1).
     #[arg(long)]
     pub snr: Option<f64>,
     /// LCT's radiometric weighting of the measurements: diffuse scenes fall off as t⁴, retroreflective

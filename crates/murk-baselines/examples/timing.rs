@@ -56,6 +56,14 @@ fn main() {
             |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });
+    time("dlct", &|| {
+        measure(
+            "dlct (M = 512)",
+            runs,
+            || DlctPlan::new(&c, DlctParams::default(), &NoProgress).unwrap(),
+            |p| p.run(&c, &murk_core::NoProgress).unwrap().albedo,
+        )
+    });
     time("fk", &|| {
         measure(
             "fk (M = 512)",

@@ -158,7 +158,7 @@ pub fn lct(capture: &Capture, params: LctParams) -> Result<Reconstruction> {
 /// offsets wrap), even in x and y: on the lines [wx][wy], wx ≤ nx, wy ≤ ny, the depth sample of its
 /// one non-zero value (none where the cone leaves the grid); and the value that normalises it to
 /// unit L2 norm.
-fn light_cone(g: &ConfocalGeometry, m: usize) -> (Vec<Option<usize>>, f32) {
+pub(crate) fn light_cone(g: &ConfocalGeometry, m: usize) -> (Vec<Option<usize>>, f32) {
     let [dx, dy] = g.spacing();
     // A scatterer at lateral distance r appears 4r²/R² later in v̂ = (path/R)², i.e. 4r²·M/R² samples.
     let r_total = m as f64 * g.ds;
@@ -205,12 +205,12 @@ fn wiener(mut f: Vec<C32>, snr: f64) -> Vec<C32> {
 /// O'Toole's t → v = t² resampling matrix as a sparse M×M operator (M a power of two): fine row
 /// j = 1..M² takes 1/√j from t sample ⌈√j⌉ − 1, and M consecutive fine rows are averaged into one
 /// row (what the reference's log2(M) pair-averagings amount to). v → t applies its transpose.
-struct Resampler {
+pub(crate) struct Resampler {
     rows: Vec<Vec<(usize, f32)>>,
 }
 
 impl Resampler {
-    fn new(m: usize) -> Self {
+    pub(crate) fn new(m: usize) -> Self {
         let rows = (0..m)
             .into_par_iter()
             .map(|i| {
@@ -230,7 +230,7 @@ impl Resampler {
     }
 
     /// Resamples t·`scale` (elementwise), zero-padded to M samples.
-    fn t_to_v(&self, t: &[f32], scale: &[f32], v: &mut [f32]) {
+    pub(crate) fn t_to_v(&self, t: &[f32], scale: &[f32], v: &mut [f32]) {
         for (row, out) in self.rows.iter().zip(v.iter_mut()) {
             *out = row
                 .iter()
@@ -241,7 +241,7 @@ impl Resampler {
     }
 
     /// The transpose applied to `v`, the first `t.len()` samples of it.
-    fn v_to_t(&self, v: &[f32], t: &mut [f32]) {
+    pub(crate) fn v_to_t(&self, v: &[f32], t: &mut [f32]) {
         t.fill(0.0);
         let n = t.len();
         for (row, x) in self.rows.iter().zip(v) {

@@ -1,7 +1,7 @@
 //! Classic NLOS reconstruction baselines for murk captures.
 //!
 //! * [`bp`](mod@bp) and [`fbp`](mod@fbp): any capture kind, any voxel box.
-//! * [`lct`](mod@lct), [`fk`](mod@fk), [`cdt`](mod@cdt): confocal captures on a regular, axis-aligned scan grid. They work on
+//! * [`lct`](mod@lct), [`dlct`](mod@dlct), [`fk`](mod@fk), [`cdt`](mod@cdt): confocal captures on a regular, axis-aligned scan grid. They work on
 //!   the capture's own grid: output [nx, ny, nt] with voxel (ix, iy, k) at scan point (ix, iy) and
 //!   k·Δs′/2 in front of the wall, after t_start and the laser/SPAD legs have been removed by
 //!   fractional shifts ([`TimeGrid`] chooses Δs′). Each has a plan (FFT plans, filters) built once
@@ -28,6 +28,7 @@ pub mod bmm;
 pub mod bp;
 pub mod cdt;
 mod confocal;
+pub mod dlct;
 pub mod fbp;
 mod fft3;
 pub mod fk;
@@ -41,6 +42,7 @@ pub use bmm::{bmm, bmm_with, BmmParams, BmmPlan, Medium, FOAM};
 pub use bp::{backproject, backproject_with, BpOptions, BpPlan};
 pub use cdt::{cdt, through_slab, CdtParams, CdtPlan, Pulse, SlabParams};
 pub use confocal::TimeGrid;
+pub use dlct::{dlct, Directional, DlctParams, DlctPlan};
 pub use fbp::{fbp, fbp_with, FbpFilter, FbpOptions, FbpPlan};
 pub use fk::{fk, FkParams, FkPlan};
 pub use lct::{lct, LctParams, LctPlan, Reflectance};

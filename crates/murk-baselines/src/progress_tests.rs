@@ -3,7 +3,9 @@
 //! partial volume.
 
 use crate::testutil::{add_point, axis, confocal, Recorder};
-use crate::{CdtParams, CdtPlan, FkParams, FkPlan, LctParams, LctPlan, Reconstruction};
+use crate::{
+    CdtParams, CdtPlan, DlctParams, DlctPlan, FkParams, FkPlan, LctParams, LctPlan, Reconstruction,
+};
 use murk_core::{Capture, DVec3, NoProgress, Progress, Result};
 use std::sync::atomic::Ordering::Relaxed;
 
@@ -14,8 +16,13 @@ fn methods(c: &Capture) -> Vec<(&'static str, Run)> {
     let lct = LctPlan::new(c, LctParams::default(), &NoProgress).unwrap();
     let fk = FkPlan::new(c, FkParams::default()).unwrap();
     let cdt = CdtPlan::new(c, CdtParams::default(), &NoProgress).unwrap();
+    let dlct = DlctPlan::new(c, DlctParams::default(), &NoProgress).unwrap();
     vec![
         ("light-cone", Box::new(move |c, p| lct.run(c, p))),
+        (
+            "directional light-cone",
+            Box::new(move |c, p| dlct.run(c, p).map(|d| d.albedo)),
+        ),
         ("f-k", Box::new(move |c, p| fk.run(c, p))),
         ("confocal diffuse", Box::new(move |c, p| cdt.run(c, p))),
     ]
@@ -66,6 +73,10 @@ fn plans() -> Vec<(&'static str, MakePlan)> {
         (
             "confocal diffuse",
             Box::new(|c, p| CdtPlan::new(c, CdtParams::default(), p).map(drop)),
+        ),
+        (
+            "directional light-cone",
+            Box::new(|c, p| DlctPlan::new(c, DlctParams::default(), p).map(drop)),
         ),
     ]
 }

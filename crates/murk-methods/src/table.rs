@@ -4,8 +4,8 @@
 
 use crate::Options;
 use murk_baselines::{
-    BmmPlan, BpOptions, BpPlan, CdtParams, CdtPlan, FbpOptions, FbpPlan, FkParams, FkPlan,
-    LctParams, LctPlan,
+    BmmPlan, BpOptions, BpPlan, CdtParams, CdtPlan, DlctParams, DlctPlan, FbpOptions, FbpPlan,
+    FkParams, FkPlan, LctParams, LctPlan,
 };
 use murk_core::{Capture, Error, Progress, Reconstructor, Result, Volume};
 use murk_recon::{PathDensity, PfForm, PfPlan};
@@ -177,6 +177,20 @@ pub const METHODS: &[MethodSpec] = &[
                 ..Default::default()
             };
             Ok(Box::new(LctPlan::new(s.geometry, params, s.progress)?))
+        },
+    },
+    MethodSpec {
+        name: "dlct",
+        help: "Directional light-cone transform: albedo (and, from the library, surface normals) by a vector Wiener filter (confocal grid; own volume)",
+        reads: &[Knob::Snr],
+        own_grid: true,
+        pulsed: false,
+        plan: |s| {
+            let params = DlctParams {
+                snr: s.options.snr.unwrap_or(DlctParams::default().snr),
+                ..Default::default()
+            };
+            Ok(Box::new(DlctPlan::new(s.geometry, params, s.progress)?))
         },
     },
     MethodSpec {

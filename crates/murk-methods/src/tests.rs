@@ -85,20 +85,51 @@ fn methods_refuse_knobs_they_ignore() {
         lateral: Lateral::Full,
         ..Options::default()
     };
+    // The readers come from the table, so that a new method reading a knob changes no test.
+    let readers = |k: Knob| format!("(it applies to {})", k.readers());
     for (name, o, want) in [
-        ("lct", &compensated, "compensation does not apply to lct, which would ignore it (it applies to pf and pf-exact)"),
-        ("fk", &snr, "a Wiener snr does not apply to fk, which would ignore it (it applies to lct and cdt)"),
-        ("cdt", &weighted, "a reflectance weighting does not apply to cdt"),
-        ("pf-exact", &full, "a lateral band does not apply to pf-exact"),
+        (
+            "lct",
+            &compensated,
+            format!(
+                "compensation does not apply to lct, which would ignore it {}",
+                readers(Knob::Compensation)
+            ),
+        ),
+        (
+            "fk",
+            &snr,
+            format!(
+                "a Wiener snr does not apply to fk, which would ignore it {}",
+                readers(Knob::Snr)
+            ),
+        ),
+        (
+            "cdt",
+            &weighted,
+            "a reflectance weighting does not apply to cdt".into(),
+        ),
+        (
+            "pf-exact",
+            &full,
+            "a lateral band does not apply to pf-exact".into(),
+        ),
+        (
+            "dlct",
+            &weighted,
+            "a reflectance weighting does not apply to dlct".into(),
+        ),
     ] {
         let e = Method::named(name, o).unwrap_err().to_string();
-        assert!(e.starts_with(want), "{name}: {e}");
+        assert!(e.starts_with(&want), "{name}: {e}");
     }
+    assert_eq!(Knob::Compensation.readers(), "pf and pf-exact");
     for (name, o) in [
         ("pf", &compensated),
         ("pf-exact", &compensated),
         ("lct", &snr),
         ("cdt", &snr),
+        ("dlct", &snr),
         ("lct", &weighted),
         ("pf", &full),
     ] {
@@ -177,6 +208,10 @@ fn the_table_names_each_method_once_and_every_knob_has_a_reader() {
     }
     for k in Knob::ALL {
         assert!(!k.readers().is_empty(), "{k:?}");
+    }
+    // `murk reconstruct --help` tells the methods on their own grid by this phrase.
+    for m in METHODS {
+        assert_eq!(m.help.contains("own volume"), m.own_grid, "{}", m.name);
     }
     let e = TOffset::parse(
         None,
