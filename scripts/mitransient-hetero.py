@@ -16,8 +16,8 @@ mitransient has no laser sampling in its volumetric integrator, so the laser spo
 light just off the wall centre and the sensor leg is dropped with camera_unwarp (as in
 /work/shared/reference/mitransient_bench.py --mode vol --medium). The spot's surface is null (it emits but
 blocks nothing): with an opaque spot 0.5 mm below the medium's boundary, Mitsuba's shadow rays that cross
-that boundary near the spot end on the spot's own surface and are blocked, which takes up to 85 % off the
-signal near each point's onset and 4-6 % off the fog at 0.6-3 m (docs/media-heterogeneous.md);
+that boundary near the spot end on the spot's own surface and are blocked, which takes about 60 % off the
+signal near each point's onset and 3-11 % off the fog from 0.6 m on (docs/media-heterogeneous.md);
 --opaque-laser renders that way. A unit-power spot in murk's units is radiance 1/(pi x area), so
 murk / mitransient = 1 / (pi x RADIANCE x area) with nothing fitted. Its max_depth 10 counts the wall vertex
 and the emitter, so it allows 8 hidden vertices, murk's max_depth 8. mitransient 1.3.1 drops the length of

@@ -14,8 +14,6 @@ use murk_core::DVec3;
 use rand_core::Rng;
 use std::f64::consts::PI;
 
-// The shared helpers; this test needs only `scene` and `render`, not the quadrature nodes.
-#[allow(dead_code)]
 mod common;
 
 const MU_T: f64 = 2.0;
@@ -110,37 +108,17 @@ fn walk(n: u64, seed: u64) -> Walk {
 
 /// murk's window sums with at most `max_depth` vertices.
 fn murk_windows(max_depth: usize, spp: u64, seed: u64) -> [f64; 5] {
-    let toml = format!(
-        r#"
-        [relay]
-        kind = "wall"
-        size = [{w}, {w}]
-        albedo = 0.0
-        [capture]
-        kind = "laser-grid"
-        grid = [1, 1]
-        center = [{}, {}]
-        extent = [0.001, 0.001]
-        spad_point = [{}, {}]
-        bins = {BINS}
-        bin_width = {BIN_M}
-        start = 0.0
-        [render]
-        max_depth = {max_depth}
-        [medium]
-        mu_t = {MU_T}
-        albedo = {ALBEDO}
-        g = 0.0
-        min = [-{HALF}, -{HALF}, {Z0}]
-        max = [{HALF}, {HALF}, {TOP}]
-        "#,
-        LASER[0],
-        LASER[1],
-        SPAD[0],
-        SPAD[1],
-        w = 2.0 * HALF,
+    let medium = format!(
+        "mu_t = {MU_T}\nalbedo = {ALBEDO}\ng = 0.0\nmin = [-{HALF}, -{HALF}, {Z0}]\nmax = [{HALF}, {HALF}, {TOP}]"
     );
-    let h = common::render(&common::scene(&toml), spp, seed).h;
+    let s = common::laser_and_spad(
+        LASER,
+        SPAD,
+        (BINS, BIN_M),
+        &format!("max_depth = {max_depth}"),
+        &medium,
+    );
+    let h = common::render(&s, spp, seed).h;
     WINDOWS.map(|(i, j)| h[i..j].iter().map(|v| *v as f64).sum())
 }
 
