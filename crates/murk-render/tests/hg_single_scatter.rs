@@ -13,7 +13,7 @@
 
 mod common;
 
-use common::{gauss_legendre, render as render_scene, scene};
+use common::{gauss_legendre, laser_and_spad, render as render_scene};
 use murk_core::DVec3;
 use std::f64::consts::PI;
 
@@ -45,30 +45,9 @@ fn render(
 ) -> Vec<f64> {
     // Relay albedo 0, and a fog box far wider than the last bin's ellipsoid (1.05 m from the wall points'
     // midpoint): nothing but the fog's first vertex, in fog the reference may treat as unbounded.
-    let toml = format!(
-        r#"
-        [relay]
-        kind = "wall"
-        size = [6.0, 6.0]
-        albedo = 0.0
-        [capture]
-        kind = "laser-grid"
-        grid = [1, 1]
-        center = [{}, {}]
-        extent = [0.001, 0.001]
-        spad_point = [{}, {}]
-        bins = {BINS}
-        bin_width = {BIN}
-        start = 0.0
-        [render]
-        max_depth = 1
-        {techniques}
-        [medium]
-        {medium}
-        "#,
-        xl[0], xl[1], xs[0], xs[1]
-    );
-    render_scene(&scene(&toml), spp, seed)
+    let render = format!("max_depth = 1\n{techniques}");
+    let s = laser_and_spad(xl, xs, (BINS, BIN), &render, medium);
+    render_scene(&s, spp, seed)
         .h
         .iter()
         .map(|v| *v as f64)

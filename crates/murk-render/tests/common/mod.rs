@@ -1,4 +1,6 @@
 //! Helpers shared by the renderer's physics tests.
+// Each test binary compiles this module and uses a part of it.
+#![allow(dead_code)]
 
 use murk_core::Capture;
 use murk_render::{Overrides, Plan, RenderOptions, Scene};
@@ -8,6 +10,24 @@ use std::time::Duration;
 
 pub fn scene(toml: &str) -> Scene {
     Scene::from_str(toml, Path::new("test.toml"), &Overrides::default()).expect("valid scene")
+}
+
+/// One laser point `xl` and one SPAD point `xs` (wall coordinates) on a black 6 m × 6 m relay wall, `bins`
+/// bins of `bin_m` from path 0, and the given `[render]` and `[medium]` lines.
+pub fn laser_and_spad(
+    xl: [f64; 2],
+    xs: [f64; 2],
+    (bins, bin_m): (usize, f64),
+    render: &str,
+    medium: &str,
+) -> Scene {
+    scene(&format!(
+        "[relay]\nkind = \"wall\"\nsize = [6.0, 6.0]\nalbedo = 0.0\n\
+         [capture]\nkind = \"laser-grid\"\ngrid = [1, 1]\ncenter = [{}, {}]\nextent = [0.001, 0.001]\n\
+         spad_point = [{}, {}]\nbins = {bins}\nbin_width = {bin_m}\nstart = 0.0\n\
+         [render]\n{render}\n[medium]\n{medium}\n",
+        xl[0], xl[1], xs[0], xs[1]
+    ))
 }
 
 pub fn render(s: &Scene, spp: u64, seed: u64) -> Capture {
