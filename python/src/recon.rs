@@ -5,10 +5,11 @@ use crate::compute;
 use murk_baselines::{BmmParams, SlabParams};
 use murk_core::{Error, Named, Result};
 use murk_medium::density::{Along, DensityGiven};
+use murk_medium::scene::homogeneous_assumed;
 use murk_methods::{Gate, MediumGiven, Request, RequestArgs};
-use murk_render::Spelling;
 use murk_recon::medium::removal::Predicted;
 use murk_recon::medium::MediumRemoval;
+use murk_render::Spelling;
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use std::path::PathBuf;
@@ -159,8 +160,13 @@ pub fn reconstruct<'py>(
             predicted: args.predicted(&cap)?,
             density: along.density.take(),
         };
+        let assumed = match args.model()? {
+            true => homogeneous_assumed(&cap, "medium_removal='model'"),
+            false => None,
+        };
         let mut out = murk_methods::run_given(cap, &req, &given, t)?;
         along.note(&mut out);
+        out.warnings.extend(assumed);
         Ok(out)
     })?;
     let v = out.volume;

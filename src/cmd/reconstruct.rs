@@ -321,6 +321,9 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         false => None,
     };
     let req = a.request()?;
+    let assumed = model
+        .then(|| murk_medium::scene::homogeneous_assumed(&cap, "--medium-removal model"))
+        .flatten();
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
     let given = murk_methods::MediumGiven {
@@ -332,6 +335,7 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     out.rows
         .extend(compensated_with.map(|line| ("compensated with".to_string(), line)));
     along.note(&mut out);
+    out.warnings.extend(assumed);
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
     for w in out.warnings.iter().filter(|_| !quiet) {

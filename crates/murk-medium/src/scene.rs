@@ -120,6 +120,15 @@ pub fn stored_medium(cap: &Capture) -> Result<StoredMedium> {
     Ok(StoredMedium { region, shape })
 }
 
+/// The warning that `step` fits one homogeneous medium where the capture's stored scene has a
+/// heterogeneous one; `None` for a homogeneous medium or none stored.
+pub fn homogeneous_assumed(cap: &Capture, step: &str) -> Option<String> {
+    let what = stored_medium(cap).ok()?.shape.describe()?;
+    Some(format!(
+        "the capture's medium is {what}: {step} assumes one homogeneous medium (one μt, albedo and g) over its box"
+    ))
+}
+
 /// A height fog's scale (m) within the renderer's range (`what` names where it came from).
 pub(crate) fn check_height_scale(scale_m: Option<f64>, what: &str) -> Result<f64> {
     match scale_m {
@@ -198,5 +207,38 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("no scene description"));
+    }
+
+    /// A step that fits one homogeneous medium says so on a heterogeneous capture, naming its kind;
+    /// on a homogeneous one, or a capture without a stored scene, it says nothing.
+    #[test]
+    fn a_heterogeneous_capture_is_named_where_one_medium_is_fitted() {
+        let info = |medium: &str| {
+            format!("generator: murk render\nscene: |\n  [medium]\n{medium}  mu_t = 1.0\n  min = [-1, -1, 0]\n  max = [1, 1, 2]\n")
+        };
+        let height = capture_with_info(&info("  kind = \"height\"\n  height_scale = 0.5\n"));
+        let w = homogeneous_assumed(&height, "the estimate").unwrap();
+        assert!(
+            w.contains("height fog (height_scale = 0.5 m): the estimate assumes one homogeneous"),
+            "{w}"
+        );
+        let grid = capture_with_info(&info("  kind = \"grid\"\n  density = \"p.npy\"\n"));
+        let w = homogeneous_assumed(&grid, "x").unwrap();
+        assert!(w.contains("a density grid (density = \"p.npy\")"), "{w}");
+        assert_eq!(
+            homogeneous_assumed(&capture_with_info(&info("")), "x"),
+            None
+        );
+        assert_eq!(
+            homogeneous_assumed(&capture_with_info("generator: murk synth\n"), "x"),
+            None
+        );
+        // A stored height fog's scale out of range is named, not used.
+        let bad = capture_with_info(&info("  kind = \"height\"\n  height_scale = 0.0\n"));
+        let e = stored_medium(&bad).unwrap_err().to_string();
+        assert!(
+            e.contains("height_scale must be in [0.001, 1e6] m, got 0"),
+            "{e}"
+        );
     }
 }

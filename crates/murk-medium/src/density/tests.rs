@@ -149,17 +149,20 @@ fn the_box_is_the_stored_scenes() {
     assert!(e.to_string().contains("no scene description"), "{e}");
 }
 
+/// The box of the height-fog tests (as `stored`'s), and the fog's scale.
+const FOG_BOX: Aabb = Aabb {
+    min: DVec3::new(-1.5, -0.5, 0.0),
+    max: DVec3::new(1.5, 1.0, 1.6),
+};
+const FOG_SCALE_M: f64 = 0.4;
+
 /// The height fog's density length against a 200 000-step midpoint sum of exp(−(y − floor)/H)
 /// inside the box, on legs that rise, fall, run level (y = 0.3 at both ends) and leave the box. The
 /// sum errs by under (len·h²/24)·max|ρ''| ≤ len·h²/(24 H²) in the fog (ρ ≤ 1), and misplaces each of
 /// the box's two faces a leg crosses by under a step: tolerance len·h²/(24 H²) + 2h + 1e-12.
 #[test]
 fn height_fog_matches_a_line_integral() {
-    let region = Aabb {
-        min: DVec3::new(-1.5, -0.5, 0.0),
-        max: DVec3::new(1.5, 1.0, 1.6),
-    };
-    let scale_m = 0.4;
+    let (region, scale_m) = (FOG_BOX, FOG_SCALE_M);
     let fog = HeightDensity::new(region, scale_m);
     let rho = |p: DVec3| {
         let inside = (0..3).all(|a| p[a] >= region.min[a] && p[a] <= region.max[a]);
@@ -196,11 +199,7 @@ fn height_fog_matches_a_line_integral() {
 /// 2μt·∑ legs agrees within 2μt × that, per leg.
 #[test]
 fn height_fog_compensation_matches_its_fine_grid() {
-    let region = Aabb {
-        min: DVec3::new(-1.5, -0.5, 0.0),
-        max: DVec3::new(1.5, 1.0, 1.6),
-    };
-    let scale_m = 0.4;
+    let (region, scale_m) = (FOG_BOX, FOG_SCALE_M);
     let ny = 3000;
     let h = (region.max.y - region.min.y) / ny as f64;
     let cells: Vec<f32> = (0..ny)
