@@ -187,15 +187,74 @@ fn reconstruct_reads_the_density_for_the_compensation() {
     fn run(a: &[String]) -> Vec<&str> {
         a.iter().map(String::as_str).collect()
     }
-    let nan_args = recon(&[
+    murk_io::write_npy_f32(
+        &d.join("negative.npy"),
+        &[2, 2, 2],
+        &[0.5, -0.5, 0.5, 0.5, 1.0, 1.0, 1.0, 1.0],
+    )
+    .unwrap();
+    murk_io::write_npy_f32(&d.join("flat.npy"), &[4, 2], &[0.5; 8]).unwrap();
+    let mut absurd = npy_header("<f4", "(100000, 100000, 100000)");
+    absurd.extend([0u8; 16]);
+    std::fs::write(d.join("absurd.npy"), absurd).unwrap();
+    for (name, needles) in [
+        ("nan.npy", &["nan.npy", "density[1, 0, 1] = NaN"][..]),
+        ("negative.npy", &["negative.npy", "density[0, 0, 1] = -0.5"]),
+        ("flat.npy", &["flat.npy", "3 dimensions", "[4, 2]"]),
+        ("absurd.npy", &["absurd.npy", "read limit"]),
+    ] {
+        let args = recon(&[
+            "--compensate",
+            "ballistic",
+            "--mu-t",
+            "1",
+            "--medium-density",
+            &file(name),
+        ]);
+        fails_with(&run(&args), needles);
+    }
+    // A height fog's scale out of the scene's range, or beside a grid.
+    for scale in ["0", "-1", "nan", "1e-4"] {
+        let args = recon(&[
+            "--compensate",
+            "ballistic",
+            "--mu-t",
+            "1",
+            "--height-scale",
+            scale,
+        ]);
+        fails_with(
+            &run(&args),
+            &["grid.h5", "--height-scale must be in [0.001, 1e6] m"],
+        );
+    }
+    let both = recon(&[
         "--compensate",
         "ballistic",
         "--mu-t",
         "1",
+        "--height-scale",
+        "0.5",
         "--medium-density",
-        &file("nan.npy"),
+        &file("good.npy"),
     ]);
-    fails_with(&run(&nan_args), &["nan.npy", "density[1, 0, 1] = NaN"]);
+    fails_with(&run(&both), &["cannot be used with"]);
+    let no_mu_t = recon(&["--compensate", "ballistic", "--height-scale", "0.5"]);
+    fails_with(
+        &run(&no_mu_t),
+        &["--height-scale is read by --compensate with --mu-t"],
+    );
+    // The capture's grid is not in it: compensated as homogeneous, and said so.
+    let mut stored = recon(&["--compensate", "ballistic", "--mu-t", "1"]);
+    stored.retain(|a| a != "--quiet");
+    let (code, _, err) = cli::murk(&run(&stored));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains(
+            "murk: warning: the capture's medium is a density grid (density = \"good.npy\")"
+        ) && err.contains("give --medium-density FILE.npy"),
+        "{err}"
+    );
     let alone = recon(&["--medium-density", &file("good.npy")]);
     fails_with(
         &run(&alone),

@@ -435,6 +435,8 @@ def reconstruct(
     medium_n: Optional[float] = None,
     medium_musp: Optional[float] = None,
     medium_mua: Optional[float] = None,
+    medium_density: Union[None, str, os.PathLike] = None,
+    height_scale: Optional[float] = None,
     threads: Optional[int] = None,
     progress: Progress = None,
 ) -> Reconstruction:
@@ -442,6 +444,10 @@ def reconstruct(
     lists); the keywords are its flags and take the same values, and the volume is the one
     its ``--out x.npy`` writes, byte for byte. bmm's medium: ``medium_n``, ``medium_musp`` (μs′,
     1/m), ``medium_mua`` (μa, 1/m); unset ones come from the capture, else the BMM foam's.
+    A heterogeneous medium's compensation (with ``mu_t``, σt where the density is 1):
+    ``medium_density`` a density grid (.npy) or ``height_scale`` (m) a height fog over the medium's
+    box of the capture's stored scene; a capture rendered from a height fog uses its own fog
+    (docs/media-heterogeneous.md).
 
     capture: a Capture (its H is copied once, since reconstruction gates and tapers its own copy)
     or a capture file (read straight into the reconstruction: no copy). volume:
@@ -459,7 +465,9 @@ def reconstruct(
              medium_removal=medium_removal, depth_search=depth_search, t_offset=_text(t_offset),
              snr=snr, weighting=weighting,
              slab=(slab_thickness, slab_mua, slab_musp, slab_n),
-             medium=(medium_n, medium_musp, medium_mua)),
+             medium=(medium_n, medium_musp, medium_mua),
+             medium_density=None if medium_density is None else _path(medium_density, "medium_density"),
+             height_scale=height_scale),
         threads, _progress(progress, "reconstruct"),
     )
     x, y, z = axes

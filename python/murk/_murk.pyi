@@ -119,6 +119,8 @@ class _ReconstructArgs(TypedDict):
     weighting: str
     slab: Tuple[float, float, float, float]
     medium: Tuple[Optional[float], Optional[float], Optional[float]]
+    medium_density: Optional[str]
+    height_scale: Optional[float]
 
 def synth(args: _SynthArgs) -> Capture: ...
 def render(scene: str, args: _RenderArgs, threads: Optional[int], progress: _Progress) -> List[Capture]: ...

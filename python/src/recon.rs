@@ -1,14 +1,18 @@
-//! `murk.reconstruct`: `murk_methods::run_with`, the call behind `murk reconstruct`.
+//! `murk.reconstruct`: `murk_methods::run_given`, the call behind `murk reconstruct`.
 
 use crate::capture::Source;
 use crate::compute;
 use murk_baselines::{BmmParams, SlabParams};
 use murk_core::{Error, Named, Result};
-use murk_methods::{Gate, Request, RequestArgs};
+use murk_medium::density::{Along, DensityGiven};
+use murk_medium::scene::homogeneous_assumed;
+use murk_methods::{Gate, MediumGiven, Request, RequestArgs};
 use murk_recon::medium::removal::Predicted;
 use murk_recon::medium::MediumRemoval;
+use murk_render::Spelling;
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
+use std::path::PathBuf;
 
 type Rows = Vec<(String, String)>;
 type Axes<'py> = [Bound<'py, PyArray1<f64>>; 3];
@@ -40,6 +44,9 @@ pub struct Args {
     slab: (f64, f64, f64, f64),
     /// bmm's medium: (n, μs′, μa); unset ones come from the capture.
     medium: (Option<f64>, Option<f64>, Option<f64>),
+    /// The compensation's density along each leg: a grid file or a height fog's scale.
+    medium_density: Option<PathBuf>,
+    height_scale: Option<f64>,
 }
 
 impl Args {
@@ -85,6 +92,16 @@ impl Args {
             depth_search: self.depth_search.clone(),
         }
         .request()
+    }
+
+    /// The density the compensation reads along each leg of `cap`, as `murk reconstruct` finds it.
+    fn along(&self, cap: &murk_core::Capture) -> Result<Along> {
+        let compensates = !matches!(self.compensate.as_deref(), None | Some("none"));
+        DensityGiven {
+            file: self.medium_density.clone(),
+            height_scale_m: self.height_scale,
+        }
+        .along(cap, compensates, self.mu_t.is_some(), Spelling::Python)
     }
 
     fn model(&self) -> Result<bool> {
@@ -138,8 +155,19 @@ pub fn reconstruct<'py>(
     let out = compute(py, progress, threads, |t| {
         let cap = source.owned()?;
         let req = args.request()?;
-        let predicted = args.predicted(&cap)?;
-        murk_methods::run_with(cap, &req, predicted, t)
+        let mut along = args.along(&cap)?;
+        let given = MediumGiven {
+            predicted: args.predicted(&cap)?,
+            density: along.density.take(),
+        };
+        let assumed = match args.model()? {
+            true => homogeneous_assumed(&cap, "medium_removal='model'"),
+            false => None,
+        };
+        let mut out = murk_methods::run_given(cap, &req, &given, t)?;
+        along.note(&mut out);
+        out.warnings.extend(assumed);
+        Ok(out)
     })?;
     let v = out.volume;
     let intensity = PyArray1::from_vec(py, out.intensity).reshape(v.shape().to_vec())?;

@@ -91,6 +91,10 @@ pub fn run(a: MediumArgs, quiet: bool) -> anyhow::Result<()> {
     .with_context(|| file.display().to_string())?;
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
+    let assumed = murk_medium::scene::homogeneous_assumed(&cap, "the estimate");
+    if let (Some(w), Outcome::Fitted(_), false) = (assumed, &outcome, quiet) {
+        eprintln!("murk: warning: {w}");
+    }
     match outcome {
         outcome if a.json => println!("{}", outcome.to_json()),
         Outcome::NoMedium(s) => say(quiet, format!("no medium detected: {}", s.describe())),

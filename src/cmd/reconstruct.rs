@@ -5,6 +5,7 @@ use anyhow::Context;
 use clap::{Args, ValueEnum};
 use murk_baselines::{BmmParams, SlabParams};
 use murk_methods::{Gate, Request, RequestArgs, METHODS};
+use murk_render::Spelling;
 use murk_view::pictures;
 use std::path::PathBuf;
 
@@ -102,8 +103,14 @@ pub struct ReconstructArgs {
     /// The density grid (.npy, the scene's `density`) of a capture's heterogeneous medium, for
     /// --compensate: the attenuation is integrated along each leg through σt = density × --mu-t over
     /// the medium's box of the scene the capture stores, instead of μt times the leg's length.
-    #[arg(long, value_name = "FILE.npy")]
+    #[arg(long, value_name = "FILE.npy", conflicts_with = "height_scale")]
     pub medium_density: Option<PathBuf>,
+    /// An exponential height fog's scale (m, the scene's `height_scale`), for --compensate: σt =
+    /// --mu-t × exp(−(y − floor)/M) integrated along each leg, over the medium's box of the scene the
+    /// capture stores (floor: its min y). Without it or --medium-density, a capture rendered from a
+    /// height fog is compensated along its own fog when --mu-t is given.
+    #[arg(long, value_name = "M")]
+    pub height_scale: Option<f64>,
     /// Amplitude factor per leg.
     #[arg(long, value_enum, default_value = "none")]
     pub falloff: FalloffArg,
@@ -283,14 +290,20 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
             );
         }
     }
-    if a.medium_density.is_some() {
-        anyhow::ensure!(
-            a.compensate.is_some() && a.mu_t_per_m.is_some(),
-            "--medium-density is read by --compensate with --mu-t (σt where the density is 1); give both"
-        );
-    }
+    let given = murk_medium::density::DensityGiven {
+        file: a.medium_density.clone(),
+        height_scale_m: a.height_scale,
+    };
     let cap = murk_io::read_capture(&a.file)?;
     let kind = cap.kind();
+    let mut along = given
+        .along(
+            &cap,
+            a.compensate.is_some(),
+            a.mu_t_per_m.is_some(),
+            Spelling::Cli,
+        )
+        .with_context(|| a.file.display().to_string())?;
     let needs_estimate = (a.compensate.is_some() && a.mu_t_per_m.is_none())
         || (model && (a.mu_t_per_m.is_none() || a.albedo.is_none()));
     let estimate = match needs_estimate {
@@ -309,27 +322,21 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         false => None,
     };
     let req = a.request()?;
+    let assumed = model
+        .then(|| murk_medium::scene::homogeneous_assumed(&cap, "--medium-removal model"))
+        .flatten();
     let bar = Bar::new("reconstruct", quiet);
     let t0 = std::time::Instant::now();
-    let density = match &a.medium_density {
-        Some(file) => Some(
-            murk_medium::density::GridDensity::for_capture(&cap, file)
-                .with_context(|| format!("{}: --medium-density", a.file.display()))?,
-        ),
-        None => None,
+    let given = murk_methods::MediumGiven {
+        predicted,
+        density: along.density.take(),
     };
-    let given = murk_methods::MediumGiven { predicted, density };
     let mut out = murk_methods::run_given(cap, &req, &given, &bar)
         .with_context(|| a.file.display().to_string())?;
     out.rows
         .extend(compensated_with.map(|line| ("compensated with".to_string(), line)));
-    out.rows.extend(a.medium_density.as_ref().map(|file| {
-        let line = format!(
-            "σt = density × μt along each leg, density from {}",
-            file.display()
-        );
-        ("compensated along".to_string(), line)
-    }));
+    along.note(&mut out);
+    out.warnings.extend(assumed);
     bar.finish();
     let secs = t0.elapsed().as_secs_f64();
     for w in out.warnings.iter().filter(|_| !quiet) {

@@ -1,72 +1,162 @@
-//! A heterogeneous medium's density along straight paths, for the compensation: the capture's
-//! density grid (`murk reconstruct --medium-density`) over the medium's box from its stored scene.
+//! A heterogeneous medium's density along straight paths, for the compensation
+//! (docs/media-heterogeneous.md): a density grid or an exponential height fog over the medium's box
+//! of the scene that `murk render` stored in the capture, zero outside it.
 
-use crate::scene::{medium_table, stored_table};
-use murk_core::{DVec3, Error, Result};
+mod grid;
+mod height;
+
+pub use grid::GridDensity;
+pub use height::HeightDensity;
+
+use crate::scene::{check_height_scale, stored_medium, StoredShape};
+use murk_core::{Capture, DVec3, Error, Result};
 use murk_recon::PathDensity;
-use murk_render::{Aabb, Grid, Segment};
-use std::path::Path;
+use murk_render::{Aabb, Segment, Spelling};
+use std::path::PathBuf;
 use std::sync::Arc;
 
-/// A density grid over a box, zero outside it: the scene's `kind = "grid"` medium with μt = 1.
-pub struct GridDensity {
-    grid: Grid,
-    region: Aabb,
+/// The medium's density as the caller gives it, in the scene file's terms: `murk reconstruct`'s
+/// `--medium-density` and `--height-scale`, `murk.reconstruct`'s `medium_density` and
+/// `height_scale`.
+#[derive(Clone, Debug, Default)]
+pub struct DensityGiven {
+    /// A density grid (.npy), as the scene's `density`.
+    pub file: Option<PathBuf>,
+    /// An exponential height fog's scale (m), as the scene's `height_scale`.
+    pub height_scale_m: Option<f64>,
 }
 
-impl GridDensity {
-    /// The grid of `file` (as a scene's `density`) over `region`.
-    pub fn load(file: &Path, region: Aabb) -> Result<GridDensity> {
-        Ok(GridDensity {
-            grid: Grid::load(file, 1.0, &region)?,
-            region,
-        })
-    }
+/// What a compensation integrates along its legs, with the summary's line and the warnings.
+#[derive(Default)]
+pub struct Along {
+    pub density: Option<Arc<dyn PathDensity>>,
+    /// The summary's `compensated along` line.
+    pub row: Option<String>,
+    pub warnings: Vec<String>,
+}
 
-    /// The grid of `file` over the medium's box of the scene that `murk render` stored in `cap`.
-    pub fn for_capture(cap: &murk_core::Capture, file: &Path) -> Result<Arc<dyn PathDensity>> {
-        let mut table = stored_table(cap)?;
-        let medium = medium_table(&mut table)?;
-        let corner = |key: &str| -> Result<DVec3> {
-            let v: Option<Vec<f64>> = medium.get(key).and_then(|v| {
-                v.as_array()?
-                    .iter()
-                    .map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
-                    .collect()
-            });
-            match v.as_deref() {
-                Some(&[x, y, z]) => Ok(DVec3::new(x, y, z)),
-                _ => Err(Error::param(format!(
-                    "scene_info.scene's [medium] has no {key} = [x, y, z]: the density grid's box is unknown"
-                ))),
+impl DensityGiven {
+    /// The density that a compensation (`compensates`) reads along each leg of `cap`. In order: the
+    /// grid or height fog given, over the box of the capture's stored scene; else the stored
+    /// scene's own height fog; else none (every metre counts as density 1, the homogeneous medium).
+    /// A density is read only with a given μt (`mu_t_given`), which is σt where the density is 1. A
+    /// stored grid (whose cells the capture does not hold), or a heterogeneous medium whose μt was
+    /// estimated as one homogeneous value, is compensated as homogeneous with a warning saying so.
+    /// `spelling` names the flags or keywords.
+    pub fn along(
+        &self,
+        cap: &Capture,
+        compensates: bool,
+        mu_t_given: bool,
+        spelling: Spelling,
+    ) -> Result<Along> {
+        let flag = |name: &str| spelling.flag(name);
+        let given = match (&self.file, self.height_scale_m) {
+            (Some(_), Some(_)) => {
+                return Err(Error::param(format!(
+                    "{} and {} each give the medium's density; give one",
+                    flag("medium-density"),
+                    flag("height-scale")
+                )))
             }
+            (Some(_), None) => Some("medium-density"),
+            (None, Some(_)) => Some("height-scale"),
+            (None, None) => None,
         };
-        let region = Aabb {
-            min: corner("min")?,
-            max: corner("max")?,
-        };
-        if !(0..3).all(|a| region.min[a] < region.max[a]) {
+        if let Some(name) = given.filter(|_| !(compensates && mu_t_given)) {
             return Err(Error::param(format!(
-                "scene_info.scene's [medium] box {}..{} is empty",
-                region.min, region.max
+                "{} is read by {} with {} (σt where the density is 1); give both",
+                flag(name),
+                flag("compensate"),
+                flag("mu-t")
             )));
         }
-        Ok(Arc::new(GridDensity::load(file, region)?))
+        if let Some(h) = self.height_scale_m {
+            check_height_scale(Some(h), &flag("height-scale"))?;
+        }
+        if let Some(file) = &self.file {
+            let region = stored_medium(cap)?.region;
+            return Ok(Along {
+                density: Some(Arc::new(GridDensity::load(file, region)?)),
+                row: Some(format!(
+                    "σt = density × μt along each leg, density from {}",
+                    file.display()
+                )),
+                warnings: Vec::new(),
+            });
+        }
+        if let Some(scale_m) = self.height_scale_m {
+            let region = stored_medium(cap)?.region;
+            return Ok(height(region, scale_m, &flag("height-scale")));
+        }
+        // Captures that murk did not render, or rendered without a medium, keep the homogeneous
+        // compensation they always had.
+        let stored = match stored_medium(cap) {
+            Ok(s) if compensates => s,
+            _ => return Ok(Along::default()),
+        };
+        let what = match (&stored.shape, mu_t_given) {
+            (StoredShape::Homogeneous, _) => return Ok(Along::default()),
+            (&StoredShape::Height { scale_m }, true) => {
+                return Ok(height(stored.region, scale_m, "the capture's scene"))
+            }
+            (shape, _) => shape.describe().unwrap_or_default(),
+        };
+        let (why, give) = match (&stored.shape, mu_t_given) {
+            (StoredShape::Grid { .. }, true) => (
+                "whose cells the capture does not hold",
+                format!("{} FILE.npy", flag("medium-density")),
+            ),
+            (StoredShape::Grid { .. }, false) => (
+                "and μt was estimated as one homogeneous value",
+                format!("{} and {} FILE.npy", flag("mu-t"), flag("medium-density")),
+            ),
+            _ => (
+                "and μt was estimated as one homogeneous value",
+                format!("{} (σt on the fog's floor)", flag("mu-t")),
+            ),
+        };
+        Ok(Along {
+            warnings: vec![format!(
+                "the capture's medium is {what}, {why}: the compensation assumes a homogeneous medium of μt; give {give} to integrate σt along each leg"
+            )],
+            ..Along::default()
+        })
     }
 }
 
-impl PathDensity for GridDensity {
-    /// ∫ density ds along the part of the segment inside the box (the renderer's cell walk).
-    fn density_length_m(&self, from: DVec3, to: DVec3) -> f64 {
-        let len = (to - from).length();
-        if len == 0.0 {
-            return 0.0;
-        }
-        let d = (to - from) / len;
-        self.region.clip(from, d, len).map_or(0.0, |(t0, t1)| {
-            self.grid.optical_depth(&Segment { o: from, d, t0, t1 })
-        })
+impl Along {
+    /// Adds the summary's `compensated along` row and the warnings to `out` (the density taken).
+    pub fn note(self, out: &mut murk_core::Reconstruction) {
+        out.rows
+            .extend(self.row.map(|line| ("compensated along".to_string(), line)));
+        out.warnings.extend(self.warnings);
     }
+}
+
+/// The height fog of `scale_m` over `region`, from `source`.
+fn height(region: Aabb, scale_m: f64, source: &str) -> Along {
+    Along {
+        density: Some(Arc::new(HeightDensity::new(region, scale_m))),
+        row: Some(format!(
+            "σt = μt × exp(−(y − floor)/{} m) along each leg, floor y = {} m, the height fog of {source}",
+            murk_core::short(scale_m),
+            murk_core::short(region.min.y)
+        )),
+        warnings: Vec::new(),
+    }
+}
+
+/// `along(segment)` over the part of the segment `from`..`to` inside `region` (0 where it misses it).
+fn inside(region: &Aabb, from: DVec3, to: DVec3, along: impl Fn(&Segment) -> f64) -> f64 {
+    let len = (to - from).length();
+    if len == 0.0 {
+        return 0.0;
+    }
+    let d = (to - from) / len;
+    region
+        .clip(from, d, len)
+        .map_or(0.0, |(t0, t1)| along(&Segment { o: from, d, t0, t1 }))
 }
 
 #[cfg(test)]

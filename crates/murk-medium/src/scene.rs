@@ -1,7 +1,8 @@
 //! The capture's own scene with every object removed: what the renderer draws as the medium's
 //! response alone.
 
-use murk_core::{Capture, Error, Result};
+use murk_core::{Capture, DVec3, Error, Result};
+use murk_render::{Aabb, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M};
 
 /// The resolved scene TOML that `murk render` stored in the capture's `scene_info`, without its
 /// `[[object]]` tables. The medium's values in it are replaced by the table's; only the geometry
@@ -31,6 +32,112 @@ pub(crate) fn stored_table(cap: &Capture) -> Result<toml::Table> {
     })?;
     text.parse()
         .map_err(|e: toml::de::Error| Error::param(format!("scene_info.scene: {}", e.message())))
+}
+
+/// The medium of the scene that `murk render` stored in a capture: its box, and how its density
+/// varies over it (the scene's `kind` with its own field).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredMedium {
+    pub region: Aabb,
+    pub shape: StoredShape,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum StoredShape {
+    Homogeneous,
+    /// `kind = "grid"`: the file as the scene names it (relative to the scene file, which the capture
+    /// does not hold, nor the cells).
+    Grid {
+        file: String,
+    },
+    /// `kind = "height"`: density exp(−(y − min.y)/`scale_m`).
+    Height {
+        scale_m: f64,
+    },
+}
+
+impl StoredShape {
+    /// What it is, for a warning that a step assumes a homogeneous medium instead.
+    pub fn describe(&self) -> Option<String> {
+        match self {
+            StoredShape::Homogeneous => None,
+            StoredShape::Grid { file } => Some(format!("a density grid (density = {file:?})")),
+            StoredShape::Height { scale_m } => Some(format!(
+                "an exponential height fog (height_scale = {} m)",
+                murk_core::short(*scale_m)
+            )),
+        }
+    }
+}
+
+/// The stored scene's medium; errors name what it lacks (no scene, no `[medium]`, no box).
+pub fn stored_medium(cap: &Capture) -> Result<StoredMedium> {
+    let mut table = stored_table(cap)?;
+    let medium = medium_table(&mut table)?;
+    let number = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64));
+    let corner = |key: &str| -> Result<DVec3> {
+        let v: Option<Vec<f64>> = medium
+            .get(key)
+            .and_then(|v| v.as_array()?.iter().map(number).collect());
+        match v.as_deref() {
+            Some(&[x, y, z]) => Ok(DVec3::new(x, y, z)),
+            _ => Err(Error::param(format!(
+                "scene_info.scene's [medium] has no {key} = [x, y, z]: the medium's box is unknown"
+            ))),
+        }
+    };
+    let region = Aabb {
+        min: corner("min")?,
+        max: corner("max")?,
+    };
+    if !(0..3).all(|a| region.min[a] < region.max[a]) {
+        return Err(Error::param(format!(
+            "scene_info.scene's [medium] box {}..{} is empty",
+            region.min, region.max
+        )));
+    }
+    let field = |key: &str| medium.get(key);
+    let shape = match field("kind").map(|k| k.as_str()) {
+        None | Some(Some("homogeneous")) => StoredShape::Homogeneous,
+        Some(Some("grid")) => StoredShape::Grid {
+            file: field("density")
+                .and_then(|f| f.as_str())
+                .unwrap_or_default()
+                .to_string(),
+        },
+        Some(Some("height")) => {
+            let scale_m = field("height_scale").and_then(number);
+            StoredShape::Height {
+                scale_m: check_height_scale(scale_m, "scene_info.scene's [medium] height_scale")?,
+            }
+        }
+        Some(k) => {
+            return Err(Error::param(format!(
+                "scene_info.scene's [medium] kind {k:?} is not homogeneous, grid or height"
+            )))
+        }
+    };
+    Ok(StoredMedium { region, shape })
+}
+
+/// The warning that `step` fits one homogeneous medium where the capture's stored scene has a
+/// heterogeneous one; `None` for a homogeneous medium or none stored.
+pub fn homogeneous_assumed(cap: &Capture, step: &str) -> Option<String> {
+    let what = stored_medium(cap).ok()?.shape.describe()?;
+    Some(format!(
+        "the capture's medium is {what}: {step} assumes one homogeneous medium (one μt, albedo and g) over its box"
+    ))
+}
+
+/// A height fog's scale (m) within the renderer's range (`what` names where it came from).
+pub(crate) fn check_height_scale(scale_m: Option<f64>, what: &str) -> Result<f64> {
+    match scale_m {
+        Some(h) if (MIN_HEIGHT_SCALE_M..=MAX_HEIGHT_SCALE_M).contains(&h) => Ok(h),
+        h => Err(Error::param(format!(
+            "{what} must be in [{MIN_HEIGHT_SCALE_M}, {MAX_HEIGHT_SCALE_M:e}] m, got {}",
+            h.map_or("none".into(), murk_core::short)
+        ))),
+    }
 }
 
 /// The `[medium]` table of a stored scene.
@@ -100,5 +207,38 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("no scene description"));
+    }
+
+    /// A step that fits one homogeneous medium says so on a heterogeneous capture, naming its kind;
+    /// on a homogeneous one, or a capture without a stored scene, it says nothing.
+    #[test]
+    fn a_heterogeneous_capture_is_named_where_one_medium_is_fitted() {
+        let info = |medium: &str| {
+            format!("generator: murk render\nscene: |\n  [medium]\n{medium}  mu_t = 1.0\n  min = [-1, -1, 0]\n  max = [1, 1, 2]\n")
+        };
+        let height = capture_with_info(&info("  kind = \"height\"\n  height_scale = 0.5\n"));
+        let w = homogeneous_assumed(&height, "the estimate").unwrap();
+        assert!(
+            w.contains("height fog (height_scale = 0.5 m): the estimate assumes one homogeneous"),
+            "{w}"
+        );
+        let grid = capture_with_info(&info("  kind = \"grid\"\n  density = \"p.npy\"\n"));
+        let w = homogeneous_assumed(&grid, "x").unwrap();
+        assert!(w.contains("a density grid (density = \"p.npy\")"), "{w}");
+        assert_eq!(
+            homogeneous_assumed(&capture_with_info(&info("")), "x"),
+            None
+        );
+        assert_eq!(
+            homogeneous_assumed(&capture_with_info("generator: murk synth\n"), "x"),
+            None
+        );
+        // A stored height fog's scale out of range is named, not used.
+        let bad = capture_with_info(&info("  kind = \"height\"\n  height_scale = 0.0\n"));
+        let e = stored_medium(&bad).unwrap_err().to_string();
+        assert!(
+            e.contains("height_scale must be in [0.001, 1e6] m, got 0"),
+            "{e}"
+        );
     }
 }

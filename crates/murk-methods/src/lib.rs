@@ -47,7 +47,7 @@ mod table;
 pub use args::RequestArgs;
 pub use depth::{default_volume, search_depth};
 pub use method::{Method, Options};
-pub use plan::{run, run_given, run_with, MediumGiven, ReconPlan};
+pub use plan::{run, run_given, MediumGiven, ReconPlan};
 pub use request::{Gate, Request, TOffset, VolumeSpec};
 pub use table::{Knob, MethodSpec, Setup, METHODS};
 

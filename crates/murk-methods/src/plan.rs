@@ -248,21 +248,7 @@ impl ReconPlan {
 /// Runs `req` on `cap` (plans and runs). With the default volume, a method on a volume and a capture
 /// whose early bins are a medium's response, the depth range is first searched ([`murk_recon::medium::search`]).
 pub fn run(cap: Capture, req: &Request, progress: &dyn Progress) -> Result<Reconstruction> {
-    run_with(cap, req, None, progress)
-}
-
-/// As [`run`], with the medium response that [`MediumRemoval::Model`] subtracts.
-pub fn run_with(
-    cap: Capture,
-    req: &Request,
-    predicted: Option<removal::Predicted>,
-    progress: &dyn Progress,
-) -> Result<Reconstruction> {
-    let given = MediumGiven {
-        predicted,
-        density: None,
-    };
-    run_given(cap, req, &given, progress)
+    run_given(cap, req, &MediumGiven::default(), progress)
 }
 
 /// As [`run`], with what the caller knows of the medium.

@@ -65,7 +65,10 @@ mod truth;
 
 pub use geometry::{Aabb, Geometry, Object, Shape};
 pub use integrator::{Endpoint, Sampler, Tracer};
-pub use medium::{Grid, Height, Homogeneous, Kind as MediumKind, Medium, Phase, Segment};
+pub use medium::{
+    Grid, Height, Homogeneous, Kind as MediumKind, Medium, Phase, Segment, MAX_HEIGHT_SCALE_M,
+    MIN_HEIGHT_SCALE_M,
+};
 pub use overrides::{Overrides, Spelling};
 pub use render::{
     check_shard, checkpoint_interval, checkpoint_path, fingerprint, merge, render_key,

@@ -27,6 +27,14 @@ pub enum Spelling {
 }
 
 impl Spelling {
+    /// How the user gives the setting `name` (a flag's name without its dashes): `--mu-t` or `mu_t`.
+    pub fn flag(self, name: &str) -> String {
+        match self {
+            Spelling::Cli => format!("--{name}"),
+            Spelling::Python => name.replace('-', "_"),
+        }
+    }
+
     /// One override as the user wrote it: `--grid 64` or `grid=64`.
     fn quote(self, name: &str, value: &str) -> String {
         match self {

@@ -6,7 +6,9 @@ use super::file::{
 };
 use super::{check_albedo, v3, Bad, CaptureSpec, Relay};
 use crate::geometry::{triangulate, Aabb, Object, Shape};
-use crate::medium::{Grid, Height, Homogeneous, Kind, Medium, Phase};
+use crate::medium::{
+    Grid, Height, Homogeneous, Kind, Medium, Phase, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M,
+};
 use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
 use std::path::Path;
 
@@ -378,12 +380,11 @@ impl MediumDef {
             }
             MediumKindDef::Height => {
                 let h = self.height_scale_m.unwrap_or(f64::NAN);
-                // Below a millimetre the falloff's exponent overflows along paths that descend.
-                if !(1e-3..=1e6).contains(&h) {
+                if !(MIN_HEIGHT_SCALE_M..=MAX_HEIGHT_SCALE_M).contains(&h) {
                     return Err(bad(
                         "medium.height_scale",
                         format!(
-                            "kind = \"height\" needs a height_scale in [0.001, 1e6] m, got {}",
+                            "kind = \"height\" needs a height_scale in [{MIN_HEIGHT_SCALE_M}, {MAX_HEIGHT_SCALE_M:e}] m, got {}",
                             self.height_scale_m.map_or("none".into(), short)
                         ),
                     ));
