@@ -524,6 +524,25 @@ fn target_phase_distances_keep_the_expectation() {
     }
 }
 
+/// Directions leaving the T in the phase function's lobe toward the target (`surface_lobe`) keep every
+/// histogram's expectation: the fog T at g = 0.9 and at g = −0.7 (the lobe pointing away from the
+/// target), the cosine lobe alone against half the directions in the phase lobe; as
+/// `phase_distances_keep_the_expectation`.
+#[test]
+fn surface_lobe_keeps_the_expectation() {
+    for (g, seed) in [(0.9, 101), (-0.7, 111)] {
+        assert_setting_keeps_the_expectation(
+            "grid = [2, 2]",
+            |tenths| format!("surface_lobe = {}", tenths as f64 / 10.0),
+            &format!("{FOG}\ng = {g}"),
+            (0, 5),
+            (240_000, seed),
+            0.05,
+            ("cosine lobe", "phase lobe toward the target"),
+        );
+    }
+}
+
 /// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 64 000-spp reference
 /// (expected 3.9 with the reference's own noise; accepted: 3.2–5.0).
 #[test]
