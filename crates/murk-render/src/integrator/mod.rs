@@ -9,7 +9,8 @@
 //! Relay reflectance at the two endpoints is not applied (it is one constant factor per capture).
 //!
 //! The sampling techniques (first directions, survival past the first vertex, no roulette in a
-//! medium, time-window distances, target-side draws, object draws and connections, shared tails) and the
+//! medium, time-window distances, target-side draws, object draws and connections, shared tails, the
+//! phase lobe out of the hidden geometry) and the
 //! measurements that chose their defaults are in `docs/renderer-sampling.md`.
 
 use crate::geometry::{Geometry, Hit, Shape, EPS};
