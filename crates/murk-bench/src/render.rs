@@ -87,8 +87,10 @@ const CASES: [Case; 3] = [
 
 /// `only`: run just the cases whose scene file name contains it. `mit`: render each T case with
 /// mitransient in this run too, instead of quoting its recorded figures.
-/// The anisotropy case's name for `--only` (it also runs with `--only t-wall-medium`).
+/// The anisotropy cases' names for `--only` (the T's also runs with `--only t-wall-medium`; the Z's
+/// name leaves it out of `--only z-letter`, the paper format).
 const ANISOTROPY: &str = "t-wall-medium.toml anisotropy";
+const ANISOTROPY_Z: &str = "z quick anisotropy";
 
 /// `only`: run just the cases whose name contains it; `set`: scene overrides for every case. `mit`:
 /// render each T case with mitransient in this run too, instead of quoting its recorded figures.
@@ -103,7 +105,7 @@ pub fn run(
     let names: Vec<&str> = CASES
         .iter()
         .map(|c| c.file)
-        .chain([ANISOTROPY, "z-letter.toml"])
+        .chain([ANISOTROPY, ANISOTROPY_Z, "z-letter.toml"])
         .collect();
     if !names.iter().any(|n| wanted(n)) {
         bail!(
@@ -117,7 +119,10 @@ pub fn run(
         t_case(&scenes, c, runs, mit, quiet)?;
     }
     if wanted(ANISOTROPY) {
-        anisotropy(&scenes, runs, quiet)?;
+        anisotropy(&scenes, &FOG_T, runs, quiet)?;
+    }
+    if wanted(ANISOTROPY_Z) {
+        anisotropy(&scenes, &FOG_Z, runs, quiet)?;
     }
     if wanted("z-letter.toml") {
         paper_format(&scenes, runs, quiet)?;
@@ -188,23 +193,57 @@ fn t_case(
 const GS: [f64; 3] = [0.0, 0.7, 0.9];
 const ALBEDOS: [f64; 2] = [0.5, 0.83];
 
-/// The fog T at each g and albedo: CPU seconds × relL2² over the object window, the error from pairs of
+/// A scene whose cost of forward scattering [`anisotropy`] measures: its file, the overrides that make
+/// it, spp and object window (m).
+struct Fog {
+    file: &'static str,
+    set: &'static [&'static str],
+    spp: u64,
+    window: (f64, f64),
+}
+
+/// The fog T of docs/benchmarks.md.
+const FOG_T: Fog = Fog {
+    file: FOG.file,
+    set: &[],
+    spp: FOG.spp,
+    window: (1.98, 2.70),
+};
+
+/// The paper's Z (2 m deep, μt = 1) at the study's quick window (1 200 bins of 5 mm from 2 m) on a 32²
+/// laser grid, the error over its direct returns (4.0–4.9 m), as in issue 47.
+const FOG_Z: Fog = Fog {
+    file: "z-letter.toml",
+    set: &[
+        "capture.grid=[32, 32]",
+        "capture.bins=1200",
+        "capture.bin_width=0.005",
+        "capture.start=2.0",
+    ],
+    spp: 128,
+    window: (4.0, 4.9),
+};
+
+/// `fog` at each g and albedo: CPU seconds × relL2² over the object window, the error from pairs of
 /// independent renders (no reference, whose own noise grows with g), the median of `runs` pairs.
-fn anisotropy(scenes: &Scenes, runs: usize, quiet: bool) -> anyhow::Result<()> {
+fn anisotropy(scenes: &Scenes, fog: &Fog, runs: usize, quiet: bool) -> anyhow::Result<()> {
     for albedo in ALBEDOS {
         let costs = GS
             .iter()
             .map(|&g| {
-                let scene = scenes.load(
-                    FOG.file,
-                    &[format!("medium.g={g}"), format!("medium.albedo={albedo}")],
-                )?;
+                let set: Vec<String> = fog
+                    .set
+                    .iter()
+                    .map(|s| s.to_string())
+                    .chain([format!("medium.g={g}"), format!("medium.albedo={albedo}")])
+                    .collect();
+                let scene = scenes.load(fog.file, &set)?;
                 let plan = Plan::new(&scene);
                 let pairs = (0..runs.max(1) as u64)
                     .map(|p| {
-                        let a = timed_render(&plan, FOG.spp, 2 * p, None)?;
-                        let b = timed_render(&plan, FOG.spp, 2 * p + 1, None)?;
-                        let mask = FOG.mask(&scene.capture.time, a.h.len());
+                        let a = timed_render(&plan, fog.spp, 2 * p, None)?;
+                        let b = timed_render(&plan, fog.spp, 2 * p + 1, None)?;
+                        let mask = window_mask(&scene.capture.time, a.h.len(), fog.window);
                         let e = split_rel_l2(&a.h, &b.h, &mask);
                         Ok(0.5 * (a.cpu_s + b.cpu_s) * e * e)
                     })
@@ -220,9 +259,12 @@ fn anisotropy(scenes: &Scenes, runs: usize, quiet: bool) -> anyhow::Result<()> {
         say(
             quiet,
             format!(
-                "{} at α {albedo}, {} spp, CPU-s × relL2² over the object window (median of {} pairs; × g = 0): {}",
-                FOG.file,
-                FOG.spp,
+                "{}{} at α {albedo}, {} spp, CPU-s × relL2² over the object window {}–{} m (median of {} pairs; × g = 0): {}",
+                fog.file,
+                if fog.set.is_empty() { "" } else { " (32² quick)" },
+                fog.spp,
+                fog.window.0,
+                fog.window.1,
                 runs.max(1),
                 row.join(", ")
             ),

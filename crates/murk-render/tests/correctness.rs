@@ -511,17 +511,40 @@ fn phase_distances_keep_the_expectation() {
 /// half the draws in the phase angle; as `phase_distances_keep_the_expectation`.
 #[test]
 fn target_phase_distances_keep_the_expectation() {
-    for (g, seed) in [(0.9, 81), (-0.7, 91)] {
+    assert_share_keeps_the_expectation(
+        "target_phase_distances",
+        [81, 91],
+        ("equiangular target-side distances", "phase-angle ones"),
+    );
+}
+
+/// The share `key` at 0 and 0.5 keeps every histogram's expectation on the fog T at g = 0.9 and at
+/// g = −0.7 (seeds from `seeds`), as `phase_distances_keep_the_expectation`.
+fn assert_share_keeps_the_expectation(key: &str, seeds: [u64; 2], names: (&str, &str)) {
+    for (g, seed) in [(0.9, seeds[0]), (-0.7, seeds[1])] {
         assert_setting_keeps_the_expectation(
             "grid = [2, 2]",
-            |tenths| format!("target_phase_distances = {}", tenths as f64 / 10.0),
+            |tenths| format!("{key} = {}", tenths as f64 / 10.0),
             &format!("{FOG}\ng = {g}"),
             (0, 5),
             (240_000, seed),
             0.05,
-            ("equiangular target-side distances", "phase-angle ones"),
+            names,
         );
     }
+}
+
+/// Directions leaving the T in the phase function's lobe toward the target (`surface_lobe`) keep every
+/// histogram's expectation: the fog T at g = 0.9 and at g = −0.7 (the lobe pointing away from the
+/// target), the cosine lobe alone against half the directions in the phase lobe; as
+/// `phase_distances_keep_the_expectation`.
+#[test]
+fn surface_lobe_keeps_the_expectation() {
+    assert_share_keeps_the_expectation(
+        "surface_lobe",
+        [101, 111],
+        ("cosine lobe", "phase lobe toward the target"),
+    );
 }
 
 /// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 64 000-spp reference

@@ -9,7 +9,8 @@
 //! Relay reflectance at the two endpoints is not applied (it is one constant factor per capture).
 //!
 //! The sampling techniques (first directions, survival past the first vertex, no roulette in a
-//! medium, time-window distances, target-side draws, object draws and connections, shared tails) and the
+//! medium, time-window distances, target-side draws, object draws and connections, shared tails, the
+//! phase lobe out of the hidden geometry) and the
 //! measurements that chose their defaults are in `docs/renderer-sampling.md`.
 
 use crate::geometry::{Geometry, Hit, Shape, EPS};
@@ -81,6 +82,8 @@ pub struct Tracer<'a> {
     /// distances drawn so.
     phase_distances: u32,
     target_phase_distances: f64,
+    /// Share of directions leaving a hidden-geometry vertex in the phase lobe toward the one target.
+    surface_lobe: f64,
     /// The hidden geometry's bounds, grown by a margin: a leg outside them meets nothing.
     hidden_bounds: crate::geometry::Aabb,
     /// The last (spp, lattice generator) pair `trace` used.
@@ -106,6 +109,9 @@ struct Start {
     opl: f64,
     scat: i32,
     origin: bool,
+    /// The axis of the phase lobe that shares this surface vertex's directions with its cosine lobe
+    /// (`surface_lobe`).
+    lobe: Option<DVec3>,
 }
 
 impl<'a> Tracer<'a> {
@@ -150,6 +156,12 @@ impl<'a> Tracer<'a> {
             target_lobe,
             phase_distances: set.phase_distances.unwrap_or(phase_default.0),
             target_phase_distances: set.target_phase_distances.unwrap_or(phase_default.1),
+            surface_lobe: set.surface_lobe.unwrap_or_else(|| {
+                scene
+                    .medium
+                    .as_ref()
+                    .map_or(0.0, Medium::default_surface_lobe)
+            }),
             hidden_bounds: {
                 let b = scene.geometry.bounds();
                 // Rounding of the leg's end points; none to cover when there is no geometry (empty box).
@@ -319,7 +331,13 @@ impl<'a> Tracer<'a> {
                 } else if from.origin {
                     self.origin_pdf(from.x, n, w).0
                 } else {
-                    c / PI
+                    match (from.lobe, self.medium()) {
+                        (Some(a), Some(m)) => {
+                            let q = self.surface_lobe;
+                            (1.0 - q) * c / PI + q * m.phase.eval(a.dot(w))
+                        }
+                        _ => c / PI,
+                    }
                 }
             }
         }
@@ -418,6 +436,7 @@ impl<'a> Tracer<'a> {
             opl: origin.extra_m,
             scat: 0,
             origin: true,
+            lobe: None,
         };
         if d.dot(origin.n) <= 0.0 {
             return;
@@ -594,6 +613,7 @@ impl<'a> Tracer<'a> {
                                 opl,
                                 scat,
                                 origin: false,
+                                lobe: None,
                             };
                             d = m.phase.sample(d, s.next(), s.next());
                             continue;
@@ -646,8 +666,36 @@ impl<'a> Tracer<'a> {
                 opl,
                 scat,
                 origin: false,
+                lobe: self.surface_lobe_axis(pos, on_relay, targets),
             };
-            d = cosine_hemisphere(h.n, s.next(), s.next());
+            d = match (from.lobe, self.medium()) {
+                (Some(a), Some(m)) => {
+                    // One more number for the choice, only where the lobe is on (other scenes keep
+                    // their random streams); weight: the cosine lobe over the mixture's density.
+                    let w = if s.next() < self.surface_lobe {
+                        m.phase.sample(a, s.next(), s.next())
+                    } else {
+                        cosine_hemisphere(h.n, s.next(), s.next())
+                    };
+                    let c = h.n.dot(w);
+                    if c <= 0.0 {
+                        return;
+                    }
+                    beta *= c / PI / self.dir_pdf(&from, w);
+                    w
+                }
+                _ => cosine_hemisphere(h.n, s.next(), s.next()),
+            };
+        }
+    }
+
+    /// The axis of a hidden-geometry vertex's phase lobe at `x` (`surface_lobe`): the direction to the
+    /// one target. None on the relay (coplanar with the targets), with several targets, or where the lobe
+    /// is off.
+    fn surface_lobe_axis(&self, x: DVec3, on_relay: bool, targets: &[Endpoint]) -> Option<DVec3> {
+        match targets {
+            [t] if !on_relay && self.surface_lobe > 0.0 => (t.p - x).try_normalize(),
+            _ => None,
         }
     }
 

@@ -114,6 +114,17 @@ impl Medium {
         }
     }
 
+    /// The share of directions leaving the hidden geometry in the phase function's lobe toward the
+    /// target where a scene leaves `render.surface_lobe` unset: in strongly forward media the light that
+    /// reaches a wall point after the object left it heading for that point, which the cosine lobe finds
+    /// rarely (docs/renderer-sampling.md).
+    pub fn default_surface_lobe(&self) -> f64 {
+        match self.phase {
+            Phase::HenyeyGreenstein { g } if g >= 0.6 && self.scatters() => 0.5,
+            _ => 0.0,
+        }
+    }
+
     /// The optical depth ∫σt along all of `segs`, exactly.
     #[inline]
     fn optical_depth(&self, segs: &[Segment]) -> f64 {

@@ -160,6 +160,11 @@ pub struct RenderDef {
     /// Share of the target-side draws' distances drawn so toward the path vertex, instead of
     /// equiangular, in [0, 1]. Default: 0.5 where g ≥ 0.6, else 0.
     pub target_phase_distances: Option<f64>,
+    /// Probability that a path leaves a hidden-geometry vertex in the phase function's lobe around the
+    /// direction to the target instead of the surface's cosine lobe (one target only): in forward fog
+    /// the light that returns to a wall point leaves the object heading for it. Default: 0.5 where g ≥
+    /// 0.6, else 0.
+    pub surface_lobe: Option<f64>,
     /// Side (in grid points) of the tiles of traced points that share their paths past the first hidden
     /// vertex, where a medium scatters and every traced point has the same targets (see the integrator);
     /// at most 16. 0 or 1: off.
@@ -187,6 +192,7 @@ impl Default for RenderDef {
             target_lobe: None,
             phase_distances: None,
             target_phase_distances: None,
+            surface_lobe: None,
             share_tile: 4,
             trace_from: TraceFrom::Auto,
         }
