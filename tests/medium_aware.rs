@@ -209,7 +209,7 @@ fn the_medium_of_the_fog_is_estimated() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/t-wall-medium.toml");
     let cap = d.join("fog.h5");
     ok(&["render", "-q", scene, "--out", s(&cap), "--spp", "64"]);
-    let json = ok(&[
+    let args = [
         "medium",
         s(&cap),
         "--json",
@@ -217,7 +217,8 @@ fn the_medium_of_the_fog_is_estimated() {
         "mu_t,albedo",
         "--g",
         "0",
-    ]);
+    ];
+    let json = ok(&args);
     let value = |key: &str| -> f64 {
         let at = json
             .find(&format!("\"{key}\": "))
@@ -245,17 +246,7 @@ fn the_medium_of_the_fog_is_estimated() {
     // answer exactly as the call without it.
     let tables = d.join("tables");
     for _ in 0..2 {
-        let cached = ok(&[
-            "medium",
-            s(&cap),
-            "--json",
-            "--fit",
-            "mu_t,albedo",
-            "--g",
-            "0",
-            "--table-cache",
-            s(&tables),
-        ]);
+        let cached = ok(&[&args[..], &["--table-cache", s(&tables)]].concat());
         assert_eq!(cached, json);
         assert_eq!(std::fs::read_dir(&tables).unwrap().count(), 1);
     }
