@@ -209,7 +209,7 @@ fn the_medium_of_the_fog_is_estimated() {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/t-wall-medium.toml");
     let cap = d.join("fog.h5");
     ok(&["render", "-q", scene, "--out", s(&cap), "--spp", "64"]);
-    let json = ok(&[
+    let args = [
         "medium",
         s(&cap),
         "--json",
@@ -217,7 +217,8 @@ fn the_medium_of_the_fog_is_estimated() {
         "mu_t,albedo",
         "--g",
         "0",
-    ]);
+    ];
+    let json = ok(&args);
     let value = |key: &str| -> f64 {
         let at = json
             .find(&format!("\"{key}\": "))
@@ -241,6 +242,14 @@ fn the_medium_of_the_fog_is_estimated() {
     assert!((value("mu_t_per_m") - 1.0).abs() <= 0.1, "{json}");
     assert!((value("albedo") - 0.5).abs() <= 0.05, "{json}");
     assert_eq!(value("g"), 0.0);
+    // With --table-cache the table is rendered by the first call and read back by the second: both
+    // answer exactly as the call without it.
+    let tables = d.join("tables");
+    for _ in 0..2 {
+        let cached = ok(&[&args[..], &["--table-cache", s(&tables)]].concat());
+        assert_eq!(cached, json);
+        assert_eq!(std::fs::read_dir(&tables).unwrap().count(), 1);
+    }
     // --compensate without --mu-t takes the estimate (every parameter free) and says so.
     let v = d.join("v.npy");
     let summary = ok(&[

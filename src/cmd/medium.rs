@@ -15,6 +15,7 @@ murk medium fog.h5\n  \
 murk medium fog.h5 --json                       # one JSON object: mu_t_per_m, albedo, g, their uncertainties, …\n  \
 murk medium fog.h5 --fit mu_t,albedo --g 0.7    # g known: fit the other two\n  \
 murk medium fog.h5 --until 3.5                  # the medium-only bins end at 3.5 m of path\n  \
+murk medium fog.h5 --table-cache tables         # renders the table once; later captures of this geometry reuse it\n  \
 murk medium --slab-transmission ../shared/data/real/cdt_lindell2020/calibration   # a foam slab's μa, μs′\n\n\
 The forward model is murk's renderer: the capture's own scene (its scene_info, as murk render writes it)\n\
 without objects, rendered on a grid of μt × g nodes, each an albedo sweep, and interpolated. The fit\n\
@@ -58,6 +59,11 @@ pub struct MediumArgs {
     /// The last path (m) of the medium-only bins (default: where the scene's signal begins).
     #[arg(long, value_name = "PATH_M")]
     pub until: Option<f64>,
+    /// A folder for the forward model's table of renders: built there once per geometry (the
+    /// capture's scene without objects, its points and time axis, the fitted parameters), then read
+    /// back by every later estimate of such a capture instead of rendered again.
+    #[arg(long, value_name = "DIR")]
+    pub table_cache: Option<PathBuf>,
 }
 
 pub fn run(a: MediumArgs, quiet: bool) -> anyhow::Result<()> {
@@ -77,6 +83,7 @@ pub fn run(a: MediumArgs, quiet: bool) -> anyhow::Result<()> {
             g: a.g,
         },
         until_m: a.until,
+        table_cache: a.table_cache.clone(),
         ..EstimateOptions::default()
     };
     let bar = Bar::new("medium", quiet || a.json);

@@ -148,6 +148,11 @@ pub struct ReconstructArgs {
     /// search` row); `off` keeps the default volume.
     #[arg(long, value_enum, default_value = "auto")]
     pub depth_search: DepthSearchArg,
+    /// Where the medium's estimate (for --compensate without --mu-t, --medium-removal model without
+    /// --mu-t and --albedo) keeps its table of renders: built once per geometry, then read back
+    /// (as `murk medium --table-cache`).
+    #[arg(long, value_name = "DIR")]
+    pub table_cache: Option<PathBuf>,
     #[command(flatten)]
     pub slab: SlabArgs,
 }
@@ -383,7 +388,11 @@ fn estimate_medium(
         None => ("--medium-removal model", "--mu-t and --albedo"),
     };
     let bar = Bar::new("medium", quiet);
-    let outcome = murk_medium::estimate(cap, &murk_medium::EstimateOptions::default(), &|d, n| {
+    let opt = murk_medium::EstimateOptions {
+        table_cache: a.table_cache.clone(),
+        ..murk_medium::EstimateOptions::default()
+    };
+    let outcome = murk_medium::estimate(cap, &opt, &|d, n| {
         if d == 0 {
             murk_recon::Progress::start(&bar, n as u64);
         } else {

@@ -1,8 +1,9 @@
 //! `murk-bench --medium CAPTURE`: what the medium-aware path costs on a capture in a medium, as
 //! `murk reconstruct` runs it (plan and run together, the default volume): the plain path (removal and
 //! depth search off), the default path (detection, the fitted removal, the depth search and the band
-//! it keeps) and the medium's estimate (`murk medium`: its table of renders and the fit), alternated
-//! run by run so that the machine's drift meets each alike.
+//! it keeps) and the medium's estimate (`murk medium`: its table of renders and the fit; and again with
+//! its table read back from a `--table-cache` folder), alternated run by run so that the machine's
+//! drift meets each alike.
 
 use crate::say;
 use anyhow::Context;
@@ -25,7 +26,23 @@ pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
         ..aware
     };
     let estimate = murk_medium::EstimateOptions::default();
+    // The estimate once more with its table kept in a folder (`--table-cache`): written by the first
+    // run, read back by the others, so its median is what a capture of a known geometry costs.
+    let cache = std::env::temp_dir().join(format!("murk-bench-tables-{}", std::process::id()));
+    let cached = murk_medium::EstimateOptions {
+        table_cache: Some(cache.clone()),
+        ..murk_medium::EstimateOptions::default()
+    };
+    let t0 = Instant::now();
+    murk_medium::estimate(&cap, &cached, &|_, _| {}).with_context(ctx)?;
+    let first = t0.elapsed().as_secs_f64();
+    // … and with the medium-only bins' end given (`--until`): no depth search, the fit alone.
+    let until = murk_medium::EstimateOptions {
+        until_m: Some(murk_medium::fit::scene_onset_m(&cap)?),
+        ..cached.clone()
+    };
     let (mut t_plain, mut t_aware, mut t_estimate) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut t_cached, mut t_until) = (Vec::new(), Vec::new());
     let time = |f: &mut dyn FnMut() -> anyhow::Result<()>, out: &mut Vec<f64>| {
         let t0 = Instant::now();
         f()?;
@@ -45,11 +62,22 @@ pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
             &mut || Ok(murk_medium::estimate(&cap, &estimate, &|_, _| {}).map(drop)?),
             &mut t_estimate,
         )?;
+        time(
+            &mut || Ok(murk_medium::estimate(&cap, &cached, &|_, _| {}).map(drop)?),
+            &mut t_cached,
+        )?;
+        time(
+            &mut || Ok(murk_medium::estimate(&cap, &until, &|_, _| {}).map(drop)?),
+            &mut t_until,
+        )?;
     }
-    let (p, m, e) = (
+    std::fs::remove_dir_all(&cache).ok();
+    let (p, m, e, c, u) = (
         crate::median(&t_plain),
         crate::median(&t_aware),
         crate::median(&t_estimate),
+        crate::median(&t_cached),
+        crate::median(&t_until),
     );
     say(quiet, format!("medium-aware path on {}:", path.display()));
     say(
@@ -68,6 +96,20 @@ pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
         format!(
             "  the medium's estimate (table and fit): {e:.3} s ({:.1}× the plain reconstruction)",
             e / p
+        ),
+    );
+    say(
+        quiet,
+        format!(
+            "  the estimate with its table read back (--table-cache; the run that wrote it took {first:.1} s): {c:.3} s ({:.0} % of the plain reconstruction)",
+            100.0 * c / p
+        ),
+    );
+    say(
+        quiet,
+        format!(
+            "  … and the medium-only bins' end given (--until: no depth search): {u:.3} s ({:.0} % of the plain reconstruction)",
+            100.0 * u / p
         ),
     );
     Ok(())

@@ -28,12 +28,20 @@ fn main() -> murk_core::Result<()> {
     if given_g {
         files.remove(0);
     }
+    let mut spec = murk_medium::TableSpec::default();
+    if files.first().is_some_and(|f| f == "--rings") {
+        spec.rings = files[1].parse().expect("--rings N");
+        files.drain(..2);
+    }
     let mut table: Option<ResponseTable> = None;
     println!("| μt | α | g | μt est. | α est. | g est. | μt err | α err | g err | s |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for f in files {
         let cap = murk_io::read_capture(std::path::Path::new(&f))?;
-        let mut opt = EstimateOptions::default();
+        let mut opt = EstimateOptions {
+            table: spec.clone(),
+            ..EstimateOptions::default()
+        };
         if given_g {
             opt.fit = murk_medium::FitParams::parse("mu_t,albedo")?;
             opt.fixed.g = truth(&cap.scene_info, "g");

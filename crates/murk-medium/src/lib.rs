@@ -62,6 +62,9 @@ pub struct EstimateOptions {
     /// The last path (m) of the medium-only bins; `None`: found from where the scene's signal begins.
     pub until_m: Option<f64>,
     pub table: TableSpec,
+    /// A folder where tables are kept ([`table::load_or_build`]): a capture whose geometry has a
+    /// table there is fitted without rendering. `None`: tables live only in memory.
+    pub table_cache: Option<std::path::PathBuf>,
 }
 
 /// The values of parameters held fixed.
@@ -110,6 +113,7 @@ impl Default for EstimateOptions {
             },
             until_m: None,
             table: TableSpec::default(),
+            table_cache: None,
         }
     }
 }
@@ -169,9 +173,13 @@ pub fn estimate_with(
         None => fit::scene_onset_m(cap)?,
     };
     let scene_text = scene::medium_only(cap)?;
-    let table = match table.filter(|t| t.serves(&scene_text, cap, opt)) {
-        Some(t) => t,
-        None => ResponseTable::build(&scene_text, cap, opt, progress)?,
+    let table = match (
+        table.filter(|t| t.serves(&scene_text, cap, opt)),
+        &opt.table_cache,
+    ) {
+        (Some(t), _) => t,
+        (None, Some(dir)) => table::load_or_build(dir, &scene_text, cap, opt, progress)?,
+        (None, None) => ResponseTable::build(&scene_text, cap, opt, progress)?,
     };
     let fitted = fit::fit(cap, &table, until_m, &opt.fit, &opt.fixed, signature)?;
     Ok((Outcome::Fitted(Box::new(fitted)), Some(table)))

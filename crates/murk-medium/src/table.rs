@@ -9,6 +9,9 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
+mod store;
+pub use store::load_or_build;
+
 /// How the table is rendered.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TableSpec {
@@ -22,6 +25,9 @@ pub struct TableSpec {
     pub g: Vec<f64>,
     /// Albedo nodes of each render's sweep, ascending (at most 16).
     pub albedos: Vec<f64>,
+    /// Rings of laser–sensor separation the capture and the renders are reduced to (equal shares of
+    /// the capture's histograms).
+    pub rings: usize,
 }
 
 impl Default for TableSpec {
@@ -33,6 +39,7 @@ impl Default for TableSpec {
             mu_t_per_m: (0..12).map(|i| 0.25 * 1.35f64.powi(i)).collect(),
             g: vec![-0.8, -0.4, 0.0, 0.4, 0.8],
             albedos: (0..16).map(|i| 0.04 + 0.063 * i as f64).collect(),
+            rings: RINGS,
         }
     }
 }
@@ -49,17 +56,18 @@ pub struct Reduction {
     separations: Vec<f64>,
 }
 
-/// Rings of separation, and the path (m) a coarse bin spans at least.
+/// Rings of separation by default, and the path (m) a coarse bin spans at least.
 const RINGS: usize = 1;
 const COARSE_M: f64 = 0.05;
 
 impl Reduction {
-    /// Rings at the quartiles of `cap`'s separations; coarse bins of at least 5 cm of path.
-    pub fn of(cap: &Capture) -> Reduction {
+    /// `rings` rings at quantiles of `cap`'s separations; coarse bins of at least 5 cm of path.
+    pub fn of(cap: &Capture, rings: usize) -> Reduction {
         let all = separations(cap);
         let mut sep = all.clone();
         sep.sort_by(f64::total_cmp);
-        let mut edges: Vec<f64> = (1..RINGS).map(|r| sep[r * sep.len() / RINGS]).collect();
+        let rings = rings.max(1);
+        let mut edges: Vec<f64> = (1..rings).map(|r| sep[r * sep.len() / rings]).collect();
         edges.dedup();
         let per_bin = ((COARSE_M / cap.time.bin_width_m).ceil() as usize).max(1);
         Reduction {
@@ -222,19 +230,9 @@ impl ResponseTable {
         opt: &EstimateOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<ResponseTable> {
-        let (spec, fit, fixed) = (&opt.table, &opt.fit, &opt.fixed);
-        let mu_t = if fit.mu_t {
-            spec.mu_t_per_m.clone()
-        } else {
-            vec![fixed.mu_t_per_m]
-        };
-        let g = if fit.g { spec.g.clone() } else { vec![fixed.g] };
-        let albedos = if fit.albedo {
-            spec.albedos.clone()
-        } else {
-            vec![fixed.albedo]
-        };
-        let reduction = Reduction::of(cap);
+        let spec = &opt.table;
+        let (mu_t, g, albedos) = node_values(opt);
+        let reduction = Reduction::of(cap, spec.rings);
         let nodes: Vec<(f64, f64)> = mu_t
             .iter()
             .flat_map(|&m| g.iter().map(move |&g| (m, g)))
@@ -269,7 +267,7 @@ impl ResponseTable {
             && o.fit == opt.fit
             && o.fixed == opt.fixed
             && o.table == opt.table
-            && self.reduction == Reduction::of(cap)
+            && self.reduction == Reduction::of(cap, o.table.rings)
     }
 
     /// Whether reduced value `i` has signal at nine in ten of the table's nodes or more: where the
@@ -283,12 +281,39 @@ impl ResponseTable {
         lit * 10 >= nodes * 9
     }
 
+    /// The number of values a table of these nodes and reduction holds.
+    fn expected_len(&self) -> usize {
+        self.mu_t_per_m.len()
+            * self.g.len()
+            * self.albedos.len()
+            * self.reduction.rings()
+            * self.reduction.coarse_bins
+    }
+
     /// The reduced response at node (mu, g, albedo): `[ring][bin]`.
     pub fn node(&self, mu: usize, g: usize, albedo: usize) -> &[f64] {
         let per = self.reduction.rings() * self.reduction.coarse_bins;
         let i = (mu * self.g.len() + g) * self.albedos.len() + albedo;
         &self.values[i * per..(i + 1) * per]
     }
+}
+
+/// The table's nodes for `opt`: μt, g and albedo; a parameter that is not fitted gets one node, its
+/// fixed value.
+fn node_values(opt: &EstimateOptions) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let (spec, fit, fixed) = (&opt.table, &opt.fit, &opt.fixed);
+    let pick = |fitted: bool, nodes: &[f64], value: f64| {
+        if fitted {
+            nodes.to_vec()
+        } else {
+            vec![value]
+        }
+    };
+    (
+        pick(fit.mu_t, &spec.mu_t_per_m, fixed.mu_t_per_m),
+        pick(fit.g, &spec.g, fixed.g),
+        pick(fit.albedo, &spec.albedos, fixed.albedo),
+    )
 }
 
 /// One (μt, g) node: the sweep's captures reduced, albedo after albedo.
@@ -319,17 +344,15 @@ pub(crate) fn render_medium_only(
     g: f64,
 ) -> Result<Vec<Capture>> {
     let top = albedos.iter().copied().fold(0.0, f64::max);
-    let ov = Overrides {
-        grid: Some(spec.grid),
-        bins: None,
-        set: vec![
+    let scene = table_scene(
+        scene_text,
+        spec,
+        vec![
             format!("medium.mu_t={mu_t}"),
             format!("medium.g={g}"),
             format!("medium.albedo={top}"),
         ],
-        ..Overrides::default()
-    };
-    let scene = Scene::from_str(scene_text, Path::new("scene_info.scene"), &ov)?;
+    )?;
     if !scene.capture.time.same_as_stored(&cap.time) {
         return Err(Error::param(
             "scene_info.scene's time axis differs from the capture's: the capture was changed after rendering",
@@ -344,4 +367,15 @@ pub(crate) fn render_medium_only(
         checkpoint_every: Duration::from_secs(3600),
     };
     plan.render_all_until(&opt, &|_, _| {}, &AtomicBool::new(false))
+}
+
+/// `scene_text` on `spec`'s grid, with the scene overrides `set`.
+fn table_scene(scene_text: &str, spec: &TableSpec, set: Vec<String>) -> Result<Scene> {
+    let ov = Overrides {
+        grid: Some(spec.grid),
+        bins: None,
+        set,
+        ..Overrides::default()
+    };
+    Scene::from_str(scene_text, Path::new("scene_info.scene"), &ov)
 }

@@ -452,7 +452,7 @@ pub fn evaluate(plan: &StudyPlan, dir: &Path, obs: &dyn Observer) -> Result<Vec<
                 references.insert(key.clone(), views(&volume, &i).front);
             }
             let reference = &references[&key];
-            let a = aware_intensity(&cap, &volume, wall_factor, tables)?;
+            let a = aware_intensity(&cap, &volume, wall_factor, tables, &dir.join("renders"))?;
             estimated.push(a.estimate);
             aware_notes.extend(a.note);
             let mut aware = Some(a.intensity);
@@ -511,7 +511,8 @@ pub fn evaluate(plan: &StudyPlan, dir: &Path, obs: &dyn Observer) -> Result<Vec<
 }
 
 /// The medium-aware reconstruction of `cap` on `volume`: the medium estimated from the capture (one
-/// table of renders per geometry, kept in `tables`), then `murk reconstruct`'s pipeline with the
+/// table of renders per geometry, kept in `tables` and as a file in `cache`, so that a study run
+/// again reads it back), then `murk reconstruct`'s pipeline with the
 /// medium's response removed, its gate and window end, and the paper's K with the estimate. A capture
 /// without a detected medium, or whose fit fails, is reconstructed without K (the note says why).
 fn aware_intensity(
@@ -519,8 +520,12 @@ fn aware_intensity(
     volume: &Volume,
     wall_factor: f64,
     tables: &mut Vec<murk_medium::ResponseTable>,
+    cache: &Path,
 ) -> Result<Aware> {
-    let opt = murk_medium::EstimateOptions::default();
+    let opt = murk_medium::EstimateOptions {
+        table_cache: Some(cache.to_path_buf()),
+        ..murk_medium::EstimateOptions::default()
+    };
     let scene_text = murk_medium::scene::medium_only(cap).ok();
     let known = scene_text.as_ref().and_then(|t| {
         tables
