@@ -723,19 +723,24 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
-    /// A row of Fig. 3b renders five albedos at once: its progress names all five, not the first.
-    #[test]
-    fn a_sweeps_label_names_every_albedo() {
-        let plan = StudyPlan::new(&crate::plan::StudyOptions {
+    /// A quick-scale plan of `figure`'s cells that match `cells` (all when empty), one seed.
+    fn quick_plan(figure: crate::plan::Figure, cells: &[&str]) -> StudyPlan {
+        StudyPlan::new(&crate::plan::StudyOptions {
             scale: crate::plan::Scale::Quick,
-            only: vec![crate::plan::Figure::Fig3b],
-            cells: vec!["μt = 2".into()],
+            only: vec![figure],
+            cells: cells.iter().map(|c| c.to_string()).collect(),
             seeds: 1,
             shards: 1,
             spp: Some(8),
             scenes_dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
         })
-        .unwrap();
+        .unwrap()
+    }
+
+    /// A row of Fig. 3b renders five albedos at once: its progress names all five, not the first.
+    #[test]
+    fn a_sweeps_label_names_every_albedo() {
+        let plan = quick_plan(crate::plan::Figure::Fig3b, &["μt = 2"]);
         let labels = job_labels(&plan);
         let sweep = plan.captures.iter().find(|j| j.albedos.len() == 5).unwrap();
         assert_eq!(
@@ -748,16 +753,7 @@ mod tests {
     /// renders) and which cells it serves, not the first cell's λ.
     #[test]
     fn a_capture_shared_by_three_wavelengths_is_named_by_its_medium() {
-        let plan = StudyPlan::new(&crate::plan::StudyOptions {
-            scale: crate::plan::Scale::Quick,
-            only: vec![crate::plan::Figure::Fig4],
-            cells: vec![],
-            seeds: 1,
-            shards: 1,
-            spp: Some(8),
-            scenes_dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
-        })
-        .unwrap();
+        let plan = quick_plan(crate::plan::Figure::Fig4, &[]);
         let labels = job_labels(&plan);
         let fog = plan
             .captures
