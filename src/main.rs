@@ -53,6 +53,8 @@ enum Command {
 
 fn main() {
     restore_default_sigpipe();
+    // The library's messages name options as this front end spells them: flags.
+    murk_core::spelling::set_front_end(murk_core::Spelling::Cli);
     // Ctrl-C and SIGTERM: during a render, the first one stops it after the units in progress, whose
     // checkpoint then keeps every finished unit (main ends the process once the render returns).
     // Otherwise, or the second time, remove the temporaries of writes in progress (finished outputs

@@ -596,11 +596,31 @@ fn help_teaches_and_demo_runs() {
         "side.png",
         "depth.png",
         "index.html",
+        "front-axes.png",
+        "top-axes.png",
+        "side-axes.png",
     ] {
         assert!(d.join(f).exists(), "{f} missing");
     }
     // The page names murk's version once, in its provenance.
     let page = std::fs::read_to_string(d.join("index.html")).unwrap();
+    // The study report's look: its page style, the provenance first, the projections as figure
+    // grids with named metre axes, the parameters after them.
+    let at = |s: &str| {
+        page.find(s)
+            .unwrap_or_else(|| panic!("{s} not in the page:\n{page}"))
+    };
+    assert!(page.contains(murk_view::PAGE_STYLE) && page.contains("#controls{position:sticky"));
+    assert!(
+        at("id=\"provenance\"") < at("front-axes.png")
+            && at("side-axes.png") < at("id=\"parameters\"")
+    );
+    let axes = std::fs::read(d.join("front-axes.png")).unwrap();
+    let front = std::fs::read(d.join("front.png")).unwrap();
+    assert!(
+        axes.windows(11).any(|w| w == b"murk:layout")
+            && !front.windows(11).any(|w| w == b"murk:layout")
+    );
     assert_eq!(
         page.matches("murk version").count() + page.matches("murk_version").count(),
         1,

@@ -231,7 +231,7 @@ window.addEventListener('load', async () => {
   const switched = imgs.filter(i => i.getAttribute('src').includes('-none')).length;
   const percell = imgs.filter(i => i.getAttribute('src').endsWith('-none-cell.png')).length;
   const after = imgs.filter((i, k) => !ok[k]).map(i => i.getAttribute('src'));
-  const rows = [...document.querySelectorAll('#metrics tbody')].filter(b => !b.hidden).map(b => b.dataset.method + ':' + b.rows.length);
+  const rows = [...document.querySelectorAll('table.metrics tbody')].filter(b => !b.hidden).map(b => b.dataset.method + ':' + b.rows.length);
   const out = document.createElement('pre');
   out.id = 'probe';
   out.textContent = 'PRO' + 'BE images=' + imgs.length + ' broken=' + JSON.stringify(broken) + ' tables=' + tables.join(',') + ' switched=' + switched + ' percell=' + percell + ' after=' + JSON.stringify(after) + ' shown=' + rows.join(',') + ' E' + 'ND';
@@ -255,15 +255,39 @@ window.addEventListener('load', async () => {
     // One grid per figure (the switch picks its file), and 7 metrics plotted against λ.
     assert!(probe.starts_with("images=9 "), "{probe}");
     assert!(probe.contains("broken=[]"), "{probe}");
-    // provenance: 6 rows; parameters: 6 + the Z's scene (the shelf's is not rendered); metrics:
-    // header + 4 cells × 4 methods (three compensations and the medium-aware column).
+    // provenance: 6 rows; parameters: 6 + the Z's scene (the shelf's is not rendered); a numbers
+    // table per figure: header + its cells (1 and 3) × 4 methods (three compensations and the
+    // medium-aware column).
     assert!(
-        probe.contains("tables=provenance:6,parameters:7,metrics:17"),
+        probe.contains("tables=provenance:6,parameters:7,metrics-fig3a:5,metrics-fig4:13"),
         "{probe}"
     );
     assert!(
-        probe.contains("switched=9 percell=2 after=[] shown=none:4"),
+        probe.contains("switched=9 percell=2 after=[] shown=none:1,none:3"),
         "{probe}"
+    );
+    // Each figure's table leaves out the columns that are empty for it (Fig. 3a has one cell, no
+    // column; Fig. 4 one row; one seed gives no render error), and the grids carry no title that
+    // repeats the section's heading.
+    let table = |id: &str| {
+        let t = page.split(&format!("id=\"{id}\"")).nth(1).unwrap();
+        t.split("</thead>").next().unwrap().to_string()
+    };
+    let (fig3a, fig4) = (table("metrics-fig3a"), table("metrics-fig4"));
+    assert!(
+        fig3a.contains("<th>row</th>") && !fig3a.contains("<th>column</th>"),
+        "{fig3a}"
+    );
+    assert!(
+        fig4.contains("<th>column</th>") && !fig4.contains("<th>row</th>"),
+        "{fig4}"
+    );
+    assert!(!fig4.contains("render error"), "{fig4}");
+    // Provenance: rendering and the reconstruction and scoring each get their CPU time.
+    assert!(
+        page.contains("CPU time</th><td>rendering ")
+            && page.contains(" + reconstruction and scoring "),
+        "{page}"
     );
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -194,6 +194,8 @@ pub(crate) fn compute<T: Send>(
 
 #[pymodule]
 fn _murk(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // The library's messages name options as this front end spells them: keywords.
+    murk_core::spelling::set_front_end(murk_core::Spelling::Python);
     m.add_class::<capture::Capture>()?;
     m.add_function(wrap_pyfunction!(capture::read_capture, m)?)?;
     m.add_function(wrap_pyfunction!(capture::write_capture, m)?)?;

@@ -87,7 +87,7 @@ impl RenderArgs {
             grid: self.grid,
             bins: self.bins,
             set: self.set.clone(),
-            spelling: murk_render::Spelling::Python,
+            spelling: murk_core::Spelling::Python,
         };
         match &self.text {
             Some(text) => Scene::from_str(text, path, &ov),

@@ -1,11 +1,12 @@
 import math
 import os
+import subprocess
 
 import numpy as np
 import pytest
 
 import murk
-from conftest import SCENES
+from conftest import MURK, SCENES, needs_cli
 
 VOL = "-0.9:0.9:5,-0.9:0.9:5,1.5:2.5:5"
 
@@ -307,3 +308,36 @@ def test_a_mesh_the_scene_reads_is_never_replaced(tmp_path):
         murk.render(scene, grid=2, spp=1, checkpoint=mesh)
     assert "the checkpoint would replace the input" in one_line(e)
     assert mesh.read_text().startswith("v 0 0 1")
+
+
+def test_warnings_and_errors_name_keywords_not_flags(tmp_path):
+    # A window cut in the middle of the Z's echo, kept as it is: the library warns and suggests
+    # the option that handles it, spelled as Python takes it (the CLI spells it as its flag).
+    short = murk.synth("z:2.0", kind="laser-grid", wall_size=2, grid=8, bins=60, bin_width=0.01,
+                       start=3.5)
+    rec = murk.reconstruct(short, volume=VOL, window_end="keep")
+    strong = [w for w in rec.warnings if "ends while the signal is strong" in w]
+    assert strong and "window_end='keep'" in strong[0] and "--" not in strong[0], rec.warnings
+    # An import error names the keywords to give.
+    p = tmp_path / "scan.npy"
+    np.save(p, np.zeros((16, 4, 4), dtype=np.float32))
+    with pytest.raises(murk.InputError) as e:
+        murk.import_capture(p, axes="t,x,y", confocal=True)
+    msg = one_line(e)
+    assert "(wall_size)" in msg and "bin_width_ps or bin_width_m" in msg and "--" not in msg, msg
+    with pytest.raises(murk.UnsupportedError) as e:
+        murk.import_capture(p, axes="t,x,y")
+    msg = one_line(e)
+    assert "give confocal=True" in msg and "format preset" in msg and "--" not in msg, msg
+
+
+@needs_cli
+def test_the_cli_names_its_flags_for_the_same_warning(tmp_path):
+    short = murk.synth("z:2.0", kind="laser-grid", wall_size=2, grid=8, bins=60, bin_width=0.01,
+                       start=3.5)
+    murk.write_capture(tmp_path / "short.h5", short)
+    r = subprocess.run([str(MURK), "reconstruct", str(tmp_path / "short.h5"), "--out",
+                        str(tmp_path / "v.npy"), "--volume", VOL, "--window-end", "keep"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "drop --window-end keep" in r.stderr and "window_end=" not in r.stderr, r.stderr

@@ -32,6 +32,7 @@ mod progress;
 mod reconstruction;
 pub mod report;
 pub mod simd;
+pub mod spelling;
 mod truth;
 mod volume;
 pub mod window;
@@ -45,6 +46,7 @@ pub use named::Named;
 pub use points::{PointLayout, PointSet, RegularGrid};
 pub use progress::{NoProgress, Progress};
 pub use reconstruction::{Reconstruction, Reconstructor};
+pub use spelling::{Opt, Spelling};
 pub use truth::GroundTruth;
 pub use volume::{Axis, Volume};
 

@@ -63,8 +63,9 @@ impl EndReport {
     pub fn warning(&self) -> Option<String> {
         (self.trim_from_m.is_none() && self.level >= AUTO_LEVEL).then(|| {
             format!(
-                "the time window ends while the signal is strong ({:.0} % of the peak in its last 5 % of bins): expect a false surface at the far end (drop --window-end keep to handle it)",
-                100.0 * self.level
+                "the time window ends while the signal is strong ({:.0} % of the peak in its last 5 % of bins): expect a false surface at the far end (drop {} to handle it)",
+                100.0 * self.level,
+                crate::Opt::WindowEnd.set("keep")
             )
         })
     }

@@ -1,6 +1,6 @@
 //! A capture described in words, for `murk info` and logs.
 
-use murk_core::Capture;
+use murk_core::{Capture, Opt};
 
 fn side(name: &str, p: &murk_core::PointSet) -> String {
     let (nx, ny) = p.shape();
@@ -47,10 +47,14 @@ fn depth_axis(cap: &Capture) -> String {
         ""
     };
     if cap.scene_info.contains(crate::import::TIME_ZERO_NOT_WALL) {
-        "depth axis: t = 0 is not the wall (an unrectified scan), so depth is not path/2 here; f-k files: import with --tof".to_string()
+        format!(
+            "depth axis: t = 0 is not the wall (an unrectified scan), so depth is not path/2 here; f-k files: import with their tof grid ({})",
+            Opt::Tof
+        )
     } else if cap.scene_info.contains("medium_n:") {
         format!(
-            "depth axis: the scene lies inside a diffusive medium at z > {wall_z:+.3} m (its surface); light diffuses there, so depth is not path/2: reconstruct with --method bmm"
+            "depth axis: the scene lies inside a diffusive medium at z > {wall_z:+.3} m (its surface); light diffuses there, so depth is not path/2: reconstruct with {}",
+            Opt::Method.set("bmm")
         )
     } else if cap.kind() == murk_core::CaptureKind::Confocal {
         format!(
@@ -114,9 +118,9 @@ pub fn describe(cap: &Capture) -> Vec<String> {
         "window end: the last 5 % of bins carry {:.1} % of the summed histogram's peak{}",
         100.0 * level,
         if level >= murk_core::window::AUTO_LEVEL {
-            " (cut while strong: reconstructions taper it and clear the far voxels; see reconstruct --window-end)"
+            format!(" (cut while strong: reconstructions taper it and clear the far voxels; see {} of reconstruct)", Opt::WindowEnd)
         } else {
-            ""
+            String::new()
         }
     ));
     for (k, v) in crate::scene_info_summary(&cap.scene_info) {

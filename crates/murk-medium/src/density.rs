@@ -11,6 +11,7 @@ pub use height::HeightDensity;
 use crate::scene::{check_height_scale, stored_medium, StoredShape};
 use murk_core::{Capture, DVec3, Error, Result};
 use murk_recon::PathDensity;
+use murk_core::Opt;
 use murk_render::{Aabb, Segment, Spelling};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -50,29 +51,29 @@ impl DensityGiven {
         mu_t_given: bool,
         spelling: Spelling,
     ) -> Result<Along> {
-        let flag = |name: &str| spelling.flag(name);
+        let flag = |opt: Opt| opt.spelled(spelling);
         let given = match (&self.file, self.height_scale_m) {
             (Some(_), Some(_)) => {
                 return Err(Error::param(format!(
                     "{} and {} each give the medium's density; give one",
-                    flag("medium-density"),
-                    flag("height-scale")
+                    flag(Opt::MediumDensity),
+                    flag(Opt::HeightScale)
                 )))
             }
-            (Some(_), None) => Some("medium-density"),
-            (None, Some(_)) => Some("height-scale"),
+            (Some(_), None) => Some(Opt::MediumDensity),
+            (None, Some(_)) => Some(Opt::HeightScale),
             (None, None) => None,
         };
         if let Some(name) = given.filter(|_| !(compensates && mu_t_given)) {
             return Err(Error::param(format!(
                 "{} is read by {} with {} (σt where the density is 1); give both",
                 flag(name),
-                flag("compensate"),
-                flag("mu-t")
+                flag(Opt::Compensate),
+                flag(Opt::MuT)
             )));
         }
         if let Some(h) = self.height_scale_m {
-            check_height_scale(Some(h), &flag("height-scale"))?;
+            check_height_scale(Some(h), &flag(Opt::HeightScale))?;
         }
         if let Some(file) = &self.file {
             let region = stored_medium(cap)?.region;
@@ -87,7 +88,7 @@ impl DensityGiven {
         }
         if let Some(scale_m) = self.height_scale_m {
             let region = stored_medium(cap)?.region;
-            return Ok(height(region, scale_m, &flag("height-scale")));
+            return Ok(height(region, scale_m, &flag(Opt::HeightScale)));
         }
         // Captures that murk did not render, or rendered without a medium, keep the homogeneous
         // compensation they always had.
@@ -105,15 +106,15 @@ impl DensityGiven {
         let (why, give) = match (&stored.shape, mu_t_given) {
             (StoredShape::Grid { .. }, true) => (
                 "whose cells the capture does not hold",
-                format!("{} FILE.npy", flag("medium-density")),
+                format!("{} FILE.npy", flag(Opt::MediumDensity)),
             ),
             (StoredShape::Grid { .. }, false) => (
                 "and μt was estimated as one homogeneous value",
-                format!("{} and {} FILE.npy", flag("mu-t"), flag("medium-density")),
+                format!("{} and {} FILE.npy", flag(Opt::MuT), flag(Opt::MediumDensity)),
             ),
             _ => (
                 "and μt was estimated as one homogeneous value",
-                format!("{} (σt on the fog's floor)", flag("mu-t")),
+                format!("{} (σt on the fog's floor)", flag(Opt::MuT)),
             ),
         };
         Ok(Along {

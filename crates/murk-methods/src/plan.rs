@@ -107,7 +107,7 @@ impl ReconPlan {
                 let shortest_m = shortest_path_m(&geometry, v);
                 let open_m = shortest_m - GATE_MARGIN_EDGES * edge_m;
                 if open_m >= geometry.time.end_m() {
-                    // Blaming the gate would send the user to --gate; the volume is what is out of reach.
+                    // Blaming the gate would send the user to the gate option; the volume is what is out of reach.
                     return Err(Error::param(format!(
                         "the volume lies beyond the capture's window: its nearest voxel is {shortest_m:.3} m of path away, the window ends at {:.3} m (after the time offset); choose a volume nearer the wall",
                         geometry.time.end_m()
@@ -281,8 +281,9 @@ fn near_face_warning(rec: &Reconstruction, gated: &GateReport) -> Option<String>
     let near = vol.z.start.min(vol.z.end);
     (gated.open_m.is_none() && vol.z.n > 2 && (p[2] - near).abs() < 1e-9).then(|| {
         format!(
-            "the brightest voxel lies on the volume's nearest plane (z = {} m): if the capture is in a medium, that is its backscatter near the relay; start the volume further away or fade out the early paths with a gate (--gate PATH_M)",
-            murk_core::short(near)
+            "the brightest voxel lies on the volume's nearest plane (z = {} m): if the capture is in a medium, that is its backscatter near the relay; start the volume further away or fade out the early paths with a gate ({})",
+            murk_core::short(near),
+            murk_core::Opt::Gate.set("PATH_M")
         )
     })
 }

@@ -18,38 +18,22 @@ pub struct Overrides {
     pub spelling: Spelling,
 }
 
-/// Where overrides come from: the command line's flags or the Python package's keywords.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Spelling {
-    #[default]
-    Cli,
-    Python,
+pub use murk_core::Spelling;
+
+/// One override as the user wrote it: `--grid 64` or `grid=64`.
+fn quote(spelling: Spelling, name: &str, value: &str) -> String {
+    match spelling {
+        Spelling::Cli => format!("--{name} {value}"),
+        Spelling::Python if name == "set" => format!("set item {value:?}"),
+        Spelling::Python => format!("{name}={value}"),
+    }
 }
 
-impl Spelling {
-    /// How the user gives the setting `name` (a flag's name without its dashes): `--mu-t` or `mu_t`.
-    pub fn flag(self, name: &str) -> String {
-        match self {
-            Spelling::Cli => format!("--{name}"),
-            Spelling::Python => name.replace('-', "_"),
-        }
-    }
-
-    /// One override as the user wrote it: `--grid 64` or `grid=64`.
-    fn quote(self, name: &str, value: &str) -> String {
-        match self {
-            Spelling::Cli => format!("--{name} {value}"),
-            Spelling::Python if name == "set" => format!("set item {value:?}"),
-            Spelling::Python => format!("{name}={value}"),
-        }
-    }
-
-    /// How to give one more `set` entry.
-    fn one_set(self) -> &'static str {
-        match self {
-            Spelling::Cli => "give one KEY=VALUE per --set",
-            Spelling::Python => "give one KEY=VALUE per item of set",
-        }
+/// How to give one more `set` entry.
+fn one_set(spelling: Spelling) -> &'static str {
+    match spelling {
+        Spelling::Cli => "give one KEY=VALUE per --set",
+        Spelling::Python => "give one KEY=VALUE per item of set",
     }
 }
 
@@ -58,7 +42,7 @@ impl Overrides {
     pub(crate) fn assignments(&self) -> Result<Vec<(String, Value, String)>, String> {
         let mut out = Vec::new();
         let quote = |name: &str, value: &dyn std::fmt::Display| {
-            self.spelling.quote(name, &value.to_string())
+            quote(self.spelling, name, &value.to_string())
         };
         // TOML integers are i64: a larger count is refused, not wrapped to a negative one.
         let int = |n: usize, name: &str| {
@@ -91,7 +75,7 @@ impl Overrides {
                 };
                 return Err(format!(
                     "{shown}: the value spans lines; {}",
-                    self.spelling.one_set()
+                    one_set(self.spelling)
                 ));
             }
             // One setting from two places: whichever came last would win unseen.

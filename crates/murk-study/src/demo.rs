@@ -1,9 +1,10 @@
 //! The whole pipeline on a built-in scene, in seconds, with pictures to look at (`murk demo`).
 
+use crate::report::page;
 use murk_core::{Axis, DVec3, Progress, Result, TimeAxis, Volume};
 use murk_recon::{PfForm, PfParams};
 use murk_synth::{add_first_bounce, CaptureLayout, LayoutKind, SynthOptions, Target};
-use murk_view::pictures;
+use murk_view::{pictures, write_grid_png, FigureGrid};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -79,30 +80,26 @@ pub fn demo(dir: &Path, progress: &dyn Progress) -> Result<Demo> {
     let t1 = Instant::now();
     let rec = murk_recon::reconstruct(&cap, &volume, &PfParams::default(), PfForm::Fast, progress)?;
     let recon_s = t1.elapsed().as_secs_f64();
-    let mut table: Vec<(String, String)> = crate::report::run_provenance()
+    let provenance: Vec<(String, String)> = crate::report::run_provenance()
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect();
-    // The provenance above already names murk's version; the summary's own row would repeat it.
-    table.extend(
+    let mut params = vec![("scene".to_string(), format!("planar Z letter (0.4 m) {LETTER_DEPTH_M} m behind a 1 m × 1 m wall, 64 × 64 laser points, one SPAD point at the centre, 1024 bins of 3 mm"))];
+    // The provenance already names murk's version; the summary's own row would repeat it.
+    params.extend(
         rec.summary(&capture.display().to_string(), cap.kind(), recon_s)
             .into_iter()
             .filter(|(k, _)| k != "murk_version"),
     );
-    table.insert(4, ("scene".into(), format!("planar Z letter (0.4 m) {LETTER_DEPTH_M} m behind a 1 m × 1 m wall, 64 × 64 laser points, one SPAD point at the centre, 1024 bins of 3 mm")));
-    table.push((
+    params.push((
         "synthesis + capture write seconds".into(),
         format!("{synth_s:.3}"),
     ));
     let volume_path = dir.join("volume.npy");
+    let table: Vec<(String, String)> = provenance.iter().chain(&params).cloned().collect();
     murk_io::write_volume(&volume_path, &volume, &rec.intensity, &table)?;
-    let pics = pictures::write_views(dir, &volume, &rec.intensity)?;
-    let index = pictures::write_index(
-        dir,
-        "murk demo: Phasor Fields reconstruction of a hidden Z",
-        &table,
-        &pics,
-    )?;
+    let views = pictures::write_views(dir, &volume, &rec.intensity)?;
+    let index = write_page(dir, &volume, &rec.intensity, &provenance, &params, &views)?;
     Ok(Demo {
         capture,
         volume: volume_path,
@@ -111,4 +108,66 @@ pub fn demo(dir: &Path, progress: &dyn Progress) -> Result<Demo> {
         synth_s,
         recon_s,
     })
+}
+
+/// The demo's page, in the study report's look: provenance first, the three projections as figure
+/// grids of one cell each (spatial axes in metres, named, and a colour bar, as the report's figures),
+/// the depth map, then the reconstruction's parameters. `views` are the pictures written beside.
+fn write_page(
+    dir: &Path,
+    volume: &Volume,
+    intensity: &[f32],
+    provenance: &[(String, String)],
+    params: &[(String, String)],
+    views: &[(PathBuf, String)],
+) -> Result<PathBuf> {
+    let mut h = page::head(
+        "murk demo",
+        "murk demo: Phasor Fields reconstruction of a hidden Z",
+    );
+    h.push_str(&page::key_values("provenance", provenance));
+    h.push_str("<h2>Reconstruction</h2>\n");
+    let v = murk_view::views(volume, intensity);
+    for (name, plane, caption) in [
+        (
+            "front-axes.png",
+            &v.front,
+            "front: the maximum along depth, seen from the wall (+x on the left)",
+        ),
+        (
+            "top-axes.png",
+            &v.top,
+            "top: the maximum along y, depth growing downwards",
+        ),
+        (
+            "side-axes.png",
+            &v.side,
+            "side: the maximum along x, depth growing to the right",
+        ),
+    ] {
+        let grid = FigureGrid {
+            title: String::new(),
+            row_labels: vec![],
+            col_labels: vec![],
+            cells: vec![vec![Some(plane)]],
+            shared_scale: false,
+        };
+        write_grid_png(&dir.join(name), &grid, 320)?;
+        h.push_str(&page::figure("view", &page::img(name, caption), caption));
+    }
+    // The depth map's colours are depths, not intensities: drawn as `murk reconstruct --pictures`
+    // draws it, its range in the caption.
+    if let Some((path, caption)) = views.iter().find(|(p, _)| p.ends_with("depth.png")) {
+        let name = path
+            .file_name()
+            .map_or("depth.png".into(), |n| n.to_string_lossy());
+        h.push_str(&page::figure(
+            "view",
+            &page::img(&name, "depth map"),
+            caption,
+        ));
+    }
+    h.push_str("<h2>Parameters</h2>\n");
+    h.push_str(&page::key_values("parameters", params));
+    page::write(dir, h)
 }

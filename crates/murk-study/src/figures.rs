@@ -82,6 +82,6 @@ pub(crate) fn grid_plane(columns: &[Vec<Option<&Reconstruction>>], extents: Stri
         height: h,
         values,
         extents,
-        axes_m: None,
+        axes: None,
     }
 }

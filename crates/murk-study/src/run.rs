@@ -3,7 +3,7 @@
 
 use crate::metrics::{self, IouScores};
 use crate::plan::{CaptureJob, Cell, Format, SceneKind, StudyPlan};
-use murk_core::{Capture, Error, GroundTruth, Result, Volume};
+use murk_core::{short, Capture, Error, GroundTruth, Result, Volume};
 use murk_methods::{Method, Options, Request, VolumeSpec};
 use murk_recon::{Compensation, NoProgress, PfForm, PfParams, Wavelength};
 use murk_render::{merge, Outputs, StoredRender};
@@ -306,6 +306,10 @@ pub struct CellResult {
     pub tail_share: Vec<f64>,
     /// CPU seconds of the cell's renders (None where an external executor rendered them).
     pub cpu_s: Option<f64>,
+    /// CPU seconds this process spent reconstructing and scoring the cell (every method, every seed,
+    /// the medium estimate and the no-medium reference where this cell was the first to need them);
+    /// None where the platform gives no process CPU time.
+    pub scoring_cpu_s: Option<f64>,
     /// Relative L2 error of one seed's capture over the object window, estimated from pairs of seeds
     /// (median over pairs; None with one seed).
     pub render_rel_err: Option<f64>,
@@ -321,8 +325,9 @@ pub struct CellResult {
 /// and the paper's K with the *estimated* μt and α.
 pub const AWARE: &str = "aware";
 
-/// What progress calls each job: its first cell's label (later inserts win, hence the reversal),
-/// or for a sweep the row with every albedo it renders, not the first cell's one.
+/// What progress calls each job: its first cell's label (later inserts win, hence the reversal); for
+/// a sweep the row with every albedo it renders, not the first cell's one; for one capture that
+/// several cells of a figure reconstruct (Fig. 4's three λ) the capture's medium and those cells.
 pub fn job_labels(plan: &StudyPlan) -> HashMap<&str, String> {
     plan.cells
         .iter()
@@ -339,7 +344,26 @@ pub fn job_labels(plan: &StudyPlan) -> HashMap<&str, String> {
                             &format!("α = {}", all.join(", ")),
                         )
                     }
-                    _ => c.label(),
+                    _ => {
+                        let serves: Vec<&str> = plan
+                            .cells
+                            .iter()
+                            .filter(|o| o.figure == c.figure && o.captures.contains(id))
+                            .map(|o| o.col.as_str())
+                            .collect();
+                        if serves.len() > 1 {
+                            let m = &job.medium;
+                            let mut what =
+                                format!("μt = {} α = {}", short(m.mu_t_per_m), short(m.albedo));
+                            if m.g != 0.0 {
+                                what.push_str(&format!(" g = {}", short(m.g)));
+                            }
+                            let what = format!("{what}, one capture for {}", serves.join(", "));
+                            crate::plan::cell_label(c.figure, &c.row, &what)
+                        } else {
+                            c.label()
+                        }
+                    }
                 };
                 (job.id.as_str(), label)
             })
@@ -407,6 +431,7 @@ pub fn evaluate(plan: &StudyPlan, dir: &Path, obs: &dyn Observer) -> Result<Vec<
             plan.cells.len()
         );
         obs.event(Event::Step(&label));
+        let cpu0_s = murk_core::process::cpu_seconds();
         let fmt = Format::of(cell.scene, plan.scale);
         let volume = Volume::parse(&fmt.volume)?;
         let scene = crate::plan::load_scene(
@@ -493,11 +518,15 @@ pub fn evaluate(plan: &StudyPlan, dir: &Path, obs: &dyn Observer) -> Result<Vec<
                     .map(|s| s / job.capture_ids().len() as f64)
             })
             .sum::<Option<f64>>();
+        let scoring_cpu_s = cpu0_s
+            .zip(murk_core::process::cpu_seconds())
+            .map(|(a, b)| b - a);
         results.push(CellResult {
             cell: cell.clone(),
             voxel_dz_m: volume.z.step(),
             tail_share: tails,
             cpu_s,
+            scoring_cpu_s,
             render_rel_err: (!pair_errors.is_empty()).then(|| metrics::median(&pair_errors)),
             by_compensation: by_comp
                 .into_iter()
@@ -699,24 +728,46 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
-    /// A row of Fig. 3b renders five albedos at once: its progress names all five, not the first.
-    #[test]
-    fn a_sweeps_label_names_every_albedo() {
-        let plan = StudyPlan::new(&crate::plan::StudyOptions {
+    /// A quick-scale plan of `figure`'s cells that match `cells` (all when empty), one seed.
+    fn quick_plan(figure: crate::plan::Figure, cells: &[&str]) -> StudyPlan {
+        StudyPlan::new(&crate::plan::StudyOptions {
             scale: crate::plan::Scale::Quick,
-            only: vec![crate::plan::Figure::Fig3b],
-            cells: vec!["μt = 2".into()],
+            only: vec![figure],
+            cells: cells.iter().map(|c| c.to_string()).collect(),
             seeds: 1,
             shards: 1,
             spp: Some(8),
             scenes_dir: Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes"),
         })
-        .unwrap();
+        .unwrap()
+    }
+
+    /// A row of Fig. 3b renders five albedos at once: its progress names all five, not the first.
+    #[test]
+    fn a_sweeps_label_names_every_albedo() {
+        let plan = quick_plan(crate::plan::Figure::Fig3b, &["μt = 2"]);
         let labels = job_labels(&plan);
         let sweep = plan.captures.iter().find(|j| j.albedos.len() == 5).unwrap();
         assert_eq!(
             labels[sweep.id.as_str()],
             "fig3b μt = 2 α = 0.15, 0.33, 0.5, 0.67, 0.83"
+        );
+    }
+
+    /// Fig. 4's three λ reconstruct one capture: its progress says what that capture is (the fog it
+    /// renders) and which cells it serves, not the first cell's λ.
+    #[test]
+    fn a_capture_shared_by_three_wavelengths_is_named_by_its_medium() {
+        let plan = quick_plan(crate::plan::Figure::Fig4, &[]);
+        let labels = job_labels(&plan);
+        let fog = plan
+            .captures
+            .iter()
+            .find(|j| j.medium.mu_t_per_m > 0.0)
+            .unwrap();
+        assert_eq!(
+            labels[fog.id.as_str()],
+            "fig4 μt = 1 α = 0.83, one capture for λ = λ0, λ = 2λ0, λ = 3λ0"
         );
     }
 }

@@ -1,7 +1,7 @@
 //! Labelled figure grids, laid out like a paper's figures: a title on top, a label above each column,
 //! a label left of each row, and one false-coloured plane per cell, written as PNG.
 
-use crate::pictures::{colour, Plane};
+use crate::pictures::{colour, MetreAxis, Plane};
 use crate::{draw_error, ensure_font, name_target, FAMILY};
 use murk_core::{Error, Result};
 use plotters::prelude::*;
@@ -47,8 +47,9 @@ pub struct GridLayout {
     /// Top edge of the colour bar under the cells (from `left`, as wide as the cells, `font_px`
     /// high), with "0" and [`bar_top_label`] under its ends.
     pub bar_top: u32,
-    /// Whether the cells' planes carry metre axes, drawn as coordinates under the bottom row's cells
-    /// and right of the last column's (the bands for them are reserved only then).
+    /// Whether the cells' planes carry metre axes, drawn as named coordinates ("x (m)" between the
+    /// end values) under the bottom row's cells and right of the last column's (the bands for them
+    /// are reserved only then).
     pub axes: bool,
 }
 
@@ -76,13 +77,16 @@ fn planes<'a>(grid: &'a FigureGrid) -> impl Iterator<Item = &'a Plane> {
     grid.cells.iter().flatten().flatten().copied()
 }
 
-/// The y coordinates (top, bottom) written right of the grid, from its first plane with axes.
-fn y_labels(grid: &FigureGrid) -> Option<(String, String)> {
-    let [_, (top, bottom)] = planes(grid).find_map(|p| p.axes_m)?;
-    Some((
-        format!("{} m", metres(top)),
-        format!("{} m", metres(bottom)),
-    ))
+/// An axis's name as the grid writes it between the end values: "x (m)".
+fn axis_name(a: &MetreAxis) -> String {
+    format!("{} (m)", a.name)
+}
+
+/// The texts written right of the grid (the rows' axis: first, last, name), from its first plane
+/// with axes.
+fn row_axis_texts(grid: &FigureGrid) -> Option<[String; 3]> {
+    let [_, rows] = planes(grid).find_map(|p| p.axes)?;
+    Some([metres(rows.first_m), metres(rows.last_m), axis_name(&rows)])
 }
 
 impl GridLayout {
@@ -184,12 +188,15 @@ pub fn grid_layout(grid: &FigureGrid, cell_px: u32) -> Result<GridLayout> {
     let (left, top) = (margin + row_band, margin + title_band + col_band);
     let cells_w = cols as u32 * (cell_px + gap) - gap;
     let cells_h = rows as u32 * (cell_px + gap) - gap;
-    let axes = planes(grid).next().is_some() && planes(grid).all(|p| p.axes_m.is_some());
-    let (x_band, y_band) = match y_labels(grid).filter(|_| axes) {
-        Some((a, b)) => (
-            font_px * 3 / 2,
-            text_width(&a, font_px)?.max(text_width(&b, font_px)?) + font_px / 2,
-        ),
+    let axes = planes(grid).next().is_some() && planes(grid).all(|p| p.axes.is_some());
+    let (x_band, y_band) = match row_axis_texts(grid).filter(|_| axes) {
+        Some(texts) => {
+            let mut w = 0;
+            for t in &texts {
+                w = w.max(text_width(t, font_px)?);
+            }
+            (font_px * 3 / 2, w + font_px / 2)
+        }
         None => (0, 0),
     };
     let bar_labels_w = text_width(bar_top_label(grid.shared_scale), font_px)?
@@ -425,8 +432,9 @@ fn draw_labels(
     root.present().map_err(err)
 }
 
-/// The metre coordinates of the planes' edges: x under each bottom cell's plane, y right of the last
-/// column's planes.
+/// The metre coordinates of the planes' edges with their axes' names: the columns' axis under each
+/// bottom cell's plane (end values at its edges, "x (m)" between), the rows' right of the last
+/// column's planes (end values at its top and bottom, "y (m)" between).
 fn draw_axes<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     grid: &FigureGrid,
@@ -437,26 +445,34 @@ fn draw_axes<DB: DrawingBackend>(
     let last_col = lay.cols as usize - 1;
     for (c, plane) in grid.cells[last_row].iter().enumerate() {
         let Some(p) = plane else { continue };
-        let Some([(x0, x1), _]) = p.axes_m else {
+        let Some([a, _]) = p.axes else {
             continue;
         };
         let (ox, oy, sw, sh) = plane_rect(lay.cell_origin(last_row, c), lay.cell_px, p);
         let y = (oy + sh + lay.font_px * 3 / 4) as i32;
-        for (v, x, h) in [(x0, ox, HPos::Left), (x1, ox + sw, HPos::Right)] {
+        for (text, x, h) in [
+            (metres(a.first_m), ox, HPos::Left),
+            (axis_name(&a), ox + sw / 2, HPos::Center),
+            (metres(a.last_m), ox + sw, HPos::Right),
+        ] {
             let style = label.pos(Pos::new(h, VPos::Center));
-            root.draw(&Text::new(format!("{} m", metres(v)), (x as i32, y), style))?;
+            root.draw(&Text::new(text, (x as i32, y), style))?;
         }
     }
     for (r, row) in grid.cells.iter().enumerate() {
         let Some(p) = row[last_col] else { continue };
-        let Some([_, (y0, y1)]) = p.axes_m else {
+        let Some([_, a]) = p.axes else {
             continue;
         };
         let (ox, oy, sw, sh) = plane_rect(lay.cell_origin(r, last_col), lay.cell_px, p);
         let x = (ox + sw + lay.font_px / 3) as i32;
-        for (v, y, vp) in [(y0, oy, VPos::Top), (y1, oy + sh, VPos::Bottom)] {
+        for (text, y, vp) in [
+            (metres(a.first_m), oy, VPos::Top),
+            (axis_name(&a), oy + sh / 2, VPos::Center),
+            (metres(a.last_m), oy + sh, VPos::Bottom),
+        ] {
             let style = label.pos(Pos::new(HPos::Left, vp));
-            root.draw(&Text::new(format!("{} m", metres(v)), (x, y as i32), style))?;
+            root.draw(&Text::new(text, (x, y as i32), style))?;
         }
     }
     Ok(())
@@ -486,7 +502,7 @@ mod tests {
             height: h,
             values,
             extents: String::new(),
-            axes_m: None,
+            axes: None,
         }
     }
 
@@ -662,9 +678,14 @@ mod tests {
         let dir = tmp_dir("shared");
         let mut bright = plane(4, 4, |_, _| 2.0);
         let mut faint = plane(4, 2, |_, _| 1.0);
-        bright.axes_m = Some([(1.0, -1.0), (1.0, -1.0)]);
+        let axis = |name, first_m, last_m| MetreAxis {
+            name,
+            first_m,
+            last_m,
+        };
+        bright.axes = Some([axis("x", 1.0, -1.0), axis("y", 1.0, -1.0)]);
         // 4 × 2 samples 1 m and 2 m apart: 4 m × 4 m, so drawn square despite the counts.
-        faint.axes_m = Some([(1.5, -1.5), (1.0, -1.0)]);
+        faint.axes = Some([axis("x", 1.5, -1.5), axis("y", 1.0, -1.0)]);
         let cell = 64;
         for shared in [false, true] {
             let grid = FigureGrid {
@@ -697,6 +718,36 @@ mod tests {
             let range = &img.texts.iter().find(|(k, _)| k == "murk:range").unwrap().1;
             assert_eq!(range.contains("the grid's maximum"), shared, "{range}");
         }
+        // The axes' names, between the end values: "x (m)" under the middle of the bottom cell's
+        // plane, "y (m)" right of the last column at mid-height (cells large enough to part them).
+        let cell = 200;
+        let grid = FigureGrid {
+            title: String::new(),
+            row_labels: vec![],
+            col_labels: vec![],
+            cells: vec![vec![Some(&bright)]],
+            shared_scale: true,
+        };
+        let path = dir.join("names.png");
+        write_grid_png(&path, &grid, cell).unwrap();
+        let lay = grid_layout(&grid, cell).unwrap();
+        let img = decode(&path);
+        let (x0, y0) = lay.cell_origin(0, 0);
+        let (mid, f) = (cell / 2, lay.font_px);
+        let name_below = img.ink(x0 + mid - f, x0 + mid + f, y0 + cell + 1, lay.bar_top - 1);
+        let gap_below = img.ink(
+            x0 + mid - 3 * f,
+            x0 + mid - 2 * f,
+            y0 + cell + 1,
+            lay.bar_top - 1,
+        );
+        let name_right = img.ink(x0 + cell + 1, lay.width, y0 + mid - f / 2, y0 + mid + f / 2);
+        let gap_right = img.ink(x0 + cell + 1, lay.width, y0 + 2 * f, y0 + 3 * f);
+        assert!(
+            name_below > 20 && gap_below == 0 && name_right > 20 && gap_right == 0,
+            "axis names: {name_below} (gap {gap_below}), {name_right} (gap {gap_right})"
+        );
+        assert_eq!(axis_name(&bright.axes.unwrap()[0]), "x (m)");
         assert_eq!(metres(-0.004), "0.00");
         assert_eq!(metres(-0.98), "−0.98");
         std::fs::remove_dir_all(&dir).unwrap();
@@ -784,7 +835,7 @@ mod tests {
             height: 3,
             values: vec![1.0; 4],
             extents: String::new(),
-            axes_m: None,
+            axes: None,
         };
         let mut g = good();
         g.cells[0][0] = Some(&broken);

@@ -23,7 +23,9 @@ pub mod pictures;
 pub mod plot;
 
 pub use grid::{bar_top_label, grid_layout, write_grid_png, FigureGrid, GridLayout};
-pub use pictures::{views, write_index, write_png, write_views, Plane, Views, PAGE_STYLE};
+pub use pictures::{
+    views, write_index, write_png, write_views, MetreAxis, Plane, Views, PAGE_STYLE,
+};
 pub use plot::{write_plot_png, write_plot_svg, LinePlot, Series, PLOT_SIZE};
 
 use murk_core::{Error, Result};

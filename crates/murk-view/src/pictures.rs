@@ -30,9 +30,34 @@ pub struct Plane {
     pub values: Vec<f32>,
     /// e.g. "columns: x from +0.98 m (left) to −0.98 m (right); rows: y from +0.98 m (top) to −0.98 m (bottom)".
     pub extents: String,
-    /// Coordinates (m) of the first and last column's samples and of the first and last row's; `None`
-    /// for a plane without one physical scale (a montage), drawn one square per value.
-    pub axes_m: Option<[(f64, f64); 2]>,
+    /// The columns' axis and the rows' (names and end coordinates); `None` for a plane without one
+    /// physical scale (a montage), drawn one square per value.
+    pub axes: Option<[MetreAxis; 2]>,
+}
+
+/// A plane's axis in metres: its name (`x`, `y`, `z`) and the coordinates of its first and last
+/// samples, in the order drawn (the front view's columns run from +x on the left to −x).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MetreAxis {
+    pub name: &'static str,
+    pub first_m: f64,
+    pub last_m: f64,
+}
+
+impl MetreAxis {
+    /// `axis` drawn from its end to its start when `reversed`.
+    pub fn of(name: &'static str, axis: &murk_core::Axis, reversed: bool) -> MetreAxis {
+        let (first_m, last_m) = if reversed {
+            (axis.end, axis.start)
+        } else {
+            (axis.start, axis.end)
+        };
+        MetreAxis {
+            name,
+            first_m,
+            last_m,
+        }
+    }
 }
 
 impl Plane {
@@ -40,11 +65,12 @@ impl Plane {
     /// equal extents is square. Without axes (or with a degenerate one), one square per value.
     pub fn aspect(&self) -> f64 {
         let by_count = self.width as f64 / self.height as f64;
-        let Some([(c0, c1), (r0, r1)]) = self.axes_m else {
+        let Some([c, r]) = self.axes else {
             return by_count;
         };
-        let pitch = |a: f64, b: f64, n: usize| (n > 1).then(|| (b - a).abs() / (n - 1) as f64);
-        match (pitch(c0, c1, self.width), pitch(r0, r1, self.height)) {
+        let pitch =
+            |a: MetreAxis, n: usize| (n > 1).then(|| (a.last_m - a.first_m).abs() / (n - 1) as f64);
+        match (pitch(c, self.width), pitch(r, self.height)) {
             (Some(dx), Some(dy)) if dx > 0.0 && dy > 0.0 => {
                 (dx * self.width as f64) / (dy * self.height as f64)
             }
@@ -117,9 +143,9 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
     }
     // Columns run from +x (left) to −x, rows from +y (top) to −y, depth from near to far.
     let (xs, ys, zs) = (
-        (vol.x.end, vol.x.start),
-        (vol.y.end, vol.y.start),
-        (vol.z.start, vol.z.end),
+        MetreAxis::of("x", &vol.x, true),
+        MetreAxis::of("y", &vol.y, true),
+        MetreAxis::of("z", &vol.z, false),
     );
     let cols_x = axis_text("columns: x", &vol.x, true, "left", "right");
     let rows_y = axis_text("rows: y", &vol.y, true, "top", "bottom");
@@ -131,7 +157,7 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
             height: ny,
             values: front,
             extents: format!("{cols_x}; {rows_y}"),
-            axes_m: Some([xs, ys]),
+            axes: Some([xs, ys]),
         },
         depth: Plane {
             width: nx,
@@ -141,21 +167,21 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
                 "{cols_x}; {rows_y}; colour: depth z from {:.3} m (dark) to {:.3} m (bright)",
                 vol.z.start, vol.z.end
             ),
-            axes_m: Some([xs, ys]),
+            axes: Some([xs, ys]),
         },
         top: Plane {
             width: nx,
             height: nz,
             values: top,
             extents: format!("{cols_x}; {rows_z}"),
-            axes_m: Some([xs, zs]),
+            axes: Some([xs, zs]),
         },
         side: Plane {
             width: nz,
             height: ny,
             values: side,
             extents: format!("{cols_z}; {rows_y}"),
-            axes_m: Some([zs, ys]),
+            axes: Some([zs, ys]),
         },
     }
 }
@@ -352,6 +378,14 @@ mod tests {
         assert!(views.depth.values[1].is_nan());
         assert_eq!(views.top.values[3], 5.0); // row = depth index 1, column 0 = +x
         assert_eq!(views.side.values[1], 5.0); // row 0 = +y, column = depth index 1
+                                               // The axes the grids write name the same orientation: the front view's first column is
+                                               // x = +1 (left), its first row y = +1 (top); the side view's columns run in depth.
+        let [cols, rows] = views.front.axes.unwrap();
+        assert_eq!((cols.name, cols.first_m, cols.last_m), ("x", 1.0, -1.0));
+        assert_eq!((rows.name, rows.first_m, rows.last_m), ("y", 1.0, -1.0));
+        let [cols, rows] = views.side.axes.unwrap();
+        assert_eq!((cols.name, cols.first_m, rows.name), ("z", 1.0, "y"));
+        assert_eq!(views.top.axes.unwrap()[1].name, "z");
         assert_eq!(colour(0.0), [0, 0, 4]);
         assert_eq!(colour(1.0), [252, 255, 164]);
     }

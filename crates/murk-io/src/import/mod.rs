@@ -21,7 +21,7 @@ mod presets;
 mod tests;
 
 use crate::mat::ArrayFile;
-use murk_core::{Capture, DVec3, Error, Limits, PointLayout, PointSet, Result, TimeAxis};
+use murk_core::{Capture, DVec3, Error, Limits, Opt, PointLayout, PointSet, Result, TimeAxis};
 use std::path::{Path, PathBuf};
 
 pub(crate) use presets::TIME_ZERO_NOT_WALL;
@@ -210,9 +210,11 @@ impl ImportOptions {
 /// geometry). Every error is one line naming the file.
 pub fn import(path: &Path, o: &ImportOptions) -> Result<Capture> {
     if o.tof.is_some() && o.layout != Layout::Preset(Preset::Fk) {
-        return Err(Error::param(
-            "a tof grid (--tof) belongs to the f-k dataset (--format fk)",
-        ));
+        return Err(Error::param(format!(
+            "a tof grid ({}) belongs to the f-k dataset ({})",
+            Opt::Tof,
+            Opt::Format.set("fk")
+        )));
     }
     match &o.layout {
         // The presets that carry their own wall points are read by `points`, the others as one array.
@@ -227,33 +229,41 @@ pub fn import(path: &Path, o: &ImportOptions) -> Result<Capture> {
 fn generic(path: &Path, g: &Generic, o: &ImportOptions) -> Result<Capture> {
     if !g.confocal {
         return Err(Error::Unsupported(format!(
-            "{}: generic imports read confocal scans only (give --confocal if this one is); for other layouts use a --format preset",
-            path.display()
+            "{}: generic imports read confocal scans only (give {} if this one is); for other layouts use a {} preset",
+            path.display(),
+            Opt::Confocal.on(),
+            Opt::Format
         )));
     }
     let mut axes = g.axes;
     axes.sort_by_key(|d| *d as u8);
     if axes != [Dim::T, Dim::X, Dim::Y] {
-        return Err(Error::param(
-            "--axes must name t, x and y once each (e.g. t,x,y)",
-        ));
+        return Err(Error::param(format!(
+            "{} must name t, x and y once each (e.g. t,x,y)",
+            Opt::Axes
+        )));
     }
     let (Some(side_m), Some(bin_width)) = (o.wall_size_m, o.bin_width) else {
-        return Err(Error::param(
-            "a generic import needs the scan side (--wall-size) and the bin width (--bin-width-ps or --bin-width-m)",
-        ));
+        return Err(Error::param(format!(
+            "a generic import needs the scan side ({}) and the bin width ({} or {})",
+            Opt::WallSize,
+            Opt::BinWidthPs,
+            Opt::BinWidthM
+        )));
     };
     let file = ArrayFile::open(path)?;
     if !g.var.is_empty() && matches!(file, ArrayFile::Npy(..)) {
         return Err(Error::param(format!(
-            "{}: a .npy file holds one unnamed array; --var names a variable of a MATLAB or HDF5 file",
-            path.display()
+            "{}: a .npy file holds one unnamed array; {} names a variable of a MATLAB or HDF5 file",
+            path.display(),
+            Opt::Var
         )));
     }
     if g.var.is_empty() && !matches!(file, ArrayFile::Npy(..)) {
         return Err(Error::param(format!(
-            "{}: give the array's name with --var (variables present: {})",
+            "{}: give the array's name with {} (variables present: {})",
             path.display(),
+            Opt::Var,
             file.names(path)?.join(", ")
         )));
     }
@@ -263,7 +273,11 @@ fn generic(path: &Path, g: &Generic, o: &ImportOptions) -> Result<Capture> {
         &g.var,
         &shape,
         g.axes,
-        "a generic import reads square scans (--wall-size is the side of both axes): check --axes",
+        &format!(
+            "a generic import reads square scans ({} is the side of both axes): check {}",
+            Opt::WallSize,
+            Opt::Axes
+        ),
     )?;
     let scan = Scan::new(path, &g.var, &shape, &data, g.axes, o.flip)?;
     let axes = g.axes.map(|d| format!("{d:?}").to_lowercase()).join(", ");

@@ -6,15 +6,16 @@ use super::presets::{check_container, positive, scalar};
 use super::{info_head, Dim, Flip, ImportOptions, Preset, Scan};
 use crate::mat::ArrayFile;
 use murk_core::{
-    short, Capture, DVec3, Error, Limits, Pairing, PointLayout, PointSet, Result, TimeAxis,
+    short, Capture, DVec3, Error, Limits, Opt, Pairing, PointLayout, PointSet, Result, TimeAxis,
 };
 use std::path::Path;
 
 pub(super) fn import(path: &Path, p: Preset, o: &ImportOptions) -> Result<Capture> {
     if o.wall_size_m.is_some() && p == Preset::Znlos {
-        return Err(Error::param(
-            "Z-NLOS files carry their wall points; --wall-size does not apply",
-        ));
+        return Err(Error::param(format!(
+            "Z-NLOS files carry their wall points; {} does not apply",
+            Opt::WallSize
+        )));
     }
     let file = ArrayFile::open(path)?;
     check_container(path, p, &file)?;
@@ -51,7 +52,11 @@ impl Walls {
             (None, None) => {
                 return Err(Error::format(
                     path,
-                    "no bin width in the file; give it with --bin-width-ps or --bin-width-m",
+                    format!(
+                        "no bin width in the file; give it with {} or {}",
+                        Opt::BinWidthPs,
+                        Opt::BinWidthM
+                    ),
                 ))
             }
         };
@@ -257,7 +262,7 @@ fn ahn(path: &Path, file: &ArrayFile, o: &ImportOptions) -> Result<Walls> {
         _ => {
             return Err(Error::format(
                 path,
-                "NLOSDATA has no usable l/s wall points; for a confocal scan give the scan side with --wall-size",
+                format!("NLOSDATA has no usable l/s wall points; for a confocal scan give the scan side with {}", Opt::WallSize),
             ))
         }
     };

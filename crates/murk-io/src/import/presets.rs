@@ -2,7 +2,7 @@
 
 use super::{BinWidth, Dim, Flip, Framing, ImportOptions, Scan};
 use crate::mat::ArrayFile;
-use murk_core::{Capture, Error, Result};
+use murk_core::{Capture, Error, Opt, Result};
 use std::path::Path;
 
 /// The public NLOS datasets murk reads. Each variant's doc states the dataset's published layout
@@ -311,7 +311,7 @@ pub(super) fn container(p: Preset) -> Container {
     }
 }
 
-/// The presets whose files come in `c`, as `--format a, b or c`.
+/// The presets whose files come in `c`, as `--format a, b or c` (in the front end's spelling).
 fn presets_in(c: Container) -> String {
     let names: Vec<&str> = Preset::ALL
         .iter()
@@ -319,8 +319,10 @@ fn presets_in(c: Container) -> String {
         .map(|p| p.name())
         .collect();
     match names.split_last() {
-        Some((last, rest)) if !rest.is_empty() => format!("--format {} or {last}", rest.join(", ")),
-        _ => format!("--format {}", names.join("")),
+        Some((last, rest)) if !rest.is_empty() => {
+            format!("{} {} or {last}", Opt::Format, rest.join(", "))
+        }
+        _ => format!("{} {}", Opt::Format, names.join("")),
     }
 }
 
@@ -334,8 +336,10 @@ pub(super) fn check_container(path: &Path, p: Preset, file: &ArrayFile) -> Resul
             return Err(Error::format(
                 path,
                 format!(
-                    "this is a .npy array, not a {} capture; read it with --var/--axes (the generic form)",
-                    p.name()
+                    "this is a .npy array, not a {} capture; read it with {}/{} (the generic form)",
+                    p.name(),
+                    Opt::Var,
+                    Opt::Axes
                 ),
             ))
         }
@@ -397,8 +401,9 @@ fn scan_side_m(path: &Path, file: &ArrayFile, side: Side, points: usize) -> Resu
             (None, None) => Err(Error::format(
                 path,
                 format!(
-                    "no variable '{var}' (half the scan side; variables present: {}); give the scan side with --wall-size",
-                    file.names(path)?.join(", ")
+                    "no variable '{var}' (half the scan side; variables present: {}); give the scan side with {}",
+                    file.names(path)?.join(", "),
+                    Opt::WallSize
                 ),
             )),
         },
@@ -435,9 +440,10 @@ fn by_stem(path: &Path, scenes: &[(&str, f64)]) -> Result<f64> {
         .map(|s| s.1)
         .ok_or_else(|| {
             Error::param(format!(
-                "{}: unknown scene '{stem}' (known: {}); give its scan side with --wall-size",
+                "{}: unknown scene '{stem}' (known: {}); give its scan side with {}",
                 path.display(),
-                scenes.iter().map(|s| s.0).collect::<Vec<_>>().join(", ")
+                scenes.iter().map(|s| s.0).collect::<Vec<_>>().join(", "),
+                Opt::WallSize
             ))
         })
 }
@@ -474,8 +480,9 @@ pub(super) fn import(path: &Path, p: Preset, s: &Spec, o: &ImportOptions) -> Res
         &shape,
         s.axes,
         &format!(
-            "{} scans are square: is this a file of another dataset (--format)?",
-            p.name()
+            "{} scans are square: is this a file of another dataset ({})?",
+            p.name(),
+            Opt::Format
         ),
     )?;
     let flip = s.flip.xor(o.flip);
@@ -501,9 +508,10 @@ pub(super) fn import(path: &Path, p: Preset, s: &Spec, o: &ImportOptions) -> Res
     }
     if let Some(tof) = &o.tof {
         let BinWidth::Ps(bin_ps) = bin_width else {
-            return Err(Error::param(
-                "--tof needs the bin width in ps (tofgrid is in ps)",
-            ));
+            return Err(Error::param(format!(
+                "{} needs the bin width in ps (tofgrid is in ps)",
+                Opt::Tof
+            )));
         };
         rectify(&mut scan, tof, s.axes, flip, bin_ps)?;
         extra += &format!(

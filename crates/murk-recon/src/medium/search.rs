@@ -43,9 +43,11 @@ impl Found {
         );
         match &self.volume {
             Some(v) => format!(
-                "{over}; depth range z {}:{} m kept (--volume or --depth-search off to choose)",
+                "{over}; depth range z {}:{} m kept ({} or {} to choose)",
                 murk_core::short(v.z.start),
-                murk_core::short(v.z.end)
+                murk_core::short(v.z.end),
+                murk_core::Opt::Volume,
+                murk_core::Opt::DepthSearch.set("off")
             ),
             None => format!("{over}: no plane stands out, the default volume kept"),
         }

@@ -96,7 +96,10 @@ pub fn merge(parts: &[(PathBuf, Capture)]) -> Result<Capture> {
         let (i, n) = shard.ok_or_else(|| {
             Error::format(
                 path,
-                "not a shard of `murk render --shard` (no `shard: i/N` in scene_info)",
+                format!(
+                    "not a shard of a render made with {} (no `shard: i/N` in scene_info)",
+                    murk_core::Opt::Shard
+                ),
             )
         })?;
         check_shard(i, n).map_err(|e| Error::format(path, format!("{e} in scene_info")))?;

@@ -52,8 +52,9 @@ impl Outputs<'_> {
                 let ckpt = checkpoint_path(out);
                 match inputs.iter().find(|i| murk_io::same_target(i, &ckpt)) {
                     Some(input) => Err(Error::param(format!(
-                        "{}: is the render's checkpoint for --out {}; choose another output",
+                        "{}: is the render's checkpoint for {} {}; choose another output",
                         input.display(),
+                        murk_core::Opt::Out,
                         out.display()
                     ))),
                     None => Ok(()),

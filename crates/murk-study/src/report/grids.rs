@@ -46,7 +46,8 @@ pub(super) fn write_figures(results: &[CellResult], dir: &Path) -> Result<Vec<Sw
                 .collect();
             for (tag, shared, _) in COLOUR_SCALES {
                 let grid = FigureGrid {
-                    title: format!("{} — {}", fig.caption(), method_label(method)),
+                    // The page's section heading names the figure; the picture says which method.
+                    title: method_label(method),
                     row_labels: rows.iter().map(|s| s.to_string()).collect(),
                     col_labels: cols.iter().map(|s| s.to_string()).collect(),
                     cells: planes.clone(),

@@ -3,7 +3,7 @@
 
 use super::provenance::provenance;
 use super::{
-    default_method, fill, findings, io, method_label, methods, scored, Switched, COLOUR_SCALES,
+    default_method, fill, findings, method_label, methods, page, scored, Switched, COLOUR_SCALES,
     METRICS,
 };
 use crate::format::{esc, show, show_stat, stat};
@@ -43,11 +43,6 @@ murkSwitch();
 </script>
 ";
 
-const STYLE: &str = "<style>#controls{position:sticky;top:0;background:#f4f4f4;border-bottom:1px solid #bbb;padding:.4em .6em;z-index:1}\
-figure{margin:.5em 0}.grid img{max-width:100%}\
-.plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(380px,1fr));gap:4px}.plots img{width:100%}\
-li{margin:.3em 0}</style>";
-
 pub(super) fn write_html(
     plan: &StudyPlan,
     results: &[CellResult],
@@ -57,15 +52,12 @@ pub(super) fn write_html(
 ) -> Result<PathBuf> {
     let methods = methods(results);
     let shown = default_method(&methods);
-    let mut h = format!(
-        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>murk: the paper's study</title>\n{}{STYLE}</head><body>\n\
-         <h1>Phasor Fields in scattering media: the study of Luesia et al., rerun by murk</h1>\n<table id=\"provenance\">",
-        murk_view::PAGE_STYLE
+    let mut h = page::head(
+        "murk: the paper's study",
+        "Phasor Fields in scattering media: the study of Luesia et al., rerun by murk",
     );
-    for (k, v) in provenance(plan, results) {
-        let _ = write!(h, "<tr><th>{k}</th><td>{}</td></tr>", esc(&v));
-    }
-    h.push_str("</table>\n<h2>Findings</h2>\n<p>Each claim of the paper that this run's cells can test, with the numbers it rests on (paper's K, mean over this run's seeds at its spp) and the verdict they give. Few samples make verdicts noisy; docs/study.md in murk's repository says which hold at the scales it reports.</p>\n<ul id=\"findings\">\n");
+    h.push_str(&page::key_values("provenance", &provenance(plan, results)));
+    h.push_str("<h2>Findings</h2>\n<p>Each claim of the paper that this run's cells can test, with the numbers it rests on (paper's K, mean over this run's seeds at its spp) and the verdict they give. Few samples make verdicts noisy; docs/study.md in murk's repository says which hold at the scales it reports.</p>\n<ul id=\"findings\">\n");
     let found = findings(results);
     if found.is_empty() {
         h.push_str("<li>No claim of the paper can be tested with this run's cells alone: each needs a figure's no-medium cell, a row or column of cells, or a pair of them.</li>\n");
@@ -114,11 +106,7 @@ pub(super) fn write_html(
             esc(fig.caption())
         );
         for g in grids {
-            let _ = writeln!(
-                h,
-                "<figure class=\"grid\">{}</figure>",
-                img(&g.pattern, &g.title)
-            );
+            h.push_str(&page::figure("grid", &img(&g.pattern, &g.title), ""));
         }
         if !graphs.is_empty() {
             h.push_str("<div class=\"plots\">");
@@ -161,36 +149,13 @@ pub(super) fn write_html(
             volume_words(&f.volume)
         );
     }
-    h.push_str("</table>\n<h2>Numbers per cell (mean ± spread over seeds)</h2>\n<table id=\"metrics\"><thead><tr><th>figure</th><th>row</th><th>column</th><th>tail share</th><th>CPU s</th><th>render error</th>");
-    for m in &METRICS {
-        let _ = write!(h, "<th>{}</th>", esc(m.label));
-    }
-    h.push_str("</tr></thead>\n");
-    for method in &methods {
-        let _ = writeln!(h, "<tbody data-method=\"{method}\">");
-        for r in results {
-            let Some((_, scores, _)) = scored(r, method) else {
-                continue;
-            };
-            let _ = write!(
-                h,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
-                r.cell.figure.name(),
-                esc(&r.cell.row),
-                esc(&r.cell.col),
-                show(metrics::mean_std(&r.tail_share).0),
-                r.cpu_s.map_or("external".into(), show),
-                r.render_rel_err
-                    .map_or("—".into(), |e| format!("{} %", show(100.0 * e)))
-            );
-            for m in &METRICS {
-                let _ = write!(h, "<td>{}</td>", show_stat(stat(scores, m.get)));
-            }
-            h.push_str("</tr>\n");
+    h.push_str("</table>\n<h2>Numbers per cell (mean ± spread over seeds)</h2>\n");
+    for fig in Figure::ALL {
+        let cells: Vec<&CellResult> = results.iter().filter(|r| r.cell.figure == fig).collect();
+        if !cells.is_empty() {
+            numbers_table(&mut h, fig, &cells, &methods);
         }
-        h.push_str("</tbody>\n");
     }
-    h.push_str("</table>\n");
     let shelf: Vec<&CellResult> = results
         .iter()
         .filter(|r| r.cell.scene == SceneKind::Shelf)
@@ -224,10 +189,72 @@ pub(super) fn write_html(
     }
     h.push_str("</ul>\n<p>Raw numbers: <a href=\"metrics.csv\">metrics.csv</a>, <a href=\"objects.csv\">objects.csv</a>; the task list: <a href=\"plan.json\">plan.json</a>.</p>\n");
     h.push_str(SWITCH_JS);
-    h.push_str("</body></html>\n");
-    let path = dir.join("index.html");
-    murk_io::write_atomic(&path, |w| w.write_all(h.as_bytes()).map_err(io(&path)))?;
-    Ok(path)
+    page::write(dir, h)
+}
+
+/// The columns of a figure's numbers table before the metrics: header and the cell's text (None:
+/// nothing to say, "—" in a column that others fill).
+type Column = (&'static str, fn(&CellResult) -> Option<String>);
+
+const CELL_COLUMNS: [Column; 6] = [
+    ("row", |r| {
+        (!r.cell.row.is_empty()).then(|| r.cell.row.clone())
+    }),
+    ("column", |r| {
+        (!r.cell.col.is_empty()).then(|| r.cell.col.clone())
+    }),
+    ("tail share", |r| {
+        Some(show(metrics::mean_std(&r.tail_share).0))
+    }),
+    ("render CPU s", |r| {
+        Some(r.cpu_s.map_or("external".into(), show))
+    }),
+    ("reconstruction and scoring CPU s", |r| {
+        r.scoring_cpu_s.map(show)
+    }),
+    ("render error", |r| {
+        r.render_rel_err.map(|e| format!("{} %", show(100.0 * e)))
+    }),
+];
+
+/// `fig`'s numbers per cell, one table body per method; the columns that are empty for every cell
+/// of the figure (Fig. 4's rows, a one-seed run's render error) are left out.
+fn numbers_table(h: &mut String, fig: Figure, cells: &[&CellResult], methods: &[&'static str]) {
+    let columns: Vec<&Column> = CELL_COLUMNS
+        .iter()
+        .filter(|(_, text)| cells.iter().any(|r| text(r).is_some()))
+        .collect();
+    let _ = write!(
+        h,
+        "<h3>{}</h3>\n<table class=\"metrics\" id=\"metrics-{}\"><thead><tr>",
+        esc(fig.caption()),
+        fig.name()
+    );
+    for (name, _) in &columns {
+        let _ = write!(h, "<th>{name}</th>");
+    }
+    for m in &METRICS {
+        let _ = write!(h, "<th>{}</th>", esc(m.label));
+    }
+    h.push_str("</tr></thead>\n");
+    for method in methods {
+        let _ = writeln!(h, "<tbody data-method=\"{method}\">");
+        for r in cells {
+            let Some((_, scores, _)) = scored(r, method) else {
+                continue;
+            };
+            h.push_str("<tr>");
+            for (_, text) in &columns {
+                let _ = write!(h, "<td>{}</td>", esc(&text(r).unwrap_or("—".into())));
+            }
+            for m in &METRICS {
+                let _ = write!(h, "<td>{}</td>", show_stat(stat(scores, m.get)));
+            }
+            h.push_str("</tr>\n");
+        }
+        h.push_str("</tbody>\n");
+    }
+    h.push_str("</table>\n");
 }
 
 /// A volume spec (`x0:x1:nx,…`) as the report writes numbers: voxels, then each axis's span in

@@ -1,12 +1,13 @@
 //! The study's outputs: `metrics.csv`, `objects.csv`, a figure grid per figure and compensation, metric
 //! plots, and `index.html` tying them together with the parameters and the choices made. One module
 //! per job: the CSV tables, the image grids, the plots, the findings (each figure's own in
-//! [`crate::spec`]), the provenance and the page.
+//! [`crate::spec`]), the provenance and the page, whose pieces (`page`) `murk demo` shares.
 
 mod csv;
 mod findings;
 mod grids;
 mod html;
+pub(crate) mod page;
 mod plots;
 mod provenance;
 

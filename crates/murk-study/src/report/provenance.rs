@@ -42,21 +42,30 @@ pub(super) fn provenance(plan: &StudyPlan, results: &[CellResult]) -> Vec<(&'sta
             .sum()
     };
     let cpu_s: f64 = distinct.iter().filter_map(|r| r.cpu_s).sum();
+    // Every cell is reconstructed and scored on its own, shared captures or not.
+    let scoring_s: f64 = results.iter().filter_map(|r| r.scoring_cpu_s).sum();
     let (ours, external) = (counted(true), counted(false));
+    let hours = |s: f64| format!("{} CPU-hours ({} s)", show(s / 3600.0), show(s));
     let mut cpu_text = format!(
-        "{} CPU-hours of rendering ({} s) for {} {}",
-        show(cpu_s / 3600.0),
-        show(cpu_s),
+        "rendering {} for {} {}",
+        hours(cpu_s),
         ours,
         plural(ours, "capture")
     );
     if external > 0 {
         let _ = write!(
             cpu_text,
-            "; {external} {} rendered by an external executor, not counted",
+            " ({external} {} rendered by an external executor, not counted)",
             plural(external, "capture")
         );
     }
+    let _ = write!(
+        cpu_text,
+        " + reconstruction and scoring {} for {} {}",
+        hours(scoring_s),
+        results.len(),
+        plural(results.len(), "cell")
+    );
     let mut rows = run_provenance();
     rows.insert(
         2,
