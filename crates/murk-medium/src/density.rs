@@ -9,9 +9,9 @@ pub use grid::GridDensity;
 pub use height::HeightDensity;
 
 use crate::scene::{check_height_scale, stored_medium, StoredShape};
+use murk_core::Opt;
 use murk_core::{Capture, DVec3, Error, Result};
 use murk_recon::PathDensity;
-use murk_core::Opt;
 use murk_render::{Aabb, Segment, Spelling};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -110,7 +110,11 @@ impl DensityGiven {
             ),
             (StoredShape::Grid { .. }, false) => (
                 "and μt was estimated as one homogeneous value",
-                format!("{} and {} FILE.npy", flag(Opt::MuT), flag(Opt::MediumDensity)),
+                format!(
+                    "{} and {} FILE.npy",
+                    flag(Opt::MuT),
+                    flag(Opt::MediumDensity)
+                ),
             ),
             _ => (
                 "and μt was estimated as one homogeneous value",
