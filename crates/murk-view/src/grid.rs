@@ -53,9 +53,12 @@ pub struct GridLayout {
     pub axes: bool,
 }
 
-/// What the top of the colour bar stands for.
-pub fn bar_top_label(shared_scale: bool) -> &'static str {
-    if shared_scale {
+/// What the top of the colour bar stands for. A grid of one cell has one maximum, whichever scale
+/// was asked for.
+pub fn bar_top_label(grid: &FigureGrid) -> &'static str {
+    if grid.cells.iter().flatten().count() == 1 {
+        "max"
+    } else if grid.shared_scale {
         "max of the whole grid"
     } else {
         "max of each cell"
@@ -199,9 +202,8 @@ pub fn grid_layout(grid: &FigureGrid, cell_px: u32) -> Result<GridLayout> {
         }
         None => (0, 0),
     };
-    let bar_labels_w = text_width(bar_top_label(grid.shared_scale), font_px)?
-        + text_width("0", font_px)?
-        + font_px;
+    let bar_labels_w =
+        text_width(bar_top_label(grid), font_px)? + text_width("0", font_px)? + font_px;
     let width = (left + (cells_w + y_band).max(bar_labels_w) + margin)
         .max(text_width(&grid.title, title_px)? + 2 * margin);
     let bar_top = top + cells_h + x_band + font_px;
@@ -420,7 +422,7 @@ fn draw_labels(
     for (text, x, h) in [
         ("0", lay.left, HPos::Left),
         (
-            bar_top_label(grid.shared_scale),
+            bar_top_label(grid),
             lay.left + lay.bar_labels_span,
             HPos::Right,
         ),
@@ -843,5 +845,27 @@ mod tests {
             write_grid_png(&missing, &g, 16),
             Err(Error::Parameter(_))
         ));
+    }
+
+    #[test]
+    fn a_one_cell_grid_has_one_maximum() {
+        fn grid(cells: Vec<Vec<Option<&Plane>>>, shared_scale: bool) -> FigureGrid<'_> {
+            FigureGrid {
+                title: String::new(),
+                row_labels: Vec::new(),
+                col_labels: Vec::new(),
+                cells,
+                shared_scale,
+            }
+        }
+        let p = plane(4, 4, |x, y| (x + y) as f32);
+        assert_eq!(bar_top_label(&grid(vec![vec![Some(&p)]], false)), "max");
+        assert_eq!(bar_top_label(&grid(vec![vec![Some(&p)]], true)), "max");
+        let two = vec![vec![Some(&p), Some(&p)]];
+        assert_eq!(
+            bar_top_label(&grid(two.clone(), true)),
+            "max of the whole grid"
+        );
+        assert_eq!(bar_top_label(&grid(two, false)), "max of each cell");
     }
 }
