@@ -427,6 +427,8 @@ fn shelf_objects_and_seed_spreads_are_reported() {
         assert_eq!(f[col("seeds")], "2", "{row}");
         let rel: f64 = f[col("render_rel_err")].parse().unwrap();
         assert!(rel > 0.0 && rel.is_finite(), "{row}");
+        let scoring: f64 = f[col("scoring_cpu_s")].parse().unwrap();
+        assert!(scoring > 0.0 && scoring.is_finite(), "{row}");
         let sd: f64 = f[col("iou_best_sd")].parse().unwrap();
         assert!(sd.is_finite() && sd >= 0.0, "{row}");
     }

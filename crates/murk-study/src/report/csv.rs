@@ -10,7 +10,7 @@ use std::path::Path;
 
 pub(super) fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
     let mut s = String::from(
-        "figure,row,col,scene,mu_t,albedo,g,lambda_factor,compensation,seeds,tail_share,cpu_s,render_rel_err",
+        "figure,row,col,scene,mu_t,albedo,g,lambda_factor,compensation,seeds,tail_share,cpu_s,scoring_cpu_s,render_rel_err",
     );
     for m in &METRICS {
         let _ = write!(s, ",{0},{0}_sd", m.column);
@@ -34,7 +34,7 @@ pub(super) fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
         for (comp, scores, _) in &r.by_compensation {
             let _ = write!(
                 s,
-                "{},{},{},{},{},{albedo},{g},{},{comp},{},{},{},{}",
+                "{},{},{},{},{},{albedo},{g},{},{comp},{},{},{},{},{}",
                 c.figure.name(),
                 c.row,
                 c.col,
@@ -44,6 +44,7 @@ pub(super) fn write_csv(results: &[CellResult], path: &Path) -> Result<()> {
                 scores.len(),
                 num(tail),
                 r.cpu_s.map_or("".into(), num),
+                r.scoring_cpu_s.map_or("".into(), num),
                 r.render_rel_err.map_or("".into(), num)
             );
             for m in &METRICS {
