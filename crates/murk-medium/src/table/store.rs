@@ -5,7 +5,6 @@
 use super::{node_values, table_scene, Reduction, ResponseTable};
 use crate::EstimateOptions;
 use murk_core::{Capture, Error, Result};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The first line of a table file, before its key.
@@ -84,22 +83,18 @@ fn read(path: &Path, key: u64) -> Option<Vec<f64>> {
     )
 }
 
-/// Writes `values` under `key` to `path`, through a temporary file renamed into place so that a
+/// Writes `values` under `key` to `path` atomically (murk-io's temporary-and-rename), so that a
 /// reader never sees half a table.
 fn write(path: &Path, key: u64, values: &[f64]) -> Result<()> {
     let dir = path.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    let fail = |e: std::io::Error| Error::io(&tmp, e);
-    let mut out = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(fail)?);
-    out.write_all(format!("{MAGIC} {key:016x}\n").as_bytes())
-        .map_err(fail)?;
-    for v in values {
-        out.write_all(&v.to_le_bytes()).map_err(fail)?;
-    }
-    out.into_inner()
-        .map_err(|e| fail(e.into_error()))?
-        .sync_all()
-        .map_err(fail)?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    murk_io::write_atomic(path, |out| {
+        let fail = |e: std::io::Error| Error::io(path, e);
+        out.write_all(format!("{MAGIC} {key:016x}\n").as_bytes())
+            .map_err(fail)?;
+        for v in values {
+            out.write_all(&v.to_le_bytes()).map_err(fail)?;
+        }
+        Ok(())
+    })
 }
