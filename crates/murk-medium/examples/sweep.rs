@@ -1,7 +1,8 @@
 //! Estimates the medium of several captures of one geometry from one table, and prints a Markdown
 //! table of the estimates against the truth that each capture's scene_info records (the table in
-//! docs/medium.md): `cargo run --release -p murk-medium --example sweep -- [--given-g] CAPTURE.h5 …`.
-//! With `--given-g` each capture's true g is given and μt and α are fitted.
+//! docs/medium.md): `cargo run --release -p murk-medium --example sweep -- [--given-g] [--rings N]
+//! [--table-cache DIR] CAPTURE.h5 …`, options in that order. With `--given-g` each capture's true g
+//! is given and μt and α are fitted.
 
 use murk_medium::{estimate_with, EstimateOptions, Outcome, ResponseTable};
 
@@ -33,6 +34,11 @@ fn main() -> murk_core::Result<()> {
         spec.rings = files[1].parse().expect("--rings N");
         files.drain(..2);
     }
+    let mut table_cache = None;
+    if files.first().is_some_and(|f| f == "--table-cache") {
+        table_cache = Some(std::path::PathBuf::from(&files[1]));
+        files.drain(..2);
+    }
     let mut table: Option<ResponseTable> = None;
     println!("| μt | α | g | μt est. | α est. | g est. | μt err | α err | g err | s |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
@@ -40,6 +46,7 @@ fn main() -> murk_core::Result<()> {
         let cap = murk_io::read_capture(std::path::Path::new(&f))?;
         let mut opt = EstimateOptions {
             table: spec.clone(),
+            table_cache: table_cache.clone(),
             ..EstimateOptions::default()
         };
         if given_g {

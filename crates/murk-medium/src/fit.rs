@@ -2,6 +2,7 @@
 //! search over (μt, α, g) that also gives each parameter's profile and so its uncertainty.
 
 use crate::posterior;
+use crate::single::Angles;
 use crate::table::ResponseTable;
 use crate::Fixed;
 use murk_core::{Capture, Error, Result};
@@ -257,14 +258,16 @@ pub fn fit(
     } else {
         vec![fixed.g]
     };
+    let phase = Phase::new(&Angles::new(red, cap, &used), &table.g, &gs);
+    let paths_m: Vec<f64> = used.iter().map(|&i| red.path_m(cap, i % n)).collect();
     // Sum of squares at every candidate, [mu][albedo][g].
     let ssr: Vec<f64> = mus
         .par_iter()
         .flat_map_iter(|&mu| {
             let mut row = Vec::with_capacity(albedos.len() * gs.len());
             for &a in &albedos {
-                for &g in &gs {
-                    let model = interpolate(table, mu, a, g, &used);
+                for (k, &g) in gs.iter().enumerate() {
+                    let model = interpolate(table, mu, a, g, &used, &paths_m, &phase.at(k));
                     row.push(sum_of_squares(&ln_data, &model, absolute));
                 }
             }
@@ -286,7 +289,15 @@ pub fn fit(
     // The residuals of neighbouring bins are correlated (the table's Monte Carlo noise is smooth over
     // a few bins, and so are model errors): the likelihood counts the effective number of
     // independent values, N·(1 − ρ)/(1 + ρ) for a lag-one correlation ρ.
-    let best_model = interpolate(table, mus[bm], albedos[ba], gs[bg], &used);
+    let best_model = interpolate(
+        table,
+        mus[bm],
+        albedos[ba],
+        gs[bg],
+        &used,
+        &paths_m,
+        &phase.at(bg),
+    );
     let residual = residuals(&ln_data, &best_model, absolute);
     let rho = posterior::lag_one_correlation(&residual, |k| {
         used[k] == used[k - 1] + 1 && !used[k].is_multiple_of(n)
@@ -394,17 +405,75 @@ fn sum_of_squares(ln_data: &[f64], model: &[f64], absolute: bool) -> f64 {
     diff.map(|x| (x - offset).powi(2)).sum()
 }
 
-/// The table's response at (mu, albedo, g) for the reduced values `used`: linear in albedo (a
-/// polynomial of low order there), and ln(response) bilinear in ln μt and in [`backscatter_ln`]`(g)`
-/// where every corner is positive (linear otherwise). The latter makes the once-scattered light of
-/// a backward-looking capture, proportional to the phase function at backscatter, exact between g
-/// nodes: HG there falls from 1 (g = 0) to 0.31 (g = 0.4) and 0.06 (g = 0.8) of isotropic, and
-/// linear weights in g were 17 % off at g = 0.2 and 12 % at g = 0.7.
-fn interpolate(table: &ResponseTable, mu: f64, albedo: f64, g: f64, used: &[usize]) -> Vec<f64> {
+/// The once-scattered light's phase factor (ln, per used value) at the table's g nodes and at the
+/// searched g values; empty when g is not fitted (one node, nothing to interpolate).
+struct Phase {
+    nodes: Vec<Vec<f64>>,
+    searched: Vec<Vec<f64>>,
+}
+
+impl Phase {
+    fn new(angles: &Angles, nodes: &[f64], searched: &[f64]) -> Phase {
+        if nodes.len() < 2 {
+            return Phase {
+                nodes: Vec::new(),
+                searched: Vec::new(),
+            };
+        }
+        let ln = |gs: &[f64]| gs.par_iter().map(|&g| angles.ln_phase(g)).collect();
+        Phase {
+            nodes: ln(nodes),
+            searched: ln(searched),
+        }
+    }
+
+    /// At the `k`-th searched g.
+    fn at(&self, k: usize) -> PhaseAt<'_> {
+        PhaseAt {
+            nodes: &self.nodes,
+            here: self.searched.get(k).map_or(&[], Vec::as_slice),
+        }
+    }
+}
+
+/// [`Phase`] at one searched g.
+struct PhaseAt<'a> {
+    nodes: &'a [Vec<f64>],
+    here: &'a [f64],
+}
+
+/// The table's response at (mu, albedo, g) for the reduced values `used` (of paths `paths_m`): linear
+/// in albedo (a polynomial of low order there); between μt and g nodes, ln of the response divided by
+/// the once-scattered light's μt·exp(−μt·L)·phase factor ([`Angles`]) bilinear in ln μt and g, times
+/// that factor at (μt, g). Once-scattered light, the part that tells g from α, is then exact between
+/// the nodes, value by value, at the angles each ring and path sees (HG at backscatter falls from
+/// 1 (g = 0) to 0.31 (g = 0.4) and 0.06 (g = 0.8) of isotropic, at 92° it peaks near g = 0; weights
+/// by the phase at backscatter alone put α 13–23 % off at g = −0.7 with four rings). Linear where a
+/// corner is not positive.
+fn interpolate(
+    table: &ResponseTable,
+    mu: f64,
+    albedo: f64,
+    g: f64,
+    used: &[usize],
+    paths_m: &[f64],
+    phase: &PhaseAt,
+) -> Vec<f64> {
     let (m0, m1, wm) = bracket(&table.mu_t_per_m, mu, true);
     let (a0, a1, wa) = bracket(&table.albedos, albedo, false);
-    let backscatter: Vec<f64> = table.g.iter().map(|&g| backscatter_ln(g)).collect();
-    let (g0, g1, wg) = bracket(&backscatter, backscatter_ln(g), false);
+    let (g0, g1, wg) = bracket(&table.g, g, false);
+    // The once-scattered light's factors that the nodes' bracket does not interpolate exactly: its
+    // attenuation exp(−μt·L) (ln-linear weights in μt are off by up to 8 % at L = 4 m between the
+    // nodes around μt = 2) and its phase factor.
+    let (mu0, mu1) = (table.mu_t_per_m[m0], table.mu_t_per_m[m1]);
+    let attenuation_ln = |k: usize| -paths_m[k] * (mu - (1.0 - wm) * mu0 - wm * mu1);
+    let phase_ln = |k: usize| {
+        if phase.here.is_empty() {
+            0.0
+        } else {
+            phase.here[k] - (1.0 - wg) * phase.nodes[g0][k] - wg * phase.nodes[g1][k]
+        }
+    };
     let at = |m: usize, g: usize| -> Vec<f64> {
         let (lo, hi) = (table.node(m, g, a0), table.node(m, g, a1));
         used.iter()
@@ -419,7 +488,7 @@ fn interpolate(table: &ResponseTable, mu: f64, albedo: f64, g: f64, used: &[usiz
     ];
     (0..used.len())
         .map(|k| {
-            if corners.iter().all(|(v, _)| v[k] > 0.0) {
+            let blend = if corners.iter().all(|(v, _)| v[k] > 0.0) {
                 corners
                     .iter()
                     .map(|(v, w)| w * v[k].ln())
@@ -427,15 +496,10 @@ fn interpolate(table: &ResponseTable, mu: f64, albedo: f64, g: f64, used: &[usiz
                     .exp()
             } else {
                 corners.iter().map(|(v, w)| w * v[k]).sum()
-            }
+            };
+            (attenuation_ln(k) + phase_ln(k)).exp() * blend
         })
         .collect()
-}
-
-/// ln of the Henyey–Greenstein phase function at backscatter relative to isotropic, (1 − g)/(1 + g)²,
-/// negated so that it grows with g.
-fn backscatter_ln(g: f64) -> f64 {
-    2.0 * (1.0 + g).ln() - (1.0 - g).ln()
 }
 
 /// The nodes around `x` (clamped to the range) and the weight of the upper one; `log`: in ln x.
@@ -468,6 +532,70 @@ mod tests {
         assert_eq!(bracket(&n, 9.0, false), (1, 2, 1.0));
         assert_eq!(bracket(&n, 0.1, false), (0, 1, 0.0));
         assert_eq!(bracket(&[0.5], 3.0, false), (0, 0, 0.0));
+    }
+
+    /// A table of once-scattered light alone, α·μt·exp(−μt·L)·phase factor, interpolated between
+    /// its nodes: exact at any (μt, α, g). Weights by the phase at backscatter alone are not: the
+    /// outer ring's phase factor differs from HG at backscatter by more than a third.
+    #[test]
+    fn once_scattered_light_is_exact_between_nodes() {
+        use murk_synth::{CaptureLayout, LayoutKind};
+        let layout = CaptureLayout {
+            kind: LayoutKind::LaserGridSinglePoint,
+            wall_size_m: 2.0,
+            grid: 16,
+            point: murk_core::DVec3::ZERO,
+            time: murk_core::TimeAxis {
+                start_m: 2.0,
+                bin_width_m: 0.05,
+                bins: 40,
+            },
+            laser_xyz: None,
+            sensor_xyz: None,
+        };
+        let cap = layout.empty_capture().unwrap();
+        let red = crate::table::Reduction::of(&cap, 4);
+        let n = red.coarse_bins;
+        let all: Vec<usize> = (0..red.rings() * n).collect();
+        let paths: Vec<f64> = all.iter().map(|&i| red.path_m(&cap, i % n)).collect();
+        let angles = Angles::new(&red, &cap, &all);
+        let (mus, gs, albedos) = (
+            vec![1.0, 1.35, 1.8225],
+            vec![-0.8, -0.4, 0.0, 0.4, 0.8],
+            vec![0.1, 0.9],
+        );
+        let model = |mu: f64, a: f64, g: f64| -> Vec<f64> {
+            let phase = angles.ln_phase(g);
+            (0..all.len())
+                .map(|k| a * mu * (-mu * paths[k] + phase[k]).exp())
+                .collect()
+        };
+        let mut values = Vec::new();
+        for &mu in &mus {
+            for &g in &gs {
+                for &a in &albedos {
+                    values.extend(model(mu, a, g));
+                }
+            }
+        }
+        let table = ResponseTable::from_values(mus, gs.clone(), albedos, red, values);
+        let (mu, a, g) = (1.6, 0.37, 0.7);
+        let phase = Phase::new(&angles, &gs, &[g]);
+        let got = interpolate(&table, mu, a, g, &all, &paths, &phase.at(0));
+        let want = model(mu, a, g);
+        let worst = got
+            .iter()
+            .zip(&want)
+            .map(|(x, y)| (x / y - 1.0).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-9, "worst relative error {worst}");
+        // The outer ring's angles differ from backscatter: its phase factor is not HG at π.
+        let outer = angles.ln_phase(0.7)[3 * n + 5] - angles.ln_phase(0.0)[3 * n + 5];
+        let back = ((1.0f64 - 0.7) / 1.7 / 1.7).ln();
+        assert!(
+            outer - back > 0.3,
+            "outer ring {outer} vs backscatter {back}"
+        );
     }
 
     #[test]

@@ -43,6 +43,7 @@ pub mod fit;
 pub mod model;
 pub mod posterior;
 pub mod scene;
+pub mod single;
 pub mod slab;
 pub mod table;
 

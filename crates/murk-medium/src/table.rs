@@ -57,7 +57,7 @@ pub struct Reduction {
 }
 
 /// Rings of separation by default, and the path (m) a coarse bin spans at least.
-const RINGS: usize = 1;
+const RINGS: usize = 4;
 const COARSE_M: f64 = 0.05;
 
 impl Reduction {
@@ -148,6 +148,23 @@ impl Reduction {
             }
         }
         sum
+    }
+
+    /// `k` separations (m) per ring, at the middles of equal shares of the ring's histograms.
+    pub fn ring_separations(&self, k: usize) -> Vec<Vec<f64>> {
+        let mut by_ring = vec![Vec::new(); self.rings()];
+        for &d in &self.separations {
+            by_ring[self.ring_of(d)].push(d);
+        }
+        by_ring
+            .into_iter()
+            .map(|mut ring| {
+                ring.sort_by(f64::total_cmp);
+                (0..k)
+                    .filter_map(|q| ring.get((2 * q + 1) * ring.len() / (2 * k)).copied())
+                    .collect()
+            })
+            .collect()
     }
 
     /// The largest separation (m) of `cap`'s histograms in each ring.
@@ -288,6 +305,31 @@ impl ResponseTable {
             * self.albedos.len()
             * self.reduction.rings()
             * self.reduction.coarse_bins
+    }
+
+    /// A table of the given nodes and values (`[mu][g][albedo][ring][bin]`), for tests of the fit.
+    #[cfg(test)]
+    pub(crate) fn from_values(
+        mu_t_per_m: Vec<f64>,
+        g: Vec<f64>,
+        albedos: Vec<f64>,
+        reduction: Reduction,
+        values: Vec<f64>,
+    ) -> ResponseTable {
+        let time = murk_core::TimeAxis {
+            start_m: 0.0,
+            bin_width_m: 1.0,
+            bins: 1,
+        };
+        ResponseTable {
+            mu_t_per_m,
+            g,
+            albedos,
+            reduction,
+            spec: TableSpec::default(),
+            built_for: (String::new(), time, EstimateOptions::default()),
+            values,
+        }
     }
 
     /// The reduced response at node (mu, g, albedo): `[ring][bin]`.
