@@ -1,5 +1,5 @@
-//! The capture's own scene with every object removed: what the renderer draws as the medium's
-//! response alone.
+//! The capture's own scene with every object removed but the medium's room: what the renderer draws
+//! as the medium's response alone.
 
 use murk_core::{Capture, DVec3, Error, Result};
 use murk_render::{Aabb, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M};
