@@ -18,7 +18,8 @@ murk medium fog.h5 --until 3.5                  # the medium-only bins end at 3.
 murk medium fog.h5 --table-cache tables         # renders the table once; later captures of this geometry reuse it\n  \
 murk medium --slab-transmission ../shared/data/real/cdt_lindell2020/calibration   # a foam slab's μa, μs′\n\n\
 The forward model is murk's renderer: the capture's own scene (its scene_info, as murk render writes it)\n\
-without objects, rendered on a grid of μt × g nodes, each an albedo sweep, and interpolated. The fit\n\
+without objects (a box around the whole medium, its room, stays), rendered on a grid of μt × g nodes,\n\
+each an albedo sweep, and interpolated. The fit\n\
 compares ring means (rings of equal laser–sensor separation) over 5 cm bins, from the window's start\n\
 to where the scene's own signal begins (the medium-aware depth search of `murk reconstruct`), in\n\
 ln(intensity). Uncertainties: the posterior's spread over the searched grid (flat priors, the noise\n\

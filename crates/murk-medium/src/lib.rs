@@ -3,7 +3,7 @@
 //!
 //! The forward model is murk's own renderer ("renderer in the loop", see `docs/medium.md` for why it
 //! was chosen over an analytic single-scattering term with a calibrated multiple-scattering part): the
-//! capture's own geometry with every object removed is rendered once per (μt, g) of a grid, each render
+//! capture's own geometry with every object removed (but a room around the medium) is rendered once per (μt, g) of a grid, each render
 //! an albedo sweep ([`table`]), and the capture's ring-averaged medium response is fitted by
 //! interpolating in that table ([`fit`]). A table is built once per geometry and serves any number of
 //! captures of it (the study fits every cell from one table).

@@ -1,5 +1,5 @@
 //! The medium's response predicted for given parameters, for `--medium-removal model`: the capture's
-//! own geometry with every object removed, rendered by murk's renderer on a coarse grid at the
+//! own geometry with every object removed but the medium's room ([`crate::scene::medium_only`]), rendered by murk's renderer on a coarse grid at the
 //! capture's full time resolution, one curve per laser–sensor separation. The reconstruction
 //! subtracts it from each histogram at that histogram's separation
 //! ([`murk_recon::medium::removal::subtract_predicted`]).

@@ -1,16 +1,29 @@
-//! The capture's own scene with every object removed: what the renderer draws as the medium's
-//! response alone.
+//! The capture's own scene with every object removed but the medium's room: what the renderer draws
+//! as the medium's response alone.
 
 use murk_core::{Capture, DVec3, Error, Result};
 use murk_render::{Aabb, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M};
 
 /// The resolved scene TOML that `murk render` stored in the capture's `scene_info`, without its
-/// `[[object]]` tables. The medium's values in it are replaced by the table's; only the geometry
-/// (relay, capture layout, time axis, the medium's extent) is used. The model is homogeneous: a
-/// heterogeneous medium's kind and density are dropped, and its box is fitted by one μt, α and g.
+/// `[[object]]` tables but those that enclose the medium ([`encloses`]: a room's walls, which return
+/// the medium's light as the medium itself does). The medium's values in it are replaced by the
+/// table's; only the geometry (relay, capture layout, time axis, the medium's extent and enclosure)
+/// is used. The model is homogeneous: a heterogeneous medium's kind and density are dropped, and its
+/// box is fitted by one μt, α and g.
 pub fn medium_only(cap: &Capture) -> Result<String> {
     let mut table = stored_table(cap)?;
-    table.remove("object");
+    // Without a box the medium has no walls to find (the fit then fails on the box, not here).
+    let region = stored_medium(cap).ok().map(|m| m.region);
+    let enclosure: Vec<toml::Value> = match (table.remove("object"), region) {
+        (Some(toml::Value::Array(objects)), Some(region)) => objects
+            .into_iter()
+            .filter(|o| encloses(o, &region))
+            .collect(),
+        _ => Vec::new(),
+    };
+    if !enclosure.is_empty() {
+        table.insert("object".into(), toml::Value::Array(enclosure));
+    }
     let medium = medium_table(&mut table)?;
     // The medium's own values are the table's to set; placeholders keep captures of one geometry
     // with different media on one table (and keep the truth out of the estimate).
@@ -21,6 +34,31 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
         medium.remove(key);
     }
     toml::to_string(&table).map_err(|e| Error::param(format!("scene_info.scene: {e}")))
+}
+
+/// Whether a stored `[[object]]` is a box around the medium's whole box (to 1 cm): the room the medium
+/// fills. Its walls light the medium and return its light from every histogram's first bins on (the
+/// shelf's room in fog: 1.6–2.4× the light of the same fog without walls), so a model without them
+/// fits another medium (μt 0.31 for 1). It is the medium's container, not the hidden scene the
+/// reconstruction looks for.
+fn encloses(object: &toml::Value, region: &Aabb) -> bool {
+    const SLACK_M: f64 = 0.01;
+    let corner = |key: &str| -> Option<DVec3> {
+        let v: Vec<f64> = object
+            .get(key)?
+            .as_array()?
+            .iter()
+            .map(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+            .collect::<Option<_>>()?;
+        (v.len() == 3).then(|| DVec3::new(v[0], v[1], v[2]))
+    };
+    let is_box = object.get("shape").and_then(|s| s.as_str()) == Some("box");
+    match (is_box, corner("min"), corner("max")) {
+        (true, Some(min), Some(max)) => {
+            (0..3).all(|a| min[a] <= region.min[a] + SLACK_M && max[a] >= region.max[a] - SLACK_M)
+        }
+        _ => false,
+    }
 }
 
 /// The scene TOML that `murk render` stored in the capture's `scene_info`, parsed.
@@ -207,6 +245,34 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("no scene description"));
+    }
+
+    /// A box around the whole medium (a room, its front omitted) stays in the medium-only scene; a
+    /// box inside it, a box that leaves out part of the medium by more than 1 cm and other shapes go.
+    #[test]
+    fn the_room_around_the_medium_stays() {
+        let info = "generator: murk render\nscene: |\n  [medium]\n  mu_t = 1.5\n  min = [-1.0, -1.0, 0.001]\n  max = [1.0, 1.0, 2.6]\n  [[object]]\n  name = \"room\"\n  shape = \"box\"\n  min = [-1.0, -1.0, 0.0]\n  max = [1.0, 1.0, 2.6]\n  omit = [\"-z\"]\n  albedo = 0.4\n  [[object]]\n  name = \"shelf\"\n  shape = \"box\"\n  min = [-0.85, -0.9, 1.8]\n  max = [0.85, 0.7, 2.2]\n  [[object]]\n  name = \"short room\"\n  shape = \"box\"\n  min = [-1.0, -1.0, 0.0]\n  max = [1.0, 1.0, 2.58]\n  [[object]]\n  name = \"letter\"\n  shape = \"z-letter\"\n  center = [0.0, 0.0, 2.0]\n";
+        let only = medium_only(&capture_with_info(info)).unwrap();
+        let kept: toml::Table = only.parse().unwrap();
+        let names: Vec<&str> = kept["object"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|o| o["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(names, ["room"], "{only}");
+        assert!(only.contains("mu_t = 1.0"), "{only}");
+        // No room: no objects at all.
+        let clear = info
+            .split("  [[object]]\n  name = \"shelf\"")
+            .next()
+            .unwrap();
+        let without = clear.replace(
+            "name = \"room\"\n  shape = \"box\"",
+            "name = \"room\"\n  shape = \"quad\"",
+        );
+        let only = medium_only(&capture_with_info(&without)).unwrap();
+        assert!(!only.contains("object"), "{only}");
     }
 
     /// A step that fits one homogeneous medium says so on a heterogeneous capture, naming its kind;

@@ -7,7 +7,10 @@
 //! the summed histogram starts near its peak and decays from there. A closed room around the scene
 //! does that too (its walls meet the relay and pass light around), but its early response depends on
 //! where each laser point sits against the walls, while a homogeneous medium's depends only on the
-//! laser–sensor separation: histograms of equal separation must agree.
+//! laser–sensor separation: histograms of equal separation must agree. The room also fails to fade:
+//! light from a medium next to the relay spreads as it travels, so past the largest separation the
+//! summed response falls at least as fast as 1/path², while a room's walls, at a fixed distance, keep
+//! returning light far more slowly.
 
 use murk_core::Capture;
 
@@ -24,6 +27,14 @@ const MIN_DECAY: f64 = 3.0;
 /// room without fog at 0.40 (64 spp) and 0.24 (512 spp): the room's spread shrinks with the Monte
 /// Carlo noise, so this test separates it from fog only at low sample counts (docs/medium.md).
 const MAX_RING_SPREAD: f64 = 0.25;
+/// The least fall of the summed response over [`SPREADING_SPAN_M`] of path, as a share of 1/path²'s
+/// fall over it. Measured (64² and 32² renders, 64–256 spp, window from 1 or 2 m): 1.00–2.32 in fog
+/// (μt 0.25–2, α 0.15–0.83, g −0.7–0.7; lowest for g = −0.7, α = 0.83 and for μt = 0.25, α = 0.15),
+/// the shelf's closed room in fog 1.14 (μt = 1) and 1.34 (μt = 1.5), the room without fog 0.74–0.76
+/// at 16² and 64², 256 and 1 024 spp (docs/medium.md).
+const MIN_SPREADING_FALL: f64 = 0.88;
+/// The path (m) over which the fall is measured: short, so that a hidden object seldom enters it.
+const SPREADING_SPAN_M: f64 = 0.5;
 
 /// What [`Signature::measure`] found.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,6 +48,9 @@ pub struct Signature {
     /// Coefficient of variation of each histogram's early signal within rings of equal separation,
     /// over `early_m` from 10 cm past the largest separation (or the window's start).
     pub ring_spread: f64,
+    /// How much the summed response falls over 0.5 m of path from 10 cm past the largest separation,
+    /// as a share of 1/path²'s fall (path counted from the relay); `None` where the window is too short.
+    pub spreading_fall: Option<f64>,
     /// Length of the early segment (m of path).
     pub early_m: f64,
 }
@@ -76,6 +90,7 @@ impl Signature {
                 f64::INFINITY
             },
             ring_spread: ring_spread(cap, early_bins),
+            spreading_fall: spreading_fall(cap, &summed, early_bins),
             early_m,
         }
     }
@@ -86,12 +101,20 @@ impl Signature {
             && self.early_level >= MIN_EARLY_LEVEL
             && self.decay >= MIN_DECAY
             && self.ring_spread <= MAX_RING_SPREAD
+            && self.spreading_fall.is_none_or(|f| f >= MIN_SPREADING_FALL)
     }
 
     /// One line for a summary.
     pub fn describe(&self) -> String {
+        let fall = match self.spreading_fall {
+            Some(f) => format!(
+                "; over {SPREADING_SPAN_M} m of path past the largest separation the summed response falls {:.0} % as fast as 1/path²",
+                100.0 * f
+            ),
+            None => String::new(),
+        };
         format!(
-            "{:.0} % of histograms hold signal within {} m of their earliest path; the first bins reach {:.0} % of the summed peak and {:.0}× the last quarter's level; histograms of equal laser–sensor separation agree within {:.0} %",
+            "{:.0} % of histograms hold signal within {} m of their earliest path; the first bins reach {:.0} % of the summed peak and {:.0}× the last quarter's level; histograms of equal laser–sensor separation agree within {:.0} %{fall}",
             100.0 * self.share_with_signal,
             murk_core::short(self.early_m),
             100.0 * self.early_level,
@@ -114,6 +137,41 @@ fn first_bin(cap: &Capture, i: usize) -> usize {
     } else {
         0
     }
+}
+
+/// The fall of `summed` (mean over `bins` bins) from 10 cm past the largest earliest path (or the
+/// window's start) to [`SPREADING_SPAN_M`] later, over (path_late / path_early)², the paths at the
+/// segments' middles less the device legs; `None` where the window ends first or the late segment is
+/// dark.
+fn spreading_fall(cap: &Capture, summed: &[f64], bins: usize) -> Option<f64> {
+    let (dt, start) = (cap.time.bin_width_m, cap.time.start_m);
+    let earliest_m = (0..cap.n_hist())
+        .map(|i| {
+            let (l, s) = cap.hist_pair(i);
+            cap.illum.points[l].distance(cap.sensor.points[s])
+                + cap.first_bounce_m(l)
+                + cap.last_bounce_m(s)
+        })
+        .fold(0.0, f64::max);
+    let legs_m = (0..cap.n_hist())
+        .map(|i| {
+            let (l, s) = cap.hist_pair(i);
+            cap.first_bounce_m(l) + cap.last_bounce_m(s)
+        })
+        .fold(f64::INFINITY, f64::min);
+    let first = ((earliest_m + 0.1).max(start) - start) / dt;
+    if !first.is_finite() {
+        return None;
+    }
+    let first = first.ceil() as usize;
+    let late = first + (SPREADING_SPAN_M / dt).round() as usize;
+    if late + bins > summed.len() {
+        return None;
+    }
+    let mean = |a: usize| summed[a..a + bins].iter().sum::<f64>() / bins as f64;
+    let path = |a: usize| start + (a as f64 + bins as f64 / 2.0) * dt - legs_m;
+    let (early, later) = (mean(first), mean(late));
+    (later > 0.0 && path(first) > 0.0).then(|| early / later / (path(late) / path(first)).powi(2))
 }
 
 /// The coefficient of variation of each histogram's signal over `bins` bins from 10 cm past the
@@ -161,4 +219,61 @@ pub(crate) fn summed(cap: &Capture) -> Vec<f64> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use murk_core::{DVec3, PointSet, TimeAxis};
+
+    /// A confocal 4 × 4 capture of `bins` bins of 1 cm from 1 m of path whose every histogram is
+    /// `f(path)` at its bins' middles: the segments compared are 1.0–1.2 m and 1.5–1.7 m.
+    fn capture(bins: usize, f: impl Fn(f64) -> f64) -> Capture {
+        let time = TimeAxis {
+            start_m: 1.0,
+            bin_width_m: 0.01,
+            bins,
+        };
+        let h: Vec<f32> = (0..bins)
+            .map(|b| f(time.start_m + (b as f64 + 0.5) * time.bin_width_m) as f32)
+            .collect();
+        Capture::confocal(
+            PointSet::wall_grid(DVec3::ZERO, 1.0, 1.0, 4, 4),
+            time,
+            h.repeat(16),
+            String::new(),
+        )
+    }
+
+    /// Once-scattered light next to the relay, exp(−μt·path)/path², falls faster than 1/path² by
+    /// exp(μt · 0.5 m) (to the segments' width: within 2 %). A wall at a fixed distance whose return
+    /// fades as 1/path falls at 69 % of 1/path²'s pace (ln 1.2 / ln(1.7/1.5) over (1.6/1.1)²) and is
+    /// no medium, though it passes every other test.
+    #[test]
+    fn a_medium_falls_at_least_as_fast_as_its_spreading() {
+        let fog = Signature::measure(&capture(400, |t| (-t).exp() / (t * t)));
+        let fall = fog.spreading_fall.unwrap();
+        assert!((fall / 0.5f64.exp() - 1.0).abs() < 0.02, "{fall}");
+        assert!(fog.is_medium(), "{fog:?}");
+        let room = Signature::measure(&capture(400, |t| 1.0 / t));
+        let fall = room.spreading_fall.unwrap();
+        assert!((fall - 0.689).abs() < 0.005, "{fall}");
+        assert!(!room.is_medium(), "{room:?}");
+        let passes_the_rest = Signature {
+            spreading_fall: None,
+            ..room
+        };
+        assert!(passes_the_rest.is_medium(), "{room:?}");
+        assert!(
+            room.describe()
+                .ends_with("the summed response falls 69 % as fast as 1/path²"),
+            "{}",
+            room.describe()
+        );
+        // A window that ends before the second segment cannot tell: the other tests decide.
+        assert_eq!(
+            Signature::measure(&capture(55, |t| 1.0 / t)).spreading_fall,
+            None
+        );
+    }
 }
