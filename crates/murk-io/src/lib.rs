@@ -61,5 +61,6 @@ pub use tal::{
 };
 pub use truth::{describe_truth, looks_like_truth, read_truth_h5, write_truth_h5};
 pub use volume::{
-    check_volume_path, read_volume_h5, write_volume, write_volume_h5, AttrValue, VolumeData,
+    check_volume_path, normals_path, read_volume_h5, write_volume, write_volume_h5, AttrValue,
+    VolumeData,
 };
