@@ -23,6 +23,7 @@
 //!     pairing: Pairing::Product,
 //!     h: vec![0.0, 1.0, 0.5, 0.0],
 //!     scene_info: String::new(),
+//!     medium_density: None,
 //! };
 //! let path = std::env::temp_dir().join(format!("murk-io-doc-{}.h5", std::process::id()));
 //! murk_io::write_capture(&path, &cap)?;
