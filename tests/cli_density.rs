@@ -244,10 +244,33 @@ fn reconstruct_reads_the_density_for_the_compensation() {
         &run(&no_mu_t),
         &["--height-scale is read by --compensate with --mu-t"],
     );
-    // The capture's grid is not in it: compensated as homogeneous, and said so.
-    let mut stored = recon(&["--compensate", "ballistic", "--mu-t", "1"]);
-    stored.retain(|a| a != "--quiet");
-    let (code, _, err) = cli::murk(&run(&stored));
+    // The capture holds its grid's cells, as the file has them.
+    let stored = murk_io::read_capture(&cap).unwrap();
+    let cells = stored.medium_density.as_deref().unwrap();
+    assert_eq!(cells.dims(), [2, 2, 2]);
+    assert_eq!(cells.values(), [0.5, 0.5, 0.5, 0.5, 2.0, 2.0, 2.0, 2.0]);
+    // Compensated along them unasked, and said so.
+    let mut own = recon(&["--compensate", "ballistic", "--mu-t", "1"]);
+    own.retain(|a| a != "--quiet");
+    let (code, said, err) = cli::murk(&run(&own));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        said.contains("density from the capture's own grid (2 × 2 × 2 cells)")
+            && !err.contains("homogeneous"),
+        "{said}\n{err}"
+    );
+    let from_capture = std::fs::read(&out).unwrap();
+    // A capture without the cells (rendered before murk stored them): homogeneous, and said so.
+    let old = d.join("old.h5");
+    let without = murk_core::Capture {
+        medium_density: None,
+        ..stored
+    };
+    murk_io::write_capture(&old, &without).unwrap();
+    let mut homogeneous = recon(&["--compensate", "ballistic", "--mu-t", "1"]);
+    homogeneous.retain(|a| a != "--quiet");
+    homogeneous[1] = old.to_str().unwrap().into();
+    let (code, _, err) = cli::murk(&run(&homogeneous));
     assert_eq!(code, 0, "{err}");
     assert!(
         err.contains(
@@ -255,6 +278,8 @@ fn reconstruct_reads_the_density_for_the_compensation() {
         ) && err.contains("give --medium-density FILE.npy"),
         "{err}"
     );
+    // The cells make a difference the test can see.
+    assert_ne!(std::fs::read(&out).unwrap(), from_capture);
     let alone = recon(&["--medium-density", &file("good.npy")]);
     fails_with(
         &run(&alone),
@@ -270,6 +295,7 @@ fn reconstruct_reads_the_density_for_the_compensation() {
     ]);
     let (code, _, err) = cli::murk(&run(&good));
     assert_eq!(code, 0, "{err}");
-    assert!(out.exists());
+    // The capture's own grid and the same grid given by hand compensate alike, byte for byte.
+    assert_eq!(std::fs::read(&out).unwrap(), from_capture);
     std::fs::remove_dir_all(&d).unwrap();
 }

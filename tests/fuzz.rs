@@ -244,8 +244,13 @@ fn seeds(dir: &Path) -> Vec<(&'static str, &'static str, Vec<u8>)> {
     }
 
     let p = dir.join("mat73.mat");
-    let axis = [0.0, 0.5, 1.0];
-    murk_io::write_volume_h5(&p, [3, 3, 3], &[1.0; 27], &axis, &axis, &axis, &[]).unwrap();
+    let axis = murk_core::Axis::new(0.0, 1.0, 3);
+    let volume = murk_core::Volume {
+        x: axis,
+        y: axis,
+        z: axis,
+    };
+    murk_io::write_volume_h5(&p, &volume, &[1.0; 27], None, &[]).unwrap();
     out.push(("mat73", "mat73", std::fs::read(&p).unwrap()));
 
     let p = dir.join("a.npy");

@@ -292,6 +292,7 @@ fn capture(illum: PointSet, sensor: PointSet, pairing: Pairing) -> Capture {
         pairing,
         h: Vec::new(),
         scene_info: "name: murk\nvalues:\n- 1\n- 2.5\n".into(),
+        medium_density: None,
     };
     c.h = (0..c.n_hist() * c.time.bins)
         .map(|i| (i as f32 * 0.73).cos())
@@ -502,7 +503,17 @@ fn volumes_npy_and_mat_v5_with_numpy_scipy() {
         ("wavelength_m", murk_io::AttrValue::Num(0.0625)),
     ];
     let (x, y, z) = ([0.0, 0.5], [-1.0, 0.0, 1.0], [1.0, 1.25, 1.5, 1.75]);
-    murk_io::write_volume_h5(&dir.join("v.h5"), [2, 3, 4], &vol, &x, &y, &z, &attrs).unwrap();
+    let volume = murk_core::Volume {
+        x: murk_core::Axis::new(0.0, 0.5, 2),
+        y: murk_core::Axis::new(-1.0, 1.0, 3),
+        z: murk_core::Axis::new(1.0, 1.75, 4),
+    };
+    assert_eq!(
+        (volume.x.values(), volume.y.values()),
+        (x.to_vec(), y.to_vec())
+    );
+    assert_eq!(volume.z.values(), z);
+    murk_io::write_volume_h5(&dir.join("v.h5"), &volume, &vol, None, &attrs).unwrap();
     murk_io::write_npy_f32(&dir.join("v.npy"), &[2, 3, 4], &vol).unwrap();
     let script = format!(
         "{EMIT}{}",

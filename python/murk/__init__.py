@@ -369,7 +369,9 @@ def _parts(parts) -> list:
 class Reconstruction:
     """A reconstructed volume: ``intensity[ix, iy, iz]`` (float32, C order) at voxel centres
     ``x[ix], y[iy], z[iz]`` (metres; z is the depth in front of the wall), the parameters used
-    (``params``: the rows ``murk reconstruct`` prints) and the library's warnings."""
+    (``params``: the rows ``murk reconstruct`` prints), the library's warnings and, from the
+    methods that recover surface orientation (dlct), ``normals[ix, iy, iz]``: the unit normal
+    (float32, n_z < 0 facing the wall; zero where the intensity is), else ``None``."""
 
     intensity: np.ndarray
     x: np.ndarray
@@ -377,6 +379,7 @@ class Reconstruction:
     z: np.ndarray
     params: Dict[str, str] = field(default_factory=dict)
     warnings: List[str] = field(default_factory=list)
+    normals: Optional[np.ndarray] = None
 
     def __repr__(self) -> str:
         # The dataclass's own repr printed the whole intensity array and the axes' float noise.
@@ -456,8 +459,9 @@ def reconstruct(
     >>> rec = murk.reconstruct("z.h5", volume="-0.99:0.99:73,-0.99:0.99:59,1.5:2.5:73")
     >>> rec.params["wavelength_m"], rec.intensity.max()
     >>> fk = murk.reconstruct(cap, "fk")     # confocal methods ("own volume") on their own grid
+    >>> d = murk.reconstruct(cap, "dlct")   # d.normals[ix, iy, iz]: unit surface normals
     """
-    intensity, axes, rows, warnings = _murk.reconstruct(
+    intensity, axes, rows, warnings, normals = _murk.reconstruct(
         capture if isinstance(capture, Capture) else _path(capture, "capture"),
         dict(method=method, volume=volume, wavelength=wavelength, wavefactor=wavefactor,
              cycles=cycles, compensate=compensate, mu_t=mu_t, albedo=albedo, falloff=falloff,
@@ -471,7 +475,7 @@ def reconstruct(
         threads, _progress(progress, "reconstruct"),
     )
     x, y, z = axes
-    return Reconstruction(intensity, x, y, z, dict(rows), list(warnings))
+    return Reconstruction(intensity, x, y, z, dict(rows), list(warnings), normals)
 
 
 def methods() -> Dict[str, str]:

@@ -144,4 +144,5 @@ def estimate_medium(capture: Union[Capture, str], args: _MediumArgs, threads: Op
 def reconstruct(capture: Union[Capture, str], args: _ReconstructArgs, threads: Optional[int],
                 progress: _Progress,
                 ) -> Tuple[npt.NDArray[np.float32], List[npt.NDArray[np.float64]],
-                           List[Tuple[str, str]], List[str]]: ...
+                           List[Tuple[str, str]], List[str],
+                           Optional[npt.NDArray[np.float32]]]: ...

@@ -181,6 +181,10 @@ impl Capture {
             paired: c.pairing == Pairing::Paired,
             h: c.h.iter().flat_map(|v| v.to_le_bytes()).collect(),
             scene_info: c.scene_info.clone(),
+            medium_density: c.medium_density.as_ref().map(|d| {
+                let bytes = d.values().iter().flat_map(|v| v.to_le_bytes()).collect();
+                (d.dims().to_vec(), bytes)
+            }),
         };
         let rebuild = slf
             .py()
@@ -353,6 +357,8 @@ pub struct State {
     /// H as little-endian f32 bytes (a list of floats would take 30 bytes a sample).
     h: Vec<u8>,
     scene_info: String,
+    /// The medium's density cells: shape and little-endian f32 bytes.
+    medium_density: Option<(Vec<usize>, Vec<u8>)>,
 }
 
 /// Rebuilds a pickled capture, checking it as a file read is checked.
@@ -379,17 +385,32 @@ pub fn _capture_from_state(state: State) -> PyResult<Capture> {
             "pickled capture: points are not xyz triples".into(),
         ));
     };
+    let f32s = |b: &[u8]| -> Vec<f32> {
+        b.chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect()
+    };
+    let medium_density = match state.medium_density {
+        Some((shape, bytes)) if bytes.len().is_multiple_of(4) => Some(std::sync::Arc::new(
+            murk_core::DensityCells::new(&shape, f32s(&bytes)).map_err(|e| {
+                crate::error("InputError", format!("pickled capture: medium density: {e}"))
+            })?,
+        )),
+        Some(_) => {
+            return Err(crate::error(
+                "InputError",
+                "pickled capture: the medium density is not whole f32 values".into(),
+            ))
+        }
+        None => None,
+    };
     if !state.h.len().is_multiple_of(4) {
         return Err(crate::error(
             "InputError",
             "pickled capture: H is not whole f32 values".into(),
         ));
     }
-    let h = state
-        .h
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect();
+    let h = f32s(&state.h);
     let (start_m, bin_width_m, bins) = state.time;
     let cap = murk_core::Capture {
         illum,
@@ -408,6 +429,7 @@ pub fn _capture_from_state(state: State) -> PyResult<Capture> {
         },
         h,
         scene_info: state.scene_info,
+        medium_density,
     };
     cap.validate()
         .map_err(|e| crate::error("InputError", format!("pickled capture: {e}")))?;

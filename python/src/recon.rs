@@ -16,8 +16,9 @@ use std::path::PathBuf;
 
 type Rows = Vec<(String, String)>;
 type Axes<'py> = [Bound<'py, PyArray1<f64>>; 3];
-/// What `reconstruct` returns: intensity, axes, rows, warnings.
-type Out<'py> = (Bound<'py, PyArrayDyn<f32>>, Axes<'py>, Rows, Vec<String>);
+type Array<'py> = Bound<'py, PyArrayDyn<f32>>;
+/// What `reconstruct` returns: intensity, axes, rows, warnings, normals.
+type Out<'py> = (Array<'py>, Axes<'py>, Rows, Vec<String>, Option<Array<'py>>);
 
 /// The keywords of `murk.reconstruct` (its capture, threads and progress aside), which are
 /// `murk reconstruct`'s flags.
@@ -141,7 +142,8 @@ pub fn methods() -> Vec<(&'static str, &'static str)> {
 }
 
 /// Runs one reconstruction; returns (intensity [nx, ny, nz] float32 without a copy, (x, y, z), rows,
-/// warnings). See `murk.reconstruct`.
+/// warnings, the normals [nx, ny, nz, 3] float32 of the methods that give them). See
+/// `murk.reconstruct`.
 #[pyfunction]
 #[pyo3(signature = (capture, args, threads, progress))]
 pub fn reconstruct<'py>(
@@ -170,12 +172,21 @@ pub fn reconstruct<'py>(
         Ok(out)
     })?;
     let v = out.volume;
-    let intensity = PyArray1::from_vec(py, out.intensity).reshape(v.shape().to_vec())?;
+    let shape = v.shape().to_vec();
+    let intensity = PyArray1::from_vec(py, out.intensity).reshape(shape.clone())?;
+    let normals = out
+        .normals
+        .map(|n| {
+            let flat = n.into_iter().flatten().collect();
+            PyArray1::from_vec(py, flat).reshape([shape, vec![3]].concat())
+        })
+        .transpose()?;
     let axis = |a: &murk_core::Axis| PyArray1::from_vec(py, a.values());
     Ok((
         intensity,
         [axis(&v.x), axis(&v.y), axis(&v.z)],
         out.rows,
         out.warnings,
+        normals,
     ))
 }

@@ -79,3 +79,17 @@ def test_bad_densities_are_refused(height, tmp_path):
         murk.reconstruct(height, medium_density=flat, height_scale=0.5, **RECON)
     with pytest.raises(murk.InputError, match="medium_density is read by compensate with mu_t"):
         murk.reconstruct(height, medium_density=flat, depth_search="off")
+
+
+def test_a_grid_capture_compensates_along_its_own_cells_in_memory_and_pickled(tmp_path):
+    import pickle
+
+    grid = fog_grid(tmp_path / "fog.npy", 12)
+    cap = murk.render(SCENE, grid=8, bins=1200, spp=1, seed=5,
+                      set={"capture.bin_width": 0.005, "medium.kind": "grid",
+                           "medium.density": str(grid)})
+    by_hand = murk.reconstruct(cap, medium_density=grid, **RECON)
+    for c in (cap, pickle.loads(pickle.dumps(cap))):
+        own = murk.reconstruct(c, **RECON)
+        assert "the capture's own grid (1 × 12 × 1 cells)" in own.params["compensated along"]
+        assert np.array_equal(own.intensity, by_hand.intensity)

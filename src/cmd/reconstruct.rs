@@ -67,6 +67,8 @@ pub struct ReconstructArgs {
     /// A y-tal HDF5 capture.
     pub file: PathBuf,
     /// Output volume: .npy (float32 [nx, ny, nz]) or .h5/.hdf5 (intensity + x, y, z + parameters).
+    /// Methods that give surface normals (dlct) also write them, float32 [nx, ny, nz, 3]: the
+    /// dataset `normals` of the .h5, or NAME-normals.npy beside NAME.npy; --png adds normals.png.
     #[arg(long)]
     pub out: PathBuf,
     #[arg(long, default_value = "pf", value_parser = method_names())]
@@ -279,6 +281,10 @@ impl ReconstructArgs {
 pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     murk_io::check_output(&a.out, &[&a.file])?;
     murk_io::check_volume_path(&a.out)?;
+    if let Some(normals) = murk_io::normals_path(&a.out) {
+        // Written only by the methods that give normals, but refused before any work all the same.
+        murk_io::check_output(&normals, &[&a.file])?;
+    }
     if let Some(png) = &a.png {
         // Before the reconstruction, so that a bad --png leaves no volume behind either.
         pictures::check_pictures_dir(png, &[&a.file], &a.out)?;
@@ -349,11 +355,17 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     }
     let table = out.summary(&a.file.display().to_string(), kind, secs);
     let v = &out.volume;
-    murk_io::write_volume(&a.out, v, &out.intensity, &table)?;
+    let normals = out.normals.as_deref();
+    murk_io::write_volume(&a.out, v, &out.intensity, normals, &table)?;
+    let beside = match (normals, murk_io::normals_path(&a.out)) {
+        (Some(_), Some(p)) => format!(", normals in {}", p.display()),
+        (Some(_), None) => ", normals beside the intensity".to_string(),
+        (None, _) => String::new(),
+    };
     say(
         quiet,
         format!(
-            "wrote {} ({}×{}×{} voxels)",
+            "wrote {} ({}×{}×{} voxels{beside})",
             a.out.display(),
             v.x.n,
             v.y.n,
@@ -361,7 +373,7 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
         ),
     );
     if let Some(dir) = &a.png {
-        let pics = pictures::write_views(dir, v, &out.intensity)?;
+        let pics = pictures::write_views(dir, v, &out.intensity, normals)?;
         let index = pictures::write_index(
             dir,
             &format!("murk reconstruction of {}", a.file.display()),

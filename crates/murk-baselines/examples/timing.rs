@@ -61,7 +61,7 @@ fn main() {
             "dlct (M = 512)",
             runs,
             || DlctPlan::new(&c, DlctParams::default(), &NoProgress).unwrap(),
-            |p| p.run(&c, &murk_core::NoProgress).unwrap().albedo,
+            |p| p.run(&c, &murk_core::NoProgress).unwrap(),
         )
     });
     time("fk", &|| {

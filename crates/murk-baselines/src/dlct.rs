@@ -34,15 +34,6 @@ impl Default for DlctParams {
     }
 }
 
-/// What D-LCT recovers on the scan grid ([nx, ny, nt], depth k·Δs′/2, as LCT).
-pub struct Directional {
-    /// |a|·z/L per voxel (the factor keeps the division of b by z from amplifying the noise near
-    /// the wall); zero where a surface would face away from the wall.
-    pub albedo: Reconstruction,
-    /// The unit normal a/|a| per voxel (n_z < 0: facing the wall), zero where the albedo is.
-    pub normals: Vec<[f32; 3]>,
-}
-
 /// Everything that depends only on the geometry: FFT plans, the three filters, the resampler.
 pub struct DlctPlan {
     geom: ConfocalGeometry,
@@ -57,10 +48,9 @@ pub struct DlctPlan {
     resampler: Resampler,
 }
 
-/// Through the method contract only the albedo passes; [`DlctPlan::run`] also gives the normals.
 impl murk_core::Reconstructor for DlctPlan {
     fn reconstruct(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
-        Ok(self.run(capture, progress)?.albedo)
+        self.run(capture, progress)
     }
 }
 
@@ -143,8 +133,11 @@ impl DlctPlan {
         })
     }
 
-    /// Albedo and normals on the scan grid: [nx, ny, nt], depth k·Δs′/2.
-    pub fn run(&self, capture: &Capture, progress: &dyn Progress) -> Result<Directional> {
+    /// Albedo and normals on the scan grid: [nx, ny, nt], depth k·Δs′/2. The intensity is |a|·z/L
+    /// per voxel (the factor keeps the division of b by z from amplifying the noise near the wall),
+    /// zero where a surface would face away from the wall; the normals are a/|a| (n_z < 0: facing
+    /// the wall), zero where the albedo is.
+    pub fn run(&self, capture: &Capture, progress: &dyn Progress) -> Result<Reconstruction> {
         self.geom.check_same(capture, self.params.grid)?;
         let steps = Steps::start(progress, Fft3::FORWARD_PASSES + 3 * Fft3::INVERSE_PASSES);
         let (g, m) = (&self.geom, self.m);
@@ -192,17 +185,16 @@ impl DlctPlan {
                 (len, a.map(|c| c / len))
             })
             .unzip();
-        Ok(Directional {
-            albedo: g
-                .reconstruction(g.nt, albedo, "directional light-cone transform (Wiener)")
-                .row("snr", self.params.snr),
-            normals,
-        })
+        let mut out = g
+            .reconstruction(g.nt, albedo, "directional light-cone transform (Wiener)")
+            .row("snr", self.params.snr);
+        out.normals = Some(normals);
+        Ok(out)
     }
 }
 
 /// One-shot D-LCT (plans and runs).
-pub fn dlct(capture: &Capture, params: DlctParams) -> Result<Directional> {
+pub fn dlct(capture: &Capture, params: DlctParams) -> Result<Reconstruction> {
     DlctPlan::new(capture, params, &NoProgress)?.run(capture, &NoProgress)
 }
 
@@ -263,8 +255,8 @@ mod tests {
 
     /// The albedo-weighted mean normal over the columns whose peak lies within `radius` m of the
     /// scan's centre axis, and the peak voxels' positions.
-    fn mean_normal(d: &Directional, radius: f64) -> (DVec3, Vec<DVec3>) {
-        let r = &d.albedo;
+    fn mean_normal(r: &Reconstruction, radius: f64) -> (DVec3, Vec<DVec3>) {
+        let normals = r.normals.as_ref().unwrap();
         let [nx, ny, nz] = r.volume.shape();
         let (mut sum, mut peaks) = (DVec3::ZERO, Vec::new());
         for ix in 0..nx {
@@ -274,7 +266,7 @@ mod tests {
                 let k = (0..nz).fold(0, |b, k| if col[k] > col[b] { k } else { b });
                 let p = DVec3::new(r.volume.x.at(ix), r.volume.y.at(iy), r.volume.z.at(k));
                 if col[k] > 0.0 && p.truncate().length() < radius {
-                    sum += col[k] as f64 * DVec3::from_array(d.normals[i0 + k].map(f64::from));
+                    sum += col[k] as f64 * DVec3::from_array(normals[i0 + k].map(f64::from));
                     peaks.push(p);
                 }
             }
@@ -329,7 +321,7 @@ mod tests {
             normal: None,
         };
         let d = dlct(&capture(32, &[point]), DlctParams::default()).unwrap();
-        let (peak, _) = d.albedo.peak();
+        let (peak, _) = d.peak();
         // A lateral sample is 2.6 cm, a depth sample 5 mm.
         let e = DVec3::from_array(peak) - p;
         assert!(e.truncate().length() < 0.02 && e.z.abs() < 0.011, "{e}");

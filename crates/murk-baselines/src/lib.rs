@@ -42,7 +42,7 @@ pub use bmm::{bmm, bmm_with, BmmParams, BmmPlan, Medium, FOAM};
 pub use bp::{backproject, backproject_with, BpOptions, BpPlan};
 pub use cdt::{cdt, through_slab, CdtParams, CdtPlan, Pulse, SlabParams};
 pub use confocal::TimeGrid;
-pub use dlct::{dlct, Directional, DlctParams, DlctPlan};
+pub use dlct::{dlct, DlctParams, DlctPlan};
 pub use fbp::{fbp, fbp_with, FbpFilter, FbpOptions, FbpPlan};
 pub use fk::{fk, FkParams, FkPlan};
 pub use lct::{lct, LctParams, LctPlan, Reflectance};

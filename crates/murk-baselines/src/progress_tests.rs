@@ -21,7 +21,7 @@ fn methods(c: &Capture) -> Vec<(&'static str, Run)> {
         ("light-cone", Box::new(move |c, p| lct.run(c, p))),
         (
             "directional light-cone",
-            Box::new(move |c, p| dlct.run(c, p).map(|d| d.albedo)),
+            Box::new(move |c, p| dlct.run(c, p)),
         ),
         ("f-k", Box::new(move |c, p| fk.run(c, p))),
         ("confocal diffuse", Box::new(move |c, p| cdt.run(c, p))),

@@ -1,4 +1,5 @@
-use crate::{DVec3, Error, PointSet, Result};
+use crate::{DVec3, DensityCells, Error, PointSet, Result};
+use std::sync::Arc;
 
 /// The time axis, as optical path length in metres.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -76,6 +77,10 @@ pub struct Capture {
     pub h: Vec<f32>,
     /// Free-form metadata as YAML text (y-tal's `scene_info`), kept opaque.
     pub scene_info: String,
+    /// The density cells of the heterogeneous medium (`kind = "grid"`) the capture was rendered
+    /// through, over the box its `scene_info` names; `None` for any other capture. Shared, since
+    /// captures are cloned and the cells may be large.
+    pub medium_density: Option<Arc<DensityCells>>,
 }
 
 impl Capture {
@@ -86,6 +91,7 @@ impl Capture {
             sensor: self.sensor.clone(),
             h: Vec::new(),
             scene_info: String::new(),
+            medium_density: None,
             ..*self
         }
     }
@@ -135,6 +141,7 @@ impl Capture {
             pairing: Pairing::Paired,
             h,
             scene_info,
+            medium_density: None,
         }
     }
 
@@ -414,6 +421,7 @@ mod tests {
             pairing: Pairing::Product,
             h: (0..nl * ns * nt).map(|v| v as f32).collect(),
             scene_info: String::new(),
+            medium_density: None,
         }
     }
 

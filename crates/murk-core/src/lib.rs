@@ -22,6 +22,7 @@
 
 pub mod buffer;
 mod capture;
+mod density;
 mod error;
 mod input;
 mod limits;
@@ -38,6 +39,7 @@ mod volume;
 pub mod window;
 
 pub use capture::{Capture, CaptureKind, Pairing, TimeAxis};
+pub use density::{DensityCells, MAX_DENSITY_CELLS};
 pub use error::{Error, Result};
 pub use glam::DVec3;
 pub use input::{open_input, read_input};

@@ -19,6 +19,10 @@ pub trait Reconstructor: Send + Sync {
 pub struct Reconstruction {
     pub volume: Volume,
     pub intensity: Vec<f32>,
+    /// The unit surface normal per voxel (indexed as `intensity`; n_z < 0 faces the wall), zero
+    /// where the intensity is: given by the methods that recover surface orientation (dlct), `None`
+    /// by the others. Writers store it beside the volume whichever method gave it.
+    pub normals: Option<Vec<[f32; 3]>>,
     /// How it was made, as (key, value) rows for summaries and file attributes.
     pub rows: Vec<(String, String)>,
     pub warnings: Vec<String>,
@@ -30,6 +34,7 @@ impl Reconstruction {
         Reconstruction {
             volume,
             intensity,
+            normals: None,
             rows: vec![("method".into(), method.into())],
             warnings: Vec::new(),
         }
@@ -39,6 +44,18 @@ impl Reconstruction {
     pub fn row(mut self, key: &str, value: impl ToString) -> Reconstruction {
         self.rows.push((key.into(), value.to_string()));
         self
+    }
+
+    /// Zeroes the normals of the voxels whose intensity is zero (after a step cleared them), so that
+    /// a normal stands only where there is a surface.
+    pub fn clear_dark_normals(&mut self) {
+        if let Some(normals) = &mut self.normals {
+            for (n, &v) in normals.iter_mut().zip(&self.intensity) {
+                if v == 0.0 {
+                    *n = [0.0; 3];
+                }
+            }
+        }
     }
 
     /// (ix, iy, iz) of the largest value (the last one on ties; NaN sorts above everything).

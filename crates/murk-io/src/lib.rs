@@ -23,6 +23,7 @@
 //!     pairing: Pairing::Product,
 //!     h: vec![0.0, 1.0, 0.5, 0.0],
 //!     scene_info: String::new(),
+//!     medium_density: None,
 //! };
 //! let path = std::env::temp_dir().join(format!("murk-io-doc-{}.h5", std::process::id()));
 //! murk_io::write_capture(&path, &cap)?;
@@ -61,5 +62,6 @@ pub use tal::{
 };
 pub use truth::{describe_truth, looks_like_truth, read_truth_h5, write_truth_h5};
 pub use volume::{
-    check_volume_path, read_volume_h5, write_volume, write_volume_h5, AttrValue, VolumeData,
+    check_volume_path, normals_path, read_volume_h5, write_volume, write_volume_h5, AttrValue,
+    VolumeData,
 };

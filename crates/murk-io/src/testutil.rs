@@ -46,6 +46,7 @@ pub fn capture(illum: PointSet, sensor: PointSet, pairing: Pairing) -> Capture {
         pairing,
         h: Vec::new(),
         scene_info: "name: test\nvalues:\n- 1\n- 2\n".into(),
+        medium_density: None,
     };
     c.h = (0..c.n_hist() * bins)
         .map(|i| (i as f32 * 0.37).sin())
@@ -123,4 +124,5 @@ pub fn assert_same(a: &Capture, b: &Capture, what: &str) {
         "{what}: H"
     );
     assert_eq!(a.scene_info, b.scene_info, "{what}: scene_info");
+    assert_eq!(a.medium_density, b.medium_density, "{what}: medium_density");
 }

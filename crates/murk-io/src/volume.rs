@@ -3,8 +3,8 @@
 
 use crate::atomic::write_atomic;
 use hdf5_pure::FileBuilder;
-use murk_core::{Error, Result};
-use std::path::Path;
+use murk_core::{Error, Result, Volume};
+use std::path::{Path, PathBuf};
 
 /// A parameter stored as an HDF5 attribute.
 #[derive(Clone, Debug, PartialEq)]
@@ -13,34 +13,29 @@ pub enum AttrValue {
     Text(String),
 }
 
-/// Writes a volume of `shape` = [nx, ny, nz] (C order, voxel (ix, iy, iz) at (ix·ny + iy)·nz + iz)
-/// with its voxel-centre coordinates and `attrs` as root attributes, atomically.
+/// Writes `intensity` on `volume` (C order, voxel (ix, iy, iz) at (ix·ny + iy)·nz + iz) with its
+/// voxel-centre coordinates, the `normals` where the method gave them (dataset `normals`
+/// [nx, ny, nz, 3]) and `attrs` as root attributes, atomically.
 pub fn write_volume_h5(
     path: &Path,
-    shape: [usize; 3],
+    volume: &Volume,
     intensity: &[f32],
-    x: &[f64],
-    y: &[f64],
-    z: &[f64],
+    normals: Option<&[[f32; 3]]>,
     attrs: &[(&str, AttrValue)],
 ) -> Result<()> {
-    let n = shape.iter().product::<usize>();
-    if intensity.len() != n || [x.len(), y.len(), z.len()] != shape {
-        return Err(Error::param(format!(
-            "{}: volume shape {shape:?} but {} values and axes of {}, {}, {}",
-            path.display(),
-            intensity.len(),
-            x.len(),
-            y.len(),
-            z.len()
-        )));
-    }
+    check_lengths(path, volume, intensity, normals)?;
+    let shape = volume.shape().map(|d| d as u64);
     let mut fb = FileBuilder::new();
     fb.create_dataset("intensity")
-        .with_shape(&shape.map(|d| d as u64))
+        .with_shape(&shape)
         .with_f32_data(intensity);
-    for (name, axis) in [("x", x), ("y", y), ("z", z)] {
-        fb.create_dataset(name).with_f64_data(axis);
+    if let Some(normals) = normals {
+        fb.create_dataset(NORMALS)
+            .with_shape(&[shape[0], shape[1], shape[2], 3])
+            .with_f32_data(normals.as_flattened());
+    }
+    for (name, axis) in [("x", &volume.x), ("y", &volume.y), ("z", &volume.z)] {
+        fb.create_dataset(name).with_f64_data(&axis.values());
     }
     for (k, v) in attrs {
         fb.set_attr(
@@ -58,30 +53,68 @@ pub fn write_volume_h5(
     })
 }
 
-/// Writes an intensity volume in the format its extension names: `.npy` (the array alone) or
-/// `.h5`/`.hdf5` (the array, its x, y, z axes and `attrs` as text attributes).
+/// The HDF5 dataset of the normals beside `intensity`.
+const NORMALS: &str = "normals";
+
+fn check_lengths(
+    path: &Path,
+    volume: &Volume,
+    intensity: &[f32],
+    normals: Option<&[[f32; 3]]>,
+) -> Result<()> {
+    let n = volume.len();
+    if intensity.len() != n || normals.is_some_and(|v| v.len() != n) {
+        return Err(Error::param(format!(
+            "{}: volume shape {:?} but {} values and {} normals",
+            path.display(),
+            volume.shape(),
+            intensity.len(),
+            normals.map_or(0, |v| v.len())
+        )));
+    }
+    Ok(())
+}
+
+/// Where a `.npy` volume's normals go: beside it, `<stem>-normals.npy` ([nx, ny, nz, 3] float32).
+/// An `.h5` volume holds them (`None`).
+pub fn normals_path(path: &Path) -> Option<PathBuf> {
+    match volume_format(path) {
+        Ok(VolumeFormat::Npy) => {
+            let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+            Some(path.with_file_name(format!("{stem}-normals.npy")))
+        }
+        _ => None,
+    }
+}
+
+/// Writes an intensity volume in the format its extension names: `.npy` (the array alone, the
+/// normals in [`normals_path`]) or `.h5`/`.hdf5` (the array, the normals, its x, y, z axes and
+/// `attrs` as text attributes).
 pub fn write_volume(
     path: &Path,
-    volume: &murk_core::Volume,
+    volume: &Volume,
     intensity: &[f32],
+    normals: Option<&[[f32; 3]]>,
     attrs: &[(String, String)],
 ) -> Result<()> {
     match volume_format(path)? {
-        VolumeFormat::Npy => crate::write_npy_f32(path, &volume.shape(), intensity),
+        VolumeFormat::Npy => {
+            check_lengths(path, volume, intensity, normals)?;
+            crate::write_npy_f32(path, &volume.shape(), intensity)?;
+            match (normals, normals_path(path)) {
+                (Some(n), Some(to)) => {
+                    let [nx, ny, nz] = volume.shape();
+                    crate::write_npy_f32(&to, &[nx, ny, nz, 3], n.as_flattened())
+                }
+                _ => Ok(()),
+            }
+        }
         VolumeFormat::Hdf5 => {
             let attrs: Vec<(&str, AttrValue)> = attrs
                 .iter()
                 .map(|(k, v)| (k.as_str(), AttrValue::Text(v.clone())))
                 .collect();
-            write_volume_h5(
-                path,
-                volume.shape(),
-                intensity,
-                &volume.x.values(),
-                &volume.y.values(),
-                &volume.z.values(),
-                &attrs,
-            )
+            write_volume_h5(path, volume, intensity, normals, &attrs)
         }
     }
 }
@@ -117,9 +150,11 @@ fn volume_format(path: &Path) -> Result<VolumeFormat> {
     }
 }
 
-/// A volume written by [`write_volume_h5`]: intensity (C order over x, y, z) and the three axes.
+/// A volume written by [`write_volume_h5`]: intensity (C order over x, y, z), the normals where
+/// it holds them, and the three axes.
 pub struct VolumeData {
     pub intensity: Vec<f32>,
+    pub normals: Option<Vec<[f32; 3]>>,
     pub x: Vec<f64>,
     pub y: Vec<f64>,
     pub z: Vec<f64>,
@@ -147,12 +182,36 @@ pub fn read_volume_h5(path: &Path) -> Result<VolumeData> {
             ),
         ));
     }
-    Ok(VolumeData { intensity, x, y, z })
+    let normals = match crate::h5::root_datasets(path, &file)?
+        .iter()
+        .any(|d| d == NORMALS)
+    {
+        false => None,
+        true => {
+            let ds = crate::h5::dataset(path, &file, NORMALS)?;
+            let (n_shape, flat) = crate::h5::read_real::<f32>(path, &ds, NORMALS, limit)?;
+            if n_shape != [&shape[..], &[3]].concat() {
+                return Err(Error::format(
+                    path,
+                    format!("normals have shape {n_shape:?}, the intensity {shape:?}: expected the intensity's and 3"),
+                ));
+            }
+            Some(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        }
+    };
+    Ok(VolumeData {
+        intensity,
+        normals,
+        x,
+        y,
+        z,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use murk_core::Axis;
 
     #[test]
     fn volume_reads_back() {
@@ -163,16 +222,12 @@ mod tests {
             ("method", AttrValue::Text("pf".into())),
             ("wavelength_m", AttrValue::Num(0.05)),
         ];
-        write_volume_h5(
-            &p,
-            [2, 3, 4],
-            &data,
-            &[0.0, 1.0],
-            &[0.0, 0.5, 1.0],
-            &[1.0, 1.25, 1.5, 1.75],
-            &attrs,
-        )
-        .unwrap();
+        let vol = Volume {
+            x: Axis::new(0.0, 1.0, 2),
+            y: Axis::new(0.0, 1.0, 3),
+            z: Axis::new(1.0, 1.75, 4),
+        };
+        write_volume_h5(&p, &vol, &data, None, &attrs).unwrap();
         let f = hdf5_pure::File::open(&p).unwrap();
         let ds = f.dataset("intensity").unwrap();
         assert_eq!(ds.shape().unwrap(), vec![2, 3, 4]);
@@ -181,9 +236,40 @@ mod tests {
         let a = f.root().attrs().unwrap();
         assert_eq!(a["method"], hdf5_pure::AttrValue::String("pf".into()));
         assert_eq!(a["wavelength_m"], hdf5_pure::AttrValue::F64(0.05));
-        assert!(
-            write_volume_h5(&p, [2, 3, 5], &data, &[0.0; 2], &[0.0; 3], &[0.0; 5], &[]).is_err()
-        );
+        assert!(read_volume_h5(&p).unwrap().normals.is_none());
+        let longer = Volume {
+            z: Axis::new(1.0, 2.0, 5),
+            ..vol
+        };
+        assert!(write_volume_h5(&p, &longer, &data, None, &[]).is_err());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// Normals go into the `.h5` beside the intensity and beside a `.npy` as `<stem>-normals.npy`,
+    /// and read back as written.
+    #[test]
+    fn normals_are_written_beside_the_volume() {
+        let dir = crate::testutil::tmpdir("vol-normals");
+        let vol = Volume {
+            x: Axis::new(0.0, 1.0, 2),
+            y: Axis::new(0.0, 1.0, 1),
+            z: Axis::new(1.0, 2.0, 3),
+        };
+        let intensity = [1.0f32, 0.0, 2.0, 3.0, 0.5, 0.0];
+        let normals: Vec<[f32; 3]> = (0..6).map(|i| [i as f32, 0.5, -1.0]).collect();
+        let h5 = dir.join("v.h5");
+        write_volume(&h5, &vol, &intensity, Some(&normals), &[]).unwrap();
+        let back = read_volume_h5(&h5).unwrap();
+        assert_eq!(back.normals.as_deref(), Some(&normals[..]));
+        assert_eq!(normals_path(&h5), None);
+        let npy = dir.join("v.npy");
+        write_volume(&npy, &vol, &intensity, Some(&normals), &[]).unwrap();
+        let beside = dir.join("v-normals.npy");
+        assert_eq!(normals_path(&npy).as_deref(), Some(beside.as_path()));
+        let (shape, flat) = crate::read_npy_f32(&beside).unwrap();
+        assert_eq!(shape, [2, 1, 3, 3]);
+        assert_eq!(flat, normals.as_flattened());
+        assert!(write_volume(&npy, &vol, &intensity, Some(&normals[1..]), &[]).is_err());
         std::fs::remove_dir_all(dir).ok();
     }
 }

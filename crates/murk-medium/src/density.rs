@@ -39,9 +39,10 @@ pub struct Along {
 impl DensityGiven {
     /// The density that a compensation (`compensates`) reads along each leg of `cap`. In order: the
     /// grid or height fog given, over the box of the capture's stored scene; else the stored
-    /// scene's own height fog; else none (every metre counts as density 1, the homogeneous medium).
-    /// A density is read only with a given μt (`mu_t_given`), which is σt where the density is 1. A
-    /// stored grid (whose cells the capture does not hold), or a heterogeneous medium whose μt was
+    /// scene's own height fog or density grid (whose cells the capture holds); else none (every
+    /// metre counts as density 1, the homogeneous medium). A density is read only with a given μt
+    /// (`mu_t_given`), which is σt where the density is 1. A stored grid whose cells the capture
+    /// does not hold (rendered before murk stored them), or a heterogeneous medium whose μt was
     /// estimated as one homogeneous value, is compensated as homogeneous with a warning saying so.
     /// `spelling` names the flags or keywords.
     pub fn along(
@@ -96,6 +97,17 @@ impl DensityGiven {
             Ok(s) if compensates => s,
             _ => return Ok(Along::default()),
         };
+        let own = cap.medium_density.as_deref();
+        if let (StoredShape::Grid { .. }, true, Some(cells)) = (&stored.shape, mu_t_given, own) {
+            let [nx, ny, nz] = cells.dims();
+            return Ok(Along {
+                density: Some(Arc::new(GridDensity::from_cells(cells, stored.region))),
+                row: Some(format!(
+                    "σt = density × μt along each leg, density from the capture's own grid ({nx} × {ny} × {nz} cells)"
+                )),
+                warnings: Vec::new(),
+            });
+        }
         let what = match (&stored.shape, mu_t_given) {
             (StoredShape::Homogeneous, _) => return Ok(Along::default()),
             (&StoredShape::Height { scale_m }, true) => {
@@ -105,7 +117,7 @@ impl DensityGiven {
         };
         let (why, give) = match (&stored.shape, mu_t_given) {
             (StoredShape::Grid { .. }, true) => (
-                "whose cells the capture does not hold",
+                "whose cells the capture does not hold (rendered before murk stored them)",
                 format!("{} FILE.npy", flag(Opt::MediumDensity)),
             ),
             (StoredShape::Grid { .. }, false) => (

@@ -204,6 +204,7 @@ impl ReconPlan {
             }));
         }
         end.trim(&cap, &out.volume, &mut out.intensity);
+        out.clear_dark_normals();
         // The volume is scanned only where the window end was trimmed, the cause explained here.
         let cleared = |_: &f64| out.intensity.iter().all(|&v| v == 0.0);
         if let Some(from_m) = end.trim_from_m.filter(cleared) {

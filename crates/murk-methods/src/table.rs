@@ -181,7 +181,7 @@ pub const METHODS: &[MethodSpec] = &[
     },
     MethodSpec {
         name: "dlct",
-        help: "Directional light-cone transform: albedo (and, from the library, surface normals) by a vector Wiener filter (confocal grid; own volume)",
+        help: "Directional light-cone transform: albedo and surface normals by a vector Wiener filter (confocal grid; own volume)",
         reads: &[Knob::Snr],
         own_grid: true,
         pulsed: false,

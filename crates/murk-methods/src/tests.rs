@@ -38,7 +38,22 @@ fn a_plan_serves_every_capture_of_its_geometry() {
             let reused = plan.run(cap.clone(), &NoProgress).unwrap();
             let fresh = crate::run(cap.clone(), &req, &NoProgress).unwrap();
             assert_eq!(reused.intensity, fresh.intensity, "{name}");
+            assert_eq!(reused.normals, fresh.normals, "{name}");
             assert_eq!(reused.rows, fresh.rows, "{name}");
+            // Normals pass through the contract from the method that gives them, unit length where
+            // there is intensity and zero where there is none.
+            assert_eq!(reused.normals.is_some(), name == "dlct", "{name}");
+            for (n, &v) in reused.normals.iter().flatten().zip(&reused.intensity) {
+                let len = n.iter().map(|c| c * c).sum::<f32>().sqrt();
+                assert!(
+                    if v == 0.0 {
+                        len == 0.0
+                    } else {
+                        (len - 1.0).abs() < 1e-4
+                    },
+                    "{name}: {n:?} at intensity {v}"
+                );
+            }
             // lct, fk and cdt reconstruct on the scan's own grid and say that the volume is ignored.
             assert_eq!(
                 reused

@@ -352,6 +352,7 @@ impl PfPlan {
                     density: self.density.as_deref(),
                 },
             ),
+            normals: None,
             rows,
             warnings: f.info.warnings,
         })

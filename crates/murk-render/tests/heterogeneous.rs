@@ -145,5 +145,12 @@ fn fog_plume_is_bitwise_reproducible() {
             (PathBuf::from(format!("part{i}")), c)
         })
         .collect();
-    assert_eq!(merge(&parts).unwrap().h, one.h);
+    let merged = merge(&parts).unwrap();
+    assert_eq!(merged.h, one.h);
+    // The capture carries the plume's cells as the scene's file holds them, through the merge too.
+    let (shape, cells) = murk_io::read_npy_f32(&path.with_file_name("fog-plume.npy")).unwrap();
+    for c in [&one, &merged] {
+        let own = c.medium_density.as_deref().unwrap();
+        assert_eq!((&own.dims()[..], own.values()), (&shape[..], &cells[..]));
+    }
 }

@@ -97,8 +97,9 @@ pub fn demo(dir: &Path, progress: &dyn Progress) -> Result<Demo> {
     ));
     let volume_path = dir.join("volume.npy");
     let table: Vec<(String, String)> = provenance.iter().chain(&params).cloned().collect();
-    murk_io::write_volume(&volume_path, &volume, &rec.intensity, &table)?;
-    let views = pictures::write_views(dir, &volume, &rec.intensity)?;
+    let normals = rec.normals.as_deref();
+    murk_io::write_volume(&volume_path, &volume, &rec.intensity, normals, &table)?;
+    let views = pictures::write_views(dir, &volume, &rec.intensity, normals)?;
     let index = write_page(dir, &volume, &rec.intensity, &provenance, &params, &views)?;
     Ok(Demo {
         capture,

@@ -108,6 +108,7 @@ impl CaptureLayout {
             pairing,
             h: Vec::new(),
             scene_info: String::new(),
+            medium_density: None,
         };
         let n = murk_core::Limits::get().capture_h(cap.n_hist(), self.time.bins)?;
         if n > 1 << 31 {

@@ -19,6 +19,7 @@
 //! ```
 
 pub mod grid;
+pub mod normal_map;
 pub mod pictures;
 pub mod plot;
 

@@ -94,7 +94,13 @@ pub struct Views {
     pub side: Plane,
     /// Depth (m) of the brightest voxel per (x, y), NaN where the front MIP is below 20 % of its maximum.
     pub depth: Plane,
+    /// The volume's index of the brightest voxel behind each front pixel (row-major as `front`).
+    pub front_voxels: Vec<usize>,
 }
+
+/// Below this share of the front view's maximum a pixel has no depth (nor normal): dim columns hold
+/// no surface to speak of.
+pub(crate) const SURFACE_LEVEL: f32 = 0.2;
 
 fn axis_text(name: &str, a: &murk_core::Axis, reversed: bool, from: &str, to: &str) -> String {
     let (s, e) = if reversed {
@@ -113,6 +119,7 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
     // Row r of an image with +y up is iy = ny − 1 − r; column c with +x on the left is ix = nx − 1 − c.
     let mut front = vec![0f32; nx * ny];
     let mut depth = vec![f32::NAN; nx * ny];
+    let mut front_voxels = vec![0; nx * ny];
     for r in 0..ny {
         for c in 0..nx {
             let (ix, iy) = (nx - 1 - c, ny - 1 - r);
@@ -121,11 +128,12 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
                 .fold((0, f32::MIN), |a, b| if b.1 > a.1 { b } else { a });
             front[r * nx + c] = m;
             depth[r * nx + c] = vol.z.at(iz) as f32;
+            front_voxels[r * nx + c] = vol.index(ix, iy, iz);
         }
     }
     let fmax = front.iter().cloned().fold(0.0, f32::max);
     for (d, f) in depth.iter_mut().zip(&front) {
-        if *f < 0.2 * fmax {
+        if *f < SURFACE_LEVEL * fmax {
             *d = f32::NAN;
         }
     }
@@ -183,6 +191,7 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
             extents: format!("{cols_z}; {rows_y}"),
             axes: Some([zs, ys]),
         },
+        front_voxels,
     }
 }
 
@@ -190,6 +199,24 @@ pub fn views(vol: &Volume, intensity: &[f32]) -> Views {
 /// value; nearest neighbour, so voxels stay visible), its sides in the plane's physical aspect ratio.
 /// Values map [lo, hi] → colour map; NaN is black.
 pub fn write_png(path: &Path, plane: &Plane, lo: f32, hi: f32) -> Result<()> {
+    write_pixels(path, plane, format!("{lo} .. {hi}"), |i| {
+        let v = plane.values[i];
+        if v.is_nan() {
+            [0, 0, 0]
+        } else {
+            colour((v - lo) / (hi - lo).max(f32::MIN_POSITIVE))
+        }
+    })
+}
+
+/// Writes an RGB PNG of `plane`'s size and aspect (as [`write_png`]), value `i` of the plane drawn
+/// in `colour_of(i)`, with the extents and `range` in its text chunks.
+pub(crate) fn write_pixels(
+    path: &Path,
+    plane: &Plane,
+    range: String,
+    colour_of: impl Fn(usize) -> [u8; 3],
+) -> Result<()> {
     let long = (plane.width.max(plane.height) as u32).max(384);
     let (w, h) = plane.fitted(long);
     let (w, h) = (w as usize, h as usize);
@@ -198,13 +225,7 @@ pub fn write_png(path: &Path, plane: &Plane, lo: f32, hi: f32) -> Result<()> {
         let py = (y * plane.height / h).min(plane.height - 1);
         for x in 0..w {
             let px = (x * plane.width / w).min(plane.width - 1);
-            let v = plane.values[py * plane.width + px];
-            let c = if v.is_nan() {
-                [0, 0, 0]
-            } else {
-                colour((v - lo) / (hi - lo).max(f32::MIN_POSITIVE))
-            };
-            rgb.extend_from_slice(&c);
+            rgb.extend_from_slice(&colour_of(py * plane.width + px));
         }
     }
     murk_io::write_atomic(path, |out| {
@@ -214,7 +235,7 @@ pub fn write_png(path: &Path, plane: &Plane, lo: f32, hi: f32) -> Result<()> {
         let fail = |e: png::EncodingError| murk_core::Error::format(path, e.to_string());
         enc.add_itxt_chunk("murk:extents".into(), plane.extents.clone())
             .map_err(fail)?;
-        enc.add_itxt_chunk("murk:range".into(), format!("{lo} .. {hi}"))
+        enc.add_itxt_chunk("murk:range".into(), range)
             .map_err(fail)?;
         let mut wr = enc.write_header().map_err(fail)?;
         wr.write_image_data(&rgb).map_err(fail)?;
@@ -223,11 +244,12 @@ pub fn write_png(path: &Path, plane: &Plane, lo: f32, hi: f32) -> Result<()> {
 }
 
 /// The files [`write_views`] and [`write_index`] write into their folder.
-pub const PICTURE_FILES: [&str; 5] = [
+pub const PICTURE_FILES: [&str; 6] = [
     "front.png",
     "top.png",
     "side.png",
     "depth.png",
+    crate::normal_map::FILE,
     "index.html",
 ];
 
@@ -280,8 +302,14 @@ pub fn check_pictures_dir(dir: &Path, inputs: &[&Path], out: &Path) -> Result<()
     Ok(())
 }
 
-/// Writes front.png, top.png, side.png and depth.png into `dir`; returns their paths with captions.
-pub fn write_views(dir: &Path, vol: &Volume, intensity: &[f32]) -> Result<Vec<(PathBuf, String)>> {
+/// Writes front.png, top.png, side.png and depth.png into `dir`, and normals.png where the method gave
+/// `normals`; returns their paths with captions.
+pub fn write_views(
+    dir: &Path,
+    vol: &Volume,
+    intensity: &[f32],
+    normals: Option<&[[f32; 3]]>,
+) -> Result<Vec<(PathBuf, String)>> {
     murk_io::create_output_dir(dir)?;
     let v = views(vol, intensity);
     let max = intensity.iter().cloned().fold(0.0, f32::max);
@@ -309,6 +337,9 @@ pub fn write_views(dir: &Path, vol: &Volume, intensity: &[f32]) -> Result<Vec<(P
         p,
         format!("depth of the brightest voxel ({})", v.depth.extents),
     ));
+    if let Some(normals) = normals {
+        out.push(crate::normal_map::write(dir, &v, normals)?);
+    }
     Ok(out)
 }
 

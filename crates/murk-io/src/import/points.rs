@@ -116,6 +116,7 @@ impl Walls {
             pairing: Pairing::Paired,
             h,
             scene_info,
+            medium_density: None,
         };
         super::checked(path, cap)
     }

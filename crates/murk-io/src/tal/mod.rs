@@ -74,6 +74,12 @@ pub(crate) fn read_limit_bytes() -> u64 {
 /// CRC-32 of what a capture file stores, as stored: H histogram by histogram (murk's order, whatever
 /// the file's layout), then the points, normals and devices, the time axis as f32, the flag and
 /// `scene_info`, all little-endian.
+/// The root attributes that hold a heterogeneous medium's density cells (f32, C order) and their
+/// shape (nx, ny, nz): attributes, which y-tal's reader passes over, where a dataset would make it
+/// refuse the file.
+const DENSITY_ATTR: &str = "murk_medium_density";
+const DENSITY_SHAPE_ATTR: &str = "murk_medium_density_shape";
+
 fn capture_crc32(cap: &Capture) -> u32 {
     let mut crc = crc32fast::Hasher::new();
     let mut bytes = Vec::with_capacity(4 * 4096);
@@ -107,6 +113,17 @@ fn capture_crc32(cap: &Capture) -> u32 {
     );
     crc.update(&[cap.t_accounts_first_and_last_bounces as u8]);
     crc.update(cap.scene_info.as_bytes());
+    // Only where there are cells, so that every other capture keeps its checksum.
+    if let Some(cells) = &cap.medium_density {
+        for d in cells.dims() {
+            crc.update(&(d as u64).to_le_bytes());
+        }
+        for block in cells.values().chunks(4096) {
+            bytes.clear();
+            bytes.extend(block.iter().flat_map(|v| v.to_le_bytes()));
+            crc.update(&bytes);
+        }
+    }
     crc.finalize()
 }
 

@@ -2,10 +2,14 @@
 //! checked before H is read.
 
 use super::format::{dims, HFormat, GRID_FORMATS};
-use super::{capture_crc32, read_limit_bytes};
+use super::{capture_crc32, read_limit_bytes, DENSITY_ATTR, DENSITY_SHAPE_ATTR};
 use crate::h5;
-use murk_core::{Capture, DVec3, Error, Pairing, PointLayout, PointSet, Result, TimeAxis};
+use murk_core::{
+    Capture, DVec3, DensityCells, Error, Pairing, PointLayout, PointSet, Result, TimeAxis,
+};
+use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Reads a y-tal HDF5 capture (see the module docs for the mapping), with the default size limit.
 pub fn read_capture(path: &Path) -> Result<Capture> {
@@ -179,6 +183,7 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
         pairing,
         h: Vec::new(),
         scene_info,
+        medium_density: None,
     };
     // Before H is read: a few bytes declaring an absurd time window must not cost gigabytes first.
     cap.validate_geometry().map_err(|e| bad(e.to_string()))?;
@@ -202,8 +207,30 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
     // Files murk wrote carry a checksum: a damaged one would otherwise read as a valid capture
     // (checked after the values, whose own faults, such as NaN written in place, say more).
     let attrs = file.root().attrs().unwrap_or_default();
+    cap.medium_density = density_cells(&attrs).map_err(bad)?.map(Arc::new);
     h5::check_crc32(path, attrs.get(h5::CRC32_ATTR), || capture_crc32(&cap))?;
     Ok(cap)
+}
+
+/// The density cells murk stored in the root attributes (a capture rendered through a density grid),
+/// if any; a shape without cells, or cells that no grid could hold, is an error's message.
+pub(super) fn density_cells(
+    attrs: &HashMap<String, hdf5_pure::AttrValue>,
+) -> std::result::Result<Option<DensityCells>, String> {
+    use hdf5_pure::AttrValue::{F32Array, U64Array};
+    let what = |e: String| format!("{DENSITY_ATTR}: {e}");
+    match (attrs.get(DENSITY_SHAPE_ATTR), attrs.get(DENSITY_ATTR)) {
+        (None, None) => Ok(None),
+        (Some(U64Array(shape)), Some(F32Array(values))) => {
+            let shape: Vec<usize> = shape.iter().map(|&d| d as usize).collect();
+            DensityCells::new(&shape, values.clone())
+                .map(Some)
+                .map_err(what)
+        }
+        _ => Err(what(format!(
+            "the medium's density cells need both {DENSITY_ATTR} (f32) and {DENSITY_SHAPE_ATTR} (u64), this file has another pair"
+        ))),
+    }
 }
 
 /// Reads `<side>_grid_xyz` and `<side>_grid_normals`; a missing or empty normals dataset means +z.

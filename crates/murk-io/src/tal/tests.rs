@@ -68,6 +68,68 @@ fn writes_only_tal_fields() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A capture rendered through a density grid keeps its cells: root attributes (y-tal's reader
+/// refuses unknown datasets, and passes over attributes) that read back as written, under the
+/// checksum; half of the pair is refused.
+#[test]
+fn density_cells_round_trip_as_attributes() {
+    let dir = tmpdir("density");
+    let p = dir.join("c.hdf5");
+    let mut cap = all_kinds()[0].1.clone();
+    let values: Vec<f32> = (0..24).map(|i| 0.25 * (i % 5) as f32).collect();
+    let cells = murk_core::DensityCells::new(&[2, 3, 4], values).unwrap();
+    cap.medium_density = Some(std::sync::Arc::new(cells));
+    for level in [0, 4] {
+        write_capture_compressed(&p, &cap, level).unwrap();
+        assert_same(&read_capture(&p).unwrap(), &cap, "density");
+    }
+    let f = hdf5_pure::File::open(&p).unwrap();
+    for k in f.root().datasets().unwrap() {
+        assert!(TAL_FIELDS.contains(&k.as_str()), "{k}");
+    }
+    drop(f);
+    // 256 kB of cells: past an object header's 64 kB, in HDF5's dense attribute storage.
+    let mut big = cap.clone();
+    let values: Vec<f32> = (0..64_000).map(|i| (i % 7) as f32).collect();
+    big.medium_density = Some(std::sync::Arc::new(
+        murk_core::DensityCells::new(&[40, 40, 40], values).unwrap(),
+    ));
+    let q = dir.join("big.hdf5");
+    write_capture(&q, &big).unwrap();
+    assert_same(&read_capture(&q).unwrap(), &big, "dense");
+    // A cell changed in place is refused: small cells sit in the root's object header, which HDF5
+    // checksums itself; murk's checksum covers them too, for the large ones HDF5 keeps elsewhere.
+    let mut bytes = std::fs::read(&p).unwrap();
+    let at = bytes
+        .windows(8)
+        .position(|w| w == [0.25f32.to_le_bytes(), 0.5f32.to_le_bytes()].concat())
+        .unwrap();
+    bytes[at] ^= 1;
+    std::fs::write(&p, &bytes).unwrap();
+    let e = err_of(&p);
+    assert!(e.contains("c.hdf5") && e.contains("checksum"), "{e}");
+    write_capture(&p, &all_kinds()[0].1).unwrap();
+    assert_eq!(read_capture(&p).unwrap().medium_density, None);
+    // Half of the pair, or cells that no grid could hold: named.
+    use hdf5_pure::AttrValue::{F32Array, U64Array};
+    let attrs = |pairs: Vec<(&str, hdf5_pure::AttrValue)>| {
+        pairs
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect::<std::collections::HashMap<_, _>>()
+    };
+    let half = attrs(vec![(DENSITY_ATTR, F32Array(vec![1.0; 8]))]);
+    let e = super::read::density_cells(&half).unwrap_err();
+    assert!(e.contains("need both murk_medium_density (f32)"), "{e}");
+    let short = attrs(vec![
+        (DENSITY_SHAPE_ATTR, U64Array(vec![2, 2, 2])),
+        (DENSITY_ATTR, F32Array(vec![1.0; 7])),
+    ]);
+    let e = super::read::density_cells(&short).unwrap_err();
+    assert!(e.contains("holds 8 cells but 7 values"), "{e}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn invalid_capture_is_not_written() {
     let dir = tmpdir("invalid");

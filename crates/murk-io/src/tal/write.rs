@@ -1,8 +1,8 @@
 //! Writing a capture as y-tal does: H transposed to time-first in the layout [`WriteLayout::of`]
 //! chooses, the point sets as f32, y-tal's enums, and murk's checksum attribute.
 
-use super::capture_crc32;
 use super::format::{HFormat, WriteLayout, GRID_FORMATS};
+use super::{capture_crc32, DENSITY_ATTR, DENSITY_SHAPE_ATTR};
 use crate::atomic::write_atomic;
 use crate::h5;
 use hdf5_pure::{make_i8_type, EnumTypeBuilder, FileBuilder};
@@ -103,6 +103,15 @@ pub fn write_capture_compressed(path: &Path, cap: &Capture, level: u32) -> Resul
     fb.create_dataset("scene_info")
         .with_shape(&[])
         .with_vlen_strings(&[cap.scene_info.as_str()]);
+    if let Some(cells) = &cap.medium_density {
+        // Root attributes, not datasets: y-tal refuses a file with a top-level key it does not know.
+        let dims = cells.dims().map(|d| d as u64).to_vec();
+        fb.set_attr(DENSITY_SHAPE_ATTR, hdf5_pure::AttrValue::U64Array(dims));
+        fb.set_attr(
+            DENSITY_ATTR,
+            hdf5_pure::AttrValue::F32Array(cells.values().to_vec()),
+        );
+    }
 
     write_atomic(path, |w| {
         fb.finish_to(w)

@@ -1,6 +1,6 @@
 //! A density grid along straight paths: the scene's `kind = "grid"` medium with μt = 1.
 
-use murk_core::{DVec3, Result};
+use murk_core::{DVec3, DensityCells, Result};
 use murk_recon::PathDensity;
 use murk_render::{Aabb, Grid};
 use std::path::Path;
@@ -18,6 +18,16 @@ impl GridDensity {
             grid: Grid::load(file, 1.0, &region)?,
             region,
         })
+    }
+}
+
+impl GridDensity {
+    /// The grid of `cells` (a capture's own) over `region`.
+    pub fn from_cells(cells: &DensityCells, region: Aabb) -> GridDensity {
+        GridDensity {
+            grid: Grid::from_cells(cells.clone(), 1.0, &region),
+            region,
+        }
     }
 }
 

@@ -4,11 +4,11 @@
 
 use super::Segment;
 use crate::geometry::Aabb;
-use murk_core::{DVec3, Error, Result};
+use murk_core::{DVec3, DensityCells, Error, Result};
 use std::path::Path;
 
 /// The most cells a density grid may have (256³: 64 MiB of f32).
-pub const MAX_CELLS: u64 = 1 << 24;
+pub const MAX_CELLS: u64 = murk_core::MAX_DENSITY_CELLS;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
@@ -16,8 +16,8 @@ pub struct Grid {
     dims: [usize; 3],
     min: DVec3,
     cell_m: DVec3,
-    /// Densities in the file's C order: cell (i, j, k) at (i·ny + j)·nz + k.
-    density: Vec<f32>,
+    /// The densities in the file's C order: cell (i, j, k) at (i·ny + j)·nz + k.
+    cells: DensityCells,
     mu_t_per_m: f64,
     /// The largest σt of any cell: the majorant of null-collision tracking.
     pub majorant_per_m: f64,
@@ -28,44 +28,34 @@ impl Grid {
     /// density × `mu_t_per_m`. Errors name the file: a rank other than 3, more than `MAX_CELLS`
     /// (256³), a density that is negative or not finite, or no density above zero.
     pub fn load(path: &Path, mu_t_per_m: f64, region: &Aabb) -> Result<Grid> {
-        let bad = |msg: String| Error::format(path, msg);
         let (shape, density) = murk_io::read_npy_f32_with_limit(path, MAX_CELLS * 4)?;
-        let &[nx, ny, nz] = shape.as_slice() else {
-            return Err(bad(format!(
-                "a density grid has 3 dimensions (nx, ny, nz), this one has shape {shape:?}"
-            )));
-        };
-        if nx * ny * nz == 0 {
-            return Err(bad(format!("the density grid {shape:?} has no cells")));
-        }
-        if let Some(at) = density.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
-            let (i, j, k) = (at / (ny * nz), at / nz % ny, at % nz);
-            return Err(bad(format!(
-                "density[{i}, {j}, {k}] = {}: densities must be finite and ≥ 0",
-                density[at]
-            )));
-        }
-        let max = density.iter().fold(0.0f32, |a, &v| a.max(v)) as f64;
-        if max <= 0.0 {
-            return Err(bad(
-                "every density is 0: the medium would be empty (leave [medium] out)".into(),
-            ));
-        }
-        let dims = [nx, ny, nz];
-        Ok(Grid {
+        let cells = DensityCells::new(&shape, density).map_err(|e| Error::format(path, e))?;
+        Ok(Grid::from_cells(cells, mu_t_per_m, region))
+    }
+
+    /// The grid of `cells` stretched over `region`, with σt = density × `mu_t_per_m`.
+    pub fn from_cells(cells: DensityCells, mu_t_per_m: f64, region: &Aabb) -> Grid {
+        let dims = cells.dims();
+        let [nx, ny, nz] = dims.map(|d| d as f64);
+        Grid {
             dims,
             min: region.min,
-            cell_m: (region.max - region.min) / DVec3::new(nx as f64, ny as f64, nz as f64),
-            density,
+            cell_m: (region.max - region.min) / DVec3::new(nx, ny, nz),
+            majorant_per_m: cells.max() as f64 * mu_t_per_m,
+            cells,
             mu_t_per_m,
-            majorant_per_m: max * mu_t_per_m,
-        })
+        }
+    }
+
+    /// The density cells (what a capture rendered through the grid stores).
+    pub fn cells(&self) -> &DensityCells {
+        &self.cells
     }
 
     /// FNV-1a of the cell counts and densities: what the scene's key records of the file.
     pub fn fingerprint(&self) -> u64 {
         let dims = self.dims.into_iter().flat_map(|d| (d as u64).to_le_bytes());
-        let cells = self.density.iter().flat_map(|v| v.to_le_bytes());
+        let cells = self.cells.values().iter().flat_map(|v| v.to_le_bytes());
         crate::hash::fnv1a(dims.chain(cells))
     }
 
@@ -77,7 +67,7 @@ impl Grid {
 
     pub fn sigma_t_at(&self, p: DVec3) -> f64 {
         let [i, j, k] = self.index(p);
-        self.density[(i * self.dims[1] + j) * self.dims[2] + k] as f64 * self.mu_t_per_m
+        self.cells.values()[(i * self.dims[1] + j) * self.dims[2] + k] as f64 * self.mu_t_per_m
     }
 
     /// ∫σt along `seg` (inside the box): each crossed cell's σt times the length within it
@@ -108,6 +98,7 @@ impl Grid {
                 step[a] = -(stride[a] as isize);
             }
         }
+        let density = self.cells.values();
         let (mut t, mut sum) = (seg.t0, 0.0);
         loop {
             let a = if next[0] < next[1] {
@@ -122,7 +113,7 @@ impl Grid {
                 2
             };
             let end = next[a];
-            let here = self.density[flat] as f64;
+            let here = density[flat] as f64;
             // Past the last cell along an axis only rounding is left: the rest lies in this cell.
             if end >= seg.t1 || left[a] == 0 {
                 return (sum + here * (seg.t1 - t).max(0.0)) * self.mu_t_per_m;
@@ -150,14 +141,7 @@ mod tests {
             max: DVec3::new(1.0, 1.5, 1.7),
         };
         let density: Vec<f32> = (0..60).map(|i| ((i * 37 % 11) as f32) / 7.0).collect();
-        let g = Grid {
-            dims,
-            min: region.min,
-            cell_m: (region.max - region.min) / DVec3::new(5.0, 4.0, 3.0),
-            majorant_per_m: 0.0,
-            density,
-            mu_t_per_m: 1.5,
-        };
+        let g = Grid::from_cells(DensityCells::new(&dims, density).unwrap(), 1.5, &region);
         let from = |o: DVec3, to: DVec3| {
             let v = to - o;
             let (t0, t1) = region.clip(o, v.normalize(), v.length()).unwrap();

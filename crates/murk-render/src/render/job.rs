@@ -4,6 +4,7 @@
 use crate::integrator::{Endpoint, Sampler, Tracer};
 use crate::scene::{Scene, TraceFrom};
 use murk_core::{Capture, DVec3, Error, Pairing, PointLayout, Result};
+use std::sync::Arc;
 
 /// The mapping from work units to wall points and histograms.
 pub struct Plan<'a> {
@@ -284,6 +285,10 @@ impl<'a> Plan<'a> {
             pairing: c.pairing,
             h: vec![0.0; n_hist * c.time.bins],
             scene_info,
+            medium_density: self.scene.medium.as_ref().and_then(|m| match &m.kind {
+                crate::medium::Kind::Grid(g) => Some(Arc::new(g.cells().clone())),
+                _ => None,
+            }),
         }
     }
 
