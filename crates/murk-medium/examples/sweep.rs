@@ -1,7 +1,8 @@
 //! Estimates the medium of several captures of one geometry from one table, and prints a Markdown
 //! table of the estimates against the truth that each capture's scene_info records (the table in
 //! docs/medium.md): `cargo run --release -p murk-medium --example sweep -- [--given-g] CAPTURE.h5 …`.
-//! With `--given-g` each capture's true g is given and μt and α are fitted.
+//! With `--given-g` each capture's true g is given and μt and α are fitted; `--rings`, `--spp` and
+//! `--grid N` (after it) set the table's.
 
 use murk_medium::{estimate_with, EstimateOptions, Outcome, ResponseTable};
 
@@ -29,8 +30,15 @@ fn main() -> murk_core::Result<()> {
         files.remove(0);
     }
     let mut spec = murk_medium::TableSpec::default();
-    if files.first().is_some_and(|f| f == "--rings") {
-        spec.rings = files[1].parse().expect("--rings N");
+    // `--rings N`, `--spp N`, `--grid N`: the table's reduction and renders (what their accuracy costs).
+    while let Some(flag) = files.first().filter(|f| f.starts_with("--")).cloned() {
+        let n: usize = files[1].parse().expect("--rings, --spp or --grid N");
+        match flag.as_str() {
+            "--rings" => spec.rings = n,
+            "--spp" => spec.spp = n as u64,
+            "--grid" => spec.grid = n,
+            other => panic!("unknown flag {other}"),
+        }
         files.drain(..2);
     }
     let mut table: Option<ResponseTable> = None;
