@@ -81,8 +81,8 @@ pub fn search_depth(
     Ok((chosen, Some((found, line))))
 }
 
-/// The most wall points a side the depth search reconstructs: 64 keeps its cost under a fifth of a
-/// 128² capture's plain reconstruction (docs/benchmarks.md) and is the quick format's own grid.
+/// The most wall points a side the depth search reconstructs: at 64 it costs an eighth of a 128²
+/// capture's plain reconstruction (docs/benchmarks.md), and the quick format's grid is searched whole.
 pub const SEARCH_GRID: usize = 64;
 
 /// `cap` with its scanned wall grid binned k × k, k the smallest that divides both sides and brings
