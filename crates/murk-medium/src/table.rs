@@ -34,7 +34,7 @@ impl Default for TableSpec {
     fn default() -> TableSpec {
         TableSpec {
             grid: 8,
-            spp: 128,
+            spp: 256,
             seed: 0,
             mu_t_per_m: (0..12).map(|i| 0.25 * 1.35f64.powi(i)).collect(),
             g: vec![-0.8, -0.4, 0.0, 0.4, 0.8],
