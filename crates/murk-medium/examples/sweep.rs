@@ -1,8 +1,8 @@
 //! Estimates the medium of several captures of one geometry from one table, and prints a Markdown
 //! table of the estimates against the truth that each capture's scene_info records (the table in
 //! docs/medium.md): `cargo run --release -p murk-medium --example sweep -- [--given-g] [--rings N]
-//! [--table-cache DIR] CAPTURE.h5 …`, options in that order. With `--given-g` each capture's true g
-//! is given and μt and α are fitted.
+//! [--spp N] [--grid N] [--table-cache DIR] CAPTURE.h5 …`. With `--given-g` (first) each capture's
+//! true g is given and μt and α are fitted; the others set the table's reduction and renders.
 
 use murk_medium::{estimate_with, EstimateOptions, Outcome, ResponseTable};
 
@@ -30,13 +30,19 @@ fn main() -> murk_core::Result<()> {
         files.remove(0);
     }
     let mut spec = murk_medium::TableSpec::default();
-    if files.first().is_some_and(|f| f == "--rings") {
-        spec.rings = files[1].parse().expect("--rings N");
-        files.drain(..2);
-    }
+    // `--rings N`, `--spp N`, `--grid N`: the table's reduction and renders (what their accuracy
+    // costs); `--table-cache DIR`: where the table is kept between runs.
     let mut table_cache = None;
-    if files.first().is_some_and(|f| f == "--table-cache") {
-        table_cache = Some(std::path::PathBuf::from(&files[1]));
+    while let Some(flag) = files.first().filter(|f| f.starts_with("--")).cloned() {
+        let value = files[1].clone();
+        let n = || value.parse::<usize>().expect("--rings, --spp or --grid N");
+        match flag.as_str() {
+            "--rings" => spec.rings = n(),
+            "--spp" => spec.spp = n() as u64,
+            "--grid" => spec.grid = n(),
+            "--table-cache" => table_cache = Some(std::path::PathBuf::from(&value)),
+            other => panic!("unknown flag {other}"),
+        }
         files.drain(..2);
     }
     let mut table: Option<ResponseTable> = None;

@@ -1,11 +1,18 @@
 //! The default volume, and the depth search of the medium-aware path: with the default volume and a
 //! capture whose early bins are a medium's response, the whole reach is first reconstructed coarsely
 //! and the depths where the signal focuses best are kept.
+//!
+//! The search runs on a wall grid of at most [`SEARCH_GRID`] points a side: a finer capture is
+//! binned (the mean histogram of each block of points) and searched at its own default volume, whose
+//! planes the binned spacing sets. Which plane focuses best needs the focus, not the full lateral
+//! resolution; the reconstruction kept is the capture's own.
 
 use crate::plan::{edge_m, MediumGiven, ReconPlan, GATE_MARGIN_EDGES};
 use crate::{Gate, Request, VolumeSpec};
 use murk_core::window::shortest_path_m;
-use murk_core::{Axis, Capture, Error, Progress, Result, Volume};
+use murk_core::{
+    Axis, Capture, DVec3, Error, Pairing, PointLayout, PointSet, Progress, Result, Volume,
+};
 use murk_recon::medium::{self, detect::Signature, DepthSearch, MediumRemoval};
 
 /// `req` with the volume the depth search chose, and what it found with its line for the summary;
@@ -24,23 +31,27 @@ pub fn search_depth(
     if !applies {
         return Ok((*req, None));
     }
-    // The whole reach at no more than the search's planes; the depth range kept gets the default
-    // volume's spacing.
+    // The whole reach at no more than the search's planes, on the binned grid where the capture's is
+    // finer; the depth range kept gets the capture's own lateral axes and the default volume's spacing.
     let full = default_volume(cap)?;
     let step_m = (full.z.end - full.z.start) / (full.z.n - 1) as f64;
+    let binned = binned_for_search(cap);
+    let searched = binned.as_ref().unwrap_or(cap);
+    let reach = default_volume(searched)?;
     let coarse = Volume {
         z: Axis::new(
-            full.z.start,
-            full.z.end,
-            full.z.n.min(medium::search::SEARCH_PLANES),
+            reach.z.start,
+            reach.z.end,
+            reach.z.n.min(medium::search::SEARCH_PLANES),
         ),
-        ..full
+        ..reach
     };
     let whole_req = Request {
         volume: VolumeSpec::Given(coarse),
         ..*req
     };
-    let whole = ReconPlan::given(cap, &whole_req, given, progress)?.run(cap.clone(), progress)?;
+    let whole =
+        ReconPlan::given(searched, &whole_req, given, progress)?.run(searched.clone(), progress)?;
     // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
     // planes it leaves fully open are searched.
     let open_m = match req.gate {
@@ -54,15 +65,96 @@ pub fn search_depth(
         };
         open_m.is_none_or(|open_m| shortest_path_m(cap, &plane) >= open_m)
     };
-    let Some(found) = medium::search::choose(&whole, &usable, step_m) else {
+    let Some(mut found) = medium::search::choose(&whole, &usable, step_m) else {
         return Ok((*req, None));
     };
+    found.volume = found.volume.map(|v| Volume {
+        x: full.x,
+        y: full.y,
+        ..v
+    });
     let line = found.describe(&whole.volume);
     let mut chosen = *req;
     if let Some(v) = found.volume {
         chosen.volume = VolumeSpec::Given(v);
     }
     Ok((chosen, Some((found, line))))
+}
+
+/// The most wall points a side the depth search reconstructs: at 64 it costs an eighth of a 128²
+/// capture's plain reconstruction (docs/benchmarks.md), and the quick format's grid is searched whole.
+pub const SEARCH_GRID: usize = 64;
+
+/// `cap` with its scanned wall grid binned k × k, k the smallest that divides both sides and brings
+/// them to [`SEARCH_GRID`] or fewer: each block's mean histogram at its points' mean. `None` where the
+/// grid is that small already, where no such k leaves half of [`SEARCH_GRID`] or more, or where
+/// binning does not apply (every laser point with every sensor point, or a side that is not a
+/// regular grid).
+pub(crate) fn binned_for_search(cap: &Capture) -> Option<Capture> {
+    // The grid the histograms follow: both sides of a paired scan, the many-point side of a product
+    // with one point on the other.
+    let (bin_illum, bin_sensor) = match cap.pairing {
+        Pairing::Paired => (true, true),
+        Pairing::Product if cap.sensor.len() == 1 => (true, false),
+        Pairing::Product if cap.illum.len() == 1 => (false, true),
+        Pairing::Product => return None,
+    };
+    let grid = if bin_illum { &cap.illum } else { &cap.sensor };
+    let g = grid.regular_grid()?;
+    let (nx, ny) = (g.nx, g.ny);
+    if nx.max(ny) <= SEARCH_GRID || (bin_illum && bin_sensor && cap.sensor.shape() != (nx, ny)) {
+        return None;
+    }
+    let k =
+        (2..=nx.max(ny)).find(|&k| nx % k == 0 && ny % k == 0 && nx.max(ny) / k <= SEARCH_GRID)?;
+    // No coarser than half the search's grid: a grid of a prime side is searched as it is.
+    if nx.max(ny) / k < SEARCH_GRID / 2 || nx.min(ny) / k < 2 {
+        return None;
+    }
+    let (bx, by) = (nx / k, ny / k);
+    // Histogram i is point i of the binned side(s), points ordered ix·ny + iy.
+    let block = |bx_i: usize, by_i: usize| {
+        (0..k).flat_map(move |dx| (0..k).map(move |dy| (bx_i * k + dx) * ny + by_i * k + dy))
+    };
+    let bin_points = |set: &PointSet| -> PointSet {
+        let mut points = Vec::with_capacity(bx * by);
+        let mut normals = Vec::with_capacity(bx * by);
+        for i in 0..bx {
+            for j in 0..by {
+                let n = (k * k) as f64;
+                points.push(block(i, j).map(|p| set.points[p]).sum::<DVec3>() / n);
+                normals.push(
+                    block(i, j)
+                        .map(|p| set.normals[p])
+                        .sum::<DVec3>()
+                        .normalize_or_zero(),
+                );
+            }
+        }
+        PointSet {
+            points,
+            normals,
+            layout: PointLayout::Grid { nx: bx, ny: by },
+        }
+    };
+    let nt = cap.time.bins;
+    let mut h = vec![0f32; bx * by * nt];
+    let scale = 1.0 / (k * k) as f32;
+    for (b, out) in h.chunks_exact_mut(nt).enumerate() {
+        for p in block(b / by, b % by) {
+            for (o, &v) in out.iter_mut().zip(cap.histogram(p)) {
+                *o += scale * v;
+            }
+        }
+    }
+    let side = |set: &PointSet, binned: bool| if binned { bin_points(set) } else { set.clone() };
+    Some(Capture {
+        illum: side(&cap.illum, bin_illum),
+        sensor: side(&cap.sensor, bin_sensor),
+        h,
+        scene_info: cap.scene_info.clone(),
+        ..*cap
+    })
 }
 
 /// The deepest depth the time window reaches: the shortest round trip to depth z is 2z (a voxel

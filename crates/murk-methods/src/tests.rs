@@ -345,3 +345,59 @@ fn request_args_make_the_request() {
         assert!(e.starts_with(want), "{e}");
     }
 }
+
+/// The depth search bins a fine wall grid to at most 64 points a side: each block's mean histogram
+/// at its points' mean; grids that small already, of a side no divisor brings near 64, or scanned
+/// every laser point with every sensor point are searched as they are.
+#[test]
+fn a_fine_grid_is_searched_binned() {
+    use murk_core::{Capture, Pairing, PointSet, TimeAxis};
+    let laser_grid = |n: usize, sensors: usize| {
+        let illum = PointSet::wall_grid(DVec3::ZERO, 2.0, 2.0, n, n);
+        let sensor = PointSet::wall_grid(DVec3::ZERO, 0.1, 0.1, sensors, 1);
+        let bins = 3;
+        let h = (0..n * n * sensors * bins).map(|v| v as f32).collect();
+        Capture {
+            illum,
+            sensor,
+            laser_xyz: None,
+            sensor_xyz: None,
+            time: TimeAxis {
+                start_m: 0.0,
+                bin_width_m: 0.01,
+                bins,
+            },
+            t_accounts_first_and_last_bounces: false,
+            pairing: Pairing::Product,
+            h,
+            scene_info: String::new(),
+        }
+    };
+    let fine = laser_grid(128, 1);
+    let b = crate::depth::binned_for_search(&fine).unwrap();
+    assert_eq!(b.illum.shape(), (64, 64));
+    assert_eq!(b.sensor, fine.sensor);
+    assert_eq!(b.n_hist(), 64 * 64);
+    // Binned point (1, 2) holds fine points (2..4) × (4..6).
+    let block = [2 * 128 + 4, 2 * 128 + 5, 3 * 128 + 4, 3 * 128 + 5];
+    let i = 64 + 2;
+    let mean_point = block.iter().map(|&p| fine.illum.points[p]).sum::<DVec3>() / 4.0;
+    assert!((b.illum.points[i] - mean_point).length() < 1e-12);
+    for t in 0..3 {
+        let mean = block.iter().map(|&p| fine.histogram(p)[t]).sum::<f32>() / 4.0;
+        assert_eq!(b.histogram(i)[t], mean);
+    }
+    assert_eq!(b.illum.spacing_m(), Some(2.0 / 64.0));
+    assert!(crate::depth::binned_for_search(&laser_grid(64, 1)).is_none());
+    assert!(crate::depth::binned_for_search(&laser_grid(127, 1)).is_none());
+    assert!(crate::depth::binned_for_search(&laser_grid(128, 2)).is_none());
+    // A confocal scan bins both sides alike.
+    let c = laser_grid(96, 1);
+    let confocal = Capture::confocal(c.illum.clone(), c.time, c.h.clone(), String::new());
+    let b = crate::depth::binned_for_search(&confocal).unwrap();
+    assert_eq!(
+        (b.illum.shape(), b.illum.clone()),
+        (b.sensor.shape(), b.sensor.clone())
+    );
+    assert_eq!(b.illum.shape(), (48, 48));
+}
