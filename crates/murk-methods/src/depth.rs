@@ -153,6 +153,7 @@ pub(crate) fn binned_for_search(cap: &Capture) -> Option<Capture> {
         sensor: side(&cap.sensor, bin_sensor),
         h,
         scene_info: cap.scene_info.clone(),
+        medium_density: cap.medium_density.clone(),
         ..*cap
     })
 }
