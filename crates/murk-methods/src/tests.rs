@@ -371,6 +371,7 @@ fn a_fine_grid_is_searched_binned() {
             pairing: Pairing::Product,
             h,
             scene_info: String::new(),
+            medium_density: None,
         }
     };
     let fine = laser_grid(128, 1);
