@@ -50,7 +50,9 @@ def table(study: Path) -> str:
            "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         a = aware.get((r["figure"], r["row"], r["col"]), {})
-        est = ", ".join(show(float(a[k])) for k in ("est_mu_t", "est_albedo", "est_g")) \
+        # The estimate is a posterior mean on the fit's grid: round off the sums' last bits (a g of
+        # 1e-18 is the grid's 0).
+        est = ", ".join(show(round(float(a[k]), 3)) for k in ("est_mu_t", "est_albedo", "est_g")) \
             if a.get("est_mu_t") else "none detected"
         cell = " ".join(x for x in (r["row"], r["col"]) if x)
         found = [o for o in objects if o["figure"] == r["figure"] and o["col"] == r["col"]
