@@ -115,9 +115,8 @@ fn the_z_in_fog_is_found_without_flags() {
 /// A capture without a medium reconstructs byte for byte as with the medium-aware path off, with the
 /// same summary: nothing is detected, so nothing is removed or searched. The shelf's closed room
 /// without fog (16², 1 024 spp) is one: its walls meet the relay and answer every histogram from the
-/// window's start, its histograms of equal separation agree within 21 % (within the 25 % that fog
-/// meets, at this many samples), but its response fades at 74 % of the pace of 1/path², where fog's
-/// falls at least as fast (docs/medium.md); it was taken for a medium (μt 0.49, α 0.86, g −0.67).
+/// window's start, its histograms of equal separation agree about as well as fog's do, but its
+/// response fades more slowly than 1/path², where fog's falls at least as fast (docs/medium.md).
 #[test]
 fn captures_without_a_medium_are_unchanged() {
     let d = temp_dir("medium-clear");

@@ -446,10 +446,9 @@ struct PhaseAt<'a> {
 /// in albedo (a polynomial of low order there); between μt and g nodes, ln of the response divided by
 /// the once-scattered light's μt·exp(−μt·L)·phase factor ([`Angles`]) bilinear in ln μt and g, times
 /// that factor at (μt, g). Once-scattered light, the part that tells g from α, is then exact between
-/// the nodes, value by value, at the angles each ring and path sees (HG at backscatter falls from
-/// 1 (g = 0) to 0.31 (g = 0.4) and 0.06 (g = 0.8) of isotropic, at 92° it peaks near g = 0; weights
-/// by the phase at backscatter alone put α 13–23 % off at g = −0.7 with four rings). Linear where a
-/// corner is not positive.
+/// the nodes, value by value, at the angles each ring and path sees: HG varies with g differently at
+/// each angle, so weights taken from backscatter alone would bend α between the g nodes. Linear
+/// where a corner is not positive.
 fn interpolate(
     table: &ResponseTable,
     mu: f64,
@@ -463,8 +462,8 @@ fn interpolate(
     let (a0, a1, wa) = bracket(&table.albedos, albedo, false);
     let (g0, g1, wg) = bracket(&table.g, g, false);
     // The once-scattered light's factors that the nodes' bracket does not interpolate exactly: its
-    // attenuation exp(−μt·L) (ln-linear weights in μt are off by up to 8 % at L = 4 m between the
-    // nodes around μt = 2) and its phase factor.
+    // attenuation exp(−μt·L) (not linear in ln μt, so the bracket's weights miss it on long paths
+    // between widely spaced nodes) and its phase factor.
     let (mu0, mu1) = (table.mu_t_per_m[m0], table.mu_t_per_m[m1]);
     let attenuation_ln = |k: usize| -paths_m[k] * (mu - (1.0 - wm) * mu0 - wm * mu1);
     let phase_ln = |k: usize| {

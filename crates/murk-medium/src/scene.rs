@@ -37,9 +37,8 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
 }
 
 /// Whether a stored `[[object]]` is a box around the medium's whole box (to 1 cm): the room the medium
-/// fills. Its walls light the medium and return its light from every histogram's first bins on (the
-/// shelf's room in fog: 1.6–2.4× the light of the same fog without walls), so a model without them
-/// fits another medium (μt 0.31 for 1). It is the medium's container, not the hidden scene the
+/// fills. Its walls light the medium and return its light from every histogram's first bins on, so a
+/// model without them fits another medium. It is the medium's container, not the hidden scene the
 /// reconstruction looks for.
 fn encloses(object: &toml::Value, region: &Aabb) -> bool {
     const SLACK_M: f64 = 0.01;

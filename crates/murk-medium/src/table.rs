@@ -341,8 +341,8 @@ impl ResponseTable {
 
 /// The table's nodes for `opt`: μt, g and albedo; a parameter that is not fitted gets one node, its
 /// fixed value, except a given g inside the g nodes' range, which is interpolated between them as a
-/// fitted one is: one node's Monte Carlo noise, not averaged with a neighbour's, put μt 42–54 % off
-/// at g = 0.7, α ≥ 0.67 in the quick sweep, and one table then serves every g.
+/// fitted one is: one node's Monte Carlo noise is then averaged with its neighbours', and one table
+/// serves every g.
 fn node_values(opt: &EstimateOptions) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let (spec, fit, fixed) = (&opt.table, &opt.fit, &opt.fixed);
     let pick = |fitted: bool, nodes: &[f64], value: f64| {
