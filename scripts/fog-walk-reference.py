@@ -31,7 +31,6 @@ import numpy as np
 Z0, TOP, HALF = 0.001, 3.0, 3.0
 BIN_M, BINS = 0.01, 300
 MAX_VERTICES = 8
-LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 
 
 def cmd_walk(a):
@@ -109,43 +108,23 @@ max = [{HALF}, {HALF}, {TOP}]
 
 
 def cmd_mit(a):
-    os.environ.setdefault("DRJIT_LIBLLVM_PATH", LLVM)
-    import mitsuba as mi
+    import mitransient_scene as ms
 
-    mi.set_variant("llvm_ad_mono")
-    import drjit as dr
-    from mitransient.integrators.transient_prbvolpath import TransientPRBVolpathIntegrator
-
-    class Unwarped(TransientPRBVolpathIntegrator):
-        # mitransient refuses camera_unwarp with an nlos_capture_meter; the unwarp itself is generic.
-        def check_transient_(self, scene, sensor):
-            pass
-
-    mi.register_integrator("fog_walk_prbvolpath", lambda props: Unwarped(props))
+    mi = ms.mitsuba()
     T = mi.ScalarTransform4f
     half = 0.001
-    film = {"type": "transient_hdr_film", "width": 1, "height": 1, "temporal_bins": BINS,
-            "bin_width_opl": BIN_M, "start_opl": 0.0, "rfilter": {"type": "box"}}
-    sensor = {"type": "nlos_capture_meter", "sensor_origin": [a.spad[0], a.spad[1], 0.5], "film": film,
-              "sampler": {"type": "independent", "sample_count": a.spp}}
-    spot_bsdf = {"type": "diffuse", "reflectance": 0.0} if a.opaque_laser else {"type": "null"}
-    scene = mi.load_dict({
-        "type": "scene",
-        "patch": {"type": "rectangle", "bsdf": {"type": "diffuse", "reflectance": 1.0}, "nlos_sensor": sensor,
+    fog = {"type": "homogeneous", "sigma_t": a.mu_t, "albedo": a.albedo, "phase": {"type": "isotropic"}}
+    shapes = {
+        "patch": {"type": "rectangle", "bsdf": {"type": "diffuse", "reflectance": 1.0},
+                  "nlos_sensor": ms.sensor([a.spad[0], a.spad[1], 0.5], 1, BINS, BIN_M, a.spp),
                   "to_world": T().translate([a.spad[0], a.spad[1], 0.0]) @ T().scale([half, half, 1.0])},
-        "laser": {"type": "rectangle", "bsdf": spot_bsdf,
-                  "to_world": T().translate([a.laser[0], a.laser[1], 0.0005]) @ T().scale([half, half, 1.0]),
-                  "emitter": {"type": "area", "radiance": 1.0 / (np.pi * (2 * half) ** 2)}},
-        "medium": {"type": "cube", "bsdf": {"type": "null"},
-                   "to_world": T().translate([0, 0, (Z0 + TOP) / 2]) @ T().scale([HALF, HALF, (TOP - Z0) / 2]),
-                   "interior": {"type": "homogeneous", "sigma_t": a.mu_t, "albedo": a.albedo,
-                                "phase": {"type": "isotropic"}}},
-        "integrator": {"type": "fog_walk_prbvolpath", "camera_unwarp": True, "hide_emitters": True,
-                       "temporal_filter": "box", "max_depth": MAX_VERTICES + 2, "rr_depth": 100},
-    })
-    _, transient = scene.integrator().render(scene, seed=a.seed, spp=a.spp)
-    dr.eval(transient)
-    np.save(a.out, np.array(transient, dtype=np.float64).reshape(BINS))
+        "laser": ms.laser_spot(mi, a.laser[0], a.laser[1], half, 1.0 / (np.pi * (2 * half) ** 2),
+                               a.opaque_laser),
+        "medium": ms.medium_box(mi, [0, 0, (Z0 + TOP) / 2], [HALF, HALF, (TOP - Z0) / 2], fog),
+    }
+    # max_depth counts the wall vertex and the emitter; no Russian roulette
+    transient = ms.render(mi, shapes, MAX_VERTICES + 2, 100, a.seed, a.spp)
+    np.save(a.out, transient.astype(np.float64).reshape(BINS))
 
 
 def cmd_compare(a):

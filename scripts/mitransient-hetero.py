@@ -27,7 +27,6 @@ mitransient venv (mitransient 1.3.1, mitsuba 3.9.1) for `render`, numpy and h5py
 
 import argparse
 import math
-import os
 import sys
 
 import numpy as np
@@ -35,7 +34,6 @@ import numpy as np
 BOX_MIN = (-1.5, -1.5, 0.001)
 BOX_MAX = (1.5, 1.5, 2.5)
 LAYERS = "2,0.5,0.5,0.5,0.5"  # default density of the layers along z, wall side first
-LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 LASER_HALF_M = 0.0025  # the laser spot is a 5 mm square
 LASER_RADIANCE = 1000.0
 # murk's laser spot has unit power; mitransient's emits pi x radiance x area
@@ -76,19 +74,9 @@ def medium_dict(mi, kind, layers, mu_t, albedo, g):
 
 
 def cmd_render(a):
-    os.environ.setdefault("DRJIT_LIBLLVM_PATH", LLVM)
-    import mitsuba as mi
+    import mitransient_scene as ms
 
-    mi.set_variant("llvm_ad_mono")
-    import drjit as dr
-    from mitransient.integrators.transient_prbvolpath import TransientPRBVolpathIntegrator
-
-    class Unwarped(TransientPRBVolpathIntegrator):
-        # mitransient refuses camera_unwarp with an nlos_capture_meter; the unwarp itself is generic.
-        def check_transient_(self, scene, sensor):
-            pass
-
-    mi.register_integrator("murk_check_prbvolpath", lambda props: Unwarped(props))
+    mi = ms.mitsuba()
     T = mi.ScalarTransform4f
     white = {"type": "diffuse", "reflectance": 1.0}
 
@@ -99,30 +87,17 @@ def cmd_render(a):
 
     centre = [(lo + hi) / 2 for lo, hi in zip(BOX_MIN, BOX_MAX)]
     half = [(hi - lo) / 2 for lo, hi in zip(BOX_MIN, BOX_MAX)]
-    film = {"type": "transient_hdr_film", "width": a.res, "height": a.res, "temporal_bins": a.bins,
-            "bin_width_opl": 0.003, "start_opl": 0.0, "rfilter": {"type": "box"}}
-    # null: the spot must not block the shadow rays that reach it (module docstring)
-    laser_bsdf = {"type": "diffuse", "reflectance": 0.0} if a.opaque_laser else {"type": "null"}
-    sensor = {"type": "nlos_capture_meter", "sensor_origin": [0.0, 0.0, 0.5], "film": film,
-              "sampler": {"type": "independent", "sample_count": a.spp}}
-    scene = mi.load_dict({
-        "type": "scene",
+    shapes = {
         "wall": {"type": "rectangle", "to_world": T().scale([0.5, 0.5, 1.0]), "bsdf": white,
-                 "nlos_sensor": sensor},
+                 "nlos_sensor": ms.sensor([0.0, 0.0, 0.5], a.res, a.bins, 0.003, a.spp)},
         "bar": facing_wall(0.0, 0.20, 0.25, 0.05),
         "stem": facing_wall(0.0, -0.05, 0.05, 0.20),
-        "laser": {"type": "rectangle", "bsdf": laser_bsdf,
-                  "to_world": T().translate([0, 0, 0.0005]) @ T().scale([LASER_HALF_M, LASER_HALF_M, 1]),
-                  "emitter": {"type": "area", "radiance": LASER_RADIANCE}},
-        "medium": {"type": "cube", "bsdf": {"type": "null"},
-                   "to_world": T().translate(centre) @ T().scale(half),
-                   "interior": medium_dict(mi, a.medium, a.layers, a.mu_t, a.albedo, 0.0)},
-        "integrator": {"type": "murk_check_prbvolpath", "camera_unwarp": True, "hide_emitters": True,
-                       "temporal_filter": "box", "max_depth": 10, "rr_depth": 5},
-    })
-    _, transient = scene.integrator().render(scene, seed=a.seed, spp=a.spp)
-    dr.eval(transient)
-    np.save(a.out, np.array(transient).astype(np.float32))
+        # null unless --opaque-laser: the spot must not block the shadow rays that reach it (module docstring)
+        "laser": ms.laser_spot(mi, 0.0, 0.0, LASER_HALF_M, LASER_RADIANCE, a.opaque_laser),
+        "medium": ms.medium_box(mi, centre, half, medium_dict(mi, a.medium, a.layers, a.mu_t, a.albedo, 0.0)),
+    }
+    transient = ms.render(mi, shapes, 10, 5, a.seed, a.spp)
+    np.save(a.out, transient.astype(np.float32))
 
 
 def murk_profile(path):

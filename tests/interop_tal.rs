@@ -278,21 +278,14 @@ fn list(n: usize) -> PointSet {
 }
 
 fn capture(illum: PointSet, sensor: PointSet, pairing: Pairing) -> Capture {
+    let time = TimeAxis {
+        start_m: 0.5,
+        bin_width_m: 0.00390625,
+        bins: 6,
+    };
     let mut c = Capture {
-        illum,
-        sensor,
-        laser_xyz: None,
-        sensor_xyz: None,
-        time: TimeAxis {
-            start_m: 0.5,
-            bin_width_m: 0.00390625,
-            bins: 6,
-        },
-        t_accounts_first_and_last_bounces: false,
-        pairing,
-        h: Vec::new(),
         scene_info: "name: murk\nvalues:\n- 1\n- 2.5\n".into(),
-        medium_density: None,
+        ..Capture::new(illum, sensor, pairing, time, Vec::new())
     };
     c.h = (0..c.n_hist() * c.time.bins)
         .map(|i| (i as f32 * 0.73).cos())

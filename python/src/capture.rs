@@ -412,24 +412,22 @@ pub fn _capture_from_state(state: State) -> PyResult<Capture> {
     }
     let h = f32s(&state.h);
     let (start_m, bin_width_m, bins) = state.time;
+    let pairing = match state.paired {
+        true => Pairing::Paired,
+        false => Pairing::Product,
+    };
+    let time = murk_core::TimeAxis {
+        start_m,
+        bin_width_m,
+        bins,
+    };
     let cap = murk_core::Capture {
-        illum,
-        sensor,
         laser_xyz: state.laser_xyz.map(murk_core::DVec3::from_array),
         sensor_xyz: state.sensor_xyz.map(murk_core::DVec3::from_array),
-        time: murk_core::TimeAxis {
-            start_m,
-            bin_width_m,
-            bins,
-        },
         t_accounts_first_and_last_bounces: state.first_and_last,
-        pairing: match state.paired {
-            true => Pairing::Paired,
-            false => Pairing::Product,
-        },
-        h,
         scene_info: state.scene_info,
         medium_density,
+        ..murk_core::Capture::new(illum, sensor, pairing, time, h)
     };
     cap.validate()
         .map_err(|e| crate::error("InputError", format!("pickled capture: {e}")))?;

@@ -27,6 +27,16 @@ CONFOCAL = ["--kind", "confocal", "--wall-size", "1", "--grid", "16", "--bins", 
             "--bin-width", "0.006", "--target", "t:0.6", "--cosines"]
 
 
+def render_z_in_fog(*, spp, seed, grid=16, settings=None, out=None):
+    """The medium tests' small capture: the paper's Z in its fog (scenes/z-letter.toml: μt = 1,
+    α = 0.5, g = 0) on a `grid`² wall, 1200 bins of 5 mm. settings: further scene settings, as
+    murk.render's `set` takes them; out: also write the capture there. Returns the capture."""
+    import murk  # here, not at the top: the CLI-only tests import this file without the module
+
+    return murk.render(SCENES / "z-letter.toml", out=out, grid=grid, bins=1200, spp=spp, seed=seed,
+                       set={"capture.bin_width": 0.005, **(settings or {})})
+
+
 @pytest.fixture(scope="session")
 def captures(tmp_path_factory):
     if not MURK.exists():

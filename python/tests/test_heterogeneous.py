@@ -1,20 +1,14 @@
 """A heterogeneous medium's compensation from Python: a density grid (``medium_density``) and a
 height fog (``height_scale``, or the capture's own), as ``murk reconstruct`` takes them."""
-import os
-
 import numpy as np
 import pytest
 
 import murk
-from conftest import cli
+from conftest import cli, render_z_in_fog
 
-SCENE = os.path.join(os.path.dirname(__file__), "..", "..", "scenes", "z-letter.toml")
 # The Z in a height fog settling toward the medium's floor at y = −3 m (its box is y −3 … 3 m).
 SCALE_M = 0.5
 FLOOR_M, TOP_M = -3.0, 3.0
-HEIGHT = dict(grid=16, bins=1200, spp=4, seed=5,
-              set={"capture.bin_width": 0.005, "medium.kind": "height",
-                   "medium.height_scale": SCALE_M})
 # Depth search off and a fixed volume: the volumes compared are the same voxels.
 RECON = dict(compensate="ballistic", mu_t=1.0, depth_search="off",
              volume="-0.9:0.9:9,-0.9:0.9:9,1.2:2.8:17")
@@ -23,7 +17,8 @@ RECON = dict(compensate="ballistic", mu_t=1.0, depth_search="off",
 @pytest.fixture(scope="module")
 def height(tmp_path_factory):
     path = tmp_path_factory.mktemp("height") / "height.h5"
-    murk.render(SCENE, out=path, **HEIGHT)
+    render_z_in_fog(spp=4, seed=5, out=path,
+                    settings={"medium.kind": "height", "medium.height_scale": SCALE_M})
     return path
 
 
@@ -85,9 +80,8 @@ def test_a_grid_capture_compensates_along_its_own_cells_in_memory_and_pickled(tm
     import pickle
 
     grid = fog_grid(tmp_path / "fog.npy", 12)
-    cap = murk.render(SCENE, grid=8, bins=1200, spp=1, seed=5,
-                      set={"capture.bin_width": 0.005, "medium.kind": "grid",
-                           "medium.density": str(grid)})
+    cap = render_z_in_fog(spp=1, seed=5, grid=8,
+                          settings={"medium.kind": "grid", "medium.density": str(grid)})
     by_hand = murk.reconstruct(cap, medium_density=grid, **RECON)
     for c in (cap, pickle.loads(pickle.dumps(cap))):
         own = murk.reconstruct(c, **RECON)

@@ -1,21 +1,17 @@
 """The medium-aware path from Python: the estimate, and the model removal against the CLI."""
-import os
-
 import numpy as np
 import pytest
 
 import murk
-from conftest import cli
+from conftest import cli, render_z_in_fog
 
-SCENE = os.path.join(os.path.dirname(__file__), "..", "..", "scenes", "z-letter.toml")
-FOG = dict(grid=16, bins=1200, set={"capture.bin_width": 0.005}, spp=64, seed=3)
+FOG = dict(spp=64, seed=3)
 
 
 @pytest.fixture(scope="module")
 def fog(tmp_path_factory):
-    """The paper's Z in fog (μt = 1, α = 0.5, g = 0), small."""
     path = tmp_path_factory.mktemp("fog") / "fog.h5"
-    murk.render(SCENE, out=path, **FOG)
+    render_z_in_fog(**FOG, out=path)
     return path
 
 
@@ -38,7 +34,7 @@ def test_the_estimate_finds_the_fog_and_the_model_removal_uses_it(fog):
 
 def test_model_removal_without_a_medium_or_a_scene_is_refused(tmp_path):
     clear = tmp_path / "clear.h5"
-    murk.render(SCENE, out=clear, **dict(FOG, set={"capture.bin_width": 0.005, "medium.mu_t": 0.0}))
+    render_z_in_fog(**FOG, out=clear, settings={"medium.mu_t": 0.0})
     with pytest.raises(murk.InputError, match="no medium detected.*give mu_t and albedo"):
         murk.reconstruct(clear, medium_removal="model")
     with pytest.raises(murk.InputError, match="mu_t and albedo are read by a compensation"):

@@ -84,6 +84,30 @@ pub struct Capture {
 }
 
 impl Capture {
+    /// A capture of `h` between `illum` and `sensor` without device positions, scene text or medium
+    /// (not validated: see [`Capture::validate`]). Other fields are set by struct update
+    /// (`Capture { scene_info, ..Capture::new(..) }`), so a new field only needs a default here.
+    pub fn new(
+        illum: PointSet,
+        sensor: PointSet,
+        pairing: Pairing,
+        time: TimeAxis,
+        h: Vec<f32>,
+    ) -> Capture {
+        Capture {
+            illum,
+            sensor,
+            laser_xyz: None,
+            sensor_xyz: None,
+            time,
+            t_accounts_first_and_last_bounces: false,
+            pairing,
+            h,
+            scene_info: String::new(),
+            medium_density: None,
+        }
+    }
+
     /// The capture without its histograms and metadata: what a reconstruction plan is built from.
     pub fn geometry(&self) -> Capture {
         Capture {
@@ -132,16 +156,8 @@ impl Capture {
     /// `h` (not validated: see [`Capture::validate`]).
     pub fn confocal(grid: PointSet, time: TimeAxis, h: Vec<f32>, scene_info: String) -> Capture {
         Capture {
-            illum: grid.clone(),
-            sensor: grid,
-            laser_xyz: None,
-            sensor_xyz: None,
-            time,
-            t_accounts_first_and_last_bounces: false,
-            pairing: Pairing::Paired,
-            h,
             scene_info,
-            medium_density: None,
+            ..Capture::new(grid.clone(), grid, Pairing::Paired, time, h)
         }
     }
 
@@ -407,22 +423,17 @@ mod tests {
     use super::*;
 
     fn product(nl: usize, ns: usize, nt: usize) -> Capture {
-        Capture {
-            illum: PointSet::wall_grid(DVec3::ZERO, 1.0, 1.0, nl, 1),
-            sensor: PointSet::wall_grid(DVec3::ZERO, 1.0, 1.0, ns, 1),
-            laser_xyz: None,
-            sensor_xyz: None,
-            time: TimeAxis {
+        Capture::new(
+            PointSet::wall_grid(DVec3::ZERO, 1.0, 1.0, nl, 1),
+            PointSet::wall_grid(DVec3::ZERO, 1.0, 1.0, ns, 1),
+            Pairing::Product,
+            TimeAxis {
                 start_m: 0.0,
                 bin_width_m: 0.01,
                 bins: nt,
             },
-            t_accounts_first_and_last_bounces: false,
-            pairing: Pairing::Product,
-            h: (0..nl * ns * nt).map(|v| v as f32).collect(),
-            scene_info: String::new(),
-            medium_density: None,
-        }
+            (0..nl * ns * nt).map(|v| v as f32).collect(),
+        )
     }
 
     /// Two histograms of 40 bins: H = 1 everywhere but a peak of 4 at bin 10 of the first.

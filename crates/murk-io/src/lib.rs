@@ -13,18 +13,13 @@
 //!
 //! // One laser and one sensor point, four bins of 1/128 m (the file stores the axis as f32, as y-tal
 //! // does: this width survives exactly).
-//! let cap = Capture {
-//!     illum: PointSet::single(DVec3::ZERO),
-//!     sensor: PointSet::single(DVec3::new(0.5, 0.0, 0.0)),
-//!     laser_xyz: None,
-//!     sensor_xyz: None,
-//!     time: TimeAxis { start_m: 0.0, bin_width_m: 0.0078125, bins: 4 },
-//!     t_accounts_first_and_last_bounces: false,
-//!     pairing: Pairing::Product,
-//!     h: vec![0.0, 1.0, 0.5, 0.0],
-//!     scene_info: String::new(),
-//!     medium_density: None,
-//! };
+//! let cap = Capture::new(
+//!     PointSet::single(DVec3::ZERO),
+//!     PointSet::single(DVec3::new(0.5, 0.0, 0.0)),
+//!     Pairing::Product,
+//!     TimeAxis { start_m: 0.0, bin_width_m: 0.0078125, bins: 4 },
+//!     vec![0.0, 1.0, 0.5, 0.0],
+//! );
 //! let path = std::env::temp_dir().join(format!("murk-io-doc-{}.h5", std::process::id()));
 //! murk_io::write_capture(&path, &cap)?;
 //! let back = murk_io::read_capture(&path)?;

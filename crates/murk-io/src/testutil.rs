@@ -32,21 +32,15 @@ pub fn list(n: usize) -> PointSet {
 
 pub fn capture(illum: PointSet, sensor: PointSet, pairing: Pairing) -> Capture {
     let bins = 7;
+    let time = TimeAxis {
+        start_m: 0.75,
+        bin_width_m: 0.0078125,
+        bins,
+    };
     let mut c = Capture {
-        illum,
-        sensor,
         laser_xyz: Some(DVec3::new(-1.5, 0.25, 2.0)),
-        sensor_xyz: None,
-        time: TimeAxis {
-            start_m: 0.75,
-            bin_width_m: 0.0078125,
-            bins,
-        },
-        t_accounts_first_and_last_bounces: false,
-        pairing,
-        h: Vec::new(),
         scene_info: "name: test\nvalues:\n- 1\n- 2\n".into(),
-        medium_density: None,
+        ..Capture::new(illum, sensor, pairing, time, Vec::new())
     };
     c.h = (0..c.n_hist() * bins)
         .map(|i| (i as f32 * 0.37).sin())

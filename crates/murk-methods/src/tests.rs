@@ -357,22 +357,12 @@ fn a_fine_grid_is_searched_binned() {
         let sensor = PointSet::wall_grid(DVec3::ZERO, 0.1, 0.1, sensors, 1);
         let bins = 3;
         let h = (0..n * n * sensors * bins).map(|v| v as f32).collect();
-        Capture {
-            illum,
-            sensor,
-            laser_xyz: None,
-            sensor_xyz: None,
-            time: TimeAxis {
-                start_m: 0.0,
-                bin_width_m: 0.01,
-                bins,
-            },
-            t_accounts_first_and_last_bounces: false,
-            pairing: Pairing::Product,
-            h,
-            scene_info: String::new(),
-            medium_density: None,
-        }
+        let time = TimeAxis {
+            start_m: 0.0,
+            bin_width_m: 0.01,
+            bins,
+        };
+        Capture::new(illum, sensor, Pairing::Product, time, h)
     };
     let fine = laser_grid(128, 1);
     let b = crate::depth::binned_for_search(&fine).unwrap();

@@ -99,16 +99,10 @@ impl CaptureLayout {
         };
         let accounts = self.laser_xyz.is_some() || self.sensor_xyz.is_some();
         let mut cap = Capture {
-            illum,
-            sensor,
             laser_xyz: self.laser_xyz.or(accounts.then_some(DVec3::ZERO)),
             sensor_xyz: self.sensor_xyz.or(accounts.then_some(DVec3::ZERO)),
-            time: self.time,
             t_accounts_first_and_last_bounces: accounts,
-            pairing,
-            h: Vec::new(),
-            scene_info: String::new(),
-            medium_density: None,
+            ..Capture::new(illum, sensor, pairing, self.time, Vec::new())
         };
         let n = murk_core::Limits::get().capture_h(cap.n_hist(), self.time.bins)?;
         if n > 1 << 31 {

@@ -107,16 +107,17 @@ impl Walls {
             super::flip_line(o.flip),
         );
         let cap = Capture {
-            illum: set(pick(&self.illum)),
-            sensor: set(pick(&self.sensor)),
             laser_xyz: self.devices.map(|d| d.0),
             sensor_xyz: self.devices.map(|d| d.1),
-            time,
             t_accounts_first_and_last_bounces: self.devices.is_some(),
-            pairing: Pairing::Paired,
-            h,
             scene_info,
-            medium_density: None,
+            ..Capture::new(
+                set(pick(&self.illum)),
+                set(pick(&self.sensor)),
+                Pairing::Paired,
+                time,
+                h,
+            )
         };
         super::checked(path, cap)
     }

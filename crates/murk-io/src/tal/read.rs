@@ -170,20 +170,21 @@ pub fn read_capture_with_limit(path: &Path, max_bytes: u64) -> Result<Capture> {
     };
 
     let mut cap = Capture {
-        illum,
-        sensor,
         laser_xyz: device("laser_xyz")?,
         sensor_xyz: device("sensor_xyz")?,
-        time: TimeAxis {
-            start_m: scalar("t_start")?,
-            bin_width_m: scalar("delta_t")?,
-            bins,
-        },
         t_accounts_first_and_last_bounces: t_accounts,
-        pairing,
-        h: Vec::new(),
         scene_info,
-        medium_density: None,
+        ..Capture::new(
+            illum,
+            sensor,
+            pairing,
+            TimeAxis {
+                start_m: scalar("t_start")?,
+                bin_width_m: scalar("delta_t")?,
+                bins,
+            },
+            Vec::new(),
+        )
     };
     // Before H is read: a few bytes declaring an absurd time window must not cost gigabytes first.
     cap.validate_geometry().map_err(|e| bad(e.to_string()))?;

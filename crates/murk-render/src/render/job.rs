@@ -276,19 +276,21 @@ impl<'a> Plan<'a> {
         let c = &self.scene.capture;
         let n_hist = self.n_hists();
         Capture {
-            illum: c.illum.clone(),
-            sensor: c.sensor.clone(),
             laser_xyz: c.laser_xyz,
             sensor_xyz: c.sensor_xyz,
-            time: c.time,
             t_accounts_first_and_last_bounces: c.account_first_and_last_bounces,
-            pairing: c.pairing,
-            h: vec![0.0; n_hist * c.time.bins],
             scene_info,
             medium_density: self.scene.medium.as_ref().and_then(|m| match &m.kind {
                 crate::medium::Kind::Grid(g) => Some(Arc::new(g.cells().clone())),
                 _ => None,
             }),
+            ..Capture::new(
+                c.illum.clone(),
+                c.sensor.clone(),
+                c.pairing,
+                c.time,
+                vec![0.0; n_hist * c.time.bins],
+            )
         }
     }
 
