@@ -301,6 +301,70 @@ fn the_medium_of_the_fog_is_estimated() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// `murk medium` on the T in an exponential height fog (σt = 2 /m × exp(−(y + 1.5 m)/2 m), 0.94 /m at
+/// the wall's centre; α = 0.5, g = 0 given; 16² sensor points, 64 spp, seed 2) keeps the fog's shape
+/// in its forward model: μt, σt where the density is 1, and α within 10 % (1.88 and 0.51 measured;
+/// one homogeneous μt fitted 0.99, −51 %). `--compensate` and `--medium-removal model` then take the
+/// estimate as the fog's scale, and nothing warns of a homogeneous medium.
+#[test]
+fn the_scale_of_a_height_fog_is_estimated() {
+    let d = temp_dir("medium-height");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/t-wall-medium.toml");
+    let cap = d.join("haze.h5");
+    let set = [
+        "--set",
+        "medium.kind=height",
+        "--set",
+        "medium.height_scale=2.0",
+        "--set",
+        "medium.mu_t=2.0",
+    ];
+    let render = ["render", "-q", scene, "--out", s(&cap), "--grid", "16"];
+    ok(&[&render[..], &["--spp", "64", "--seed", "2"], &set].concat());
+    let tables = d.join("tables");
+    let args = [
+        "medium",
+        s(&cap),
+        "--fit",
+        "mu_t,albedo",
+        "--g",
+        "0",
+        "--table-cache",
+        s(&tables),
+    ];
+    let json = ok(&[&args[..], &["--json"]].concat());
+    let value = |key: &str| json_number(&json, key);
+    assert!((value("mu_t_per_m") / 2.0 - 1.0).abs() <= 0.1, "{json}");
+    assert!((value("albedo") / 0.5 - 1.0).abs() <= 0.1, "{json}");
+    let said = "μt is σt where the density is 1 (the capture's height fog, height_scale 2 m)";
+    assert!(json.contains(&format!("\"density\": \"{said}\"")), "{json}");
+    let (code, summary, err) = murk(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(summary.contains(&format!("density: {said}")), "{summary}");
+    assert!(!err.contains("homogeneous"), "{err}");
+    let v = d.join("v.npy");
+    let (code, summary, err) = murk(&[
+        "reconstruct",
+        s(&cap),
+        "--out",
+        s(&v),
+        "--compensate",
+        "ballistic",
+        "--medium-removal",
+        "model",
+        "--table-cache",
+        s(&tables),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        row(&summary, "compensated along").contains("the height fog of the capture's scene")
+            && summary.contains(said),
+        "{summary}"
+    );
+    assert!(!err.contains("homogeneous"), "{err}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
 /// The number after `"key": ` in `json`.
 fn json_number(json: &str, key: &str) -> f64 {
     let at = json

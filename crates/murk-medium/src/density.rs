@@ -8,7 +8,7 @@ mod height;
 pub use grid::GridDensity;
 pub use height::HeightDensity;
 
-use crate::scene::{check_height_scale, stored_medium, StoredShape};
+use crate::scene::{check_height_scale, modelled, stored_medium, Modelled};
 use murk_core::Opt;
 use murk_core::{Capture, DVec3, Error, Result};
 use murk_recon::PathDensity;
@@ -38,13 +38,13 @@ pub struct Along {
 
 impl DensityGiven {
     /// The density that a compensation (`compensates`) reads along each leg of `cap`. In order: the
-    /// grid or height fog given, over the box of the capture's stored scene; else the stored
-    /// scene's own height fog or density grid (whose cells the capture holds); else none (every
-    /// metre counts as density 1, the homogeneous medium). A density is read only with a given μt
-    /// (`mu_t_given`), which is σt where the density is 1. A stored grid whose cells the capture
-    /// does not hold (rendered before murk stored them), or a heterogeneous medium whose μt was
-    /// estimated as one homogeneous value, is compensated as homogeneous with a warning saying so.
-    /// `spelling` names the flags or keywords.
+    /// grid or height fog given, over the box of the capture's stored scene, read only with a given
+    /// μt (`mu_t_given`); else the stored scene's own height fog or density grid (whose cells the
+    /// capture holds), with μt given or estimated (the estimate keeps that shape, so either is σt
+    /// where the density is 1); else none (every metre counts as density 1, the homogeneous
+    /// medium). A stored grid whose cells the capture does not hold (rendered before murk stored
+    /// them) is compensated as homogeneous with a warning saying so. `spelling` names the flags or
+    /// keywords.
     pub fn along(
         &self,
         cap: &Capture,
@@ -97,45 +97,37 @@ impl DensityGiven {
             Ok(s) if compensates => s,
             _ => return Ok(Along::default()),
         };
-        let own = cap.medium_density.as_deref();
-        if let (StoredShape::Grid { .. }, true, Some(cells)) = (&stored.shape, mu_t_given, own) {
-            let [nx, ny, nz] = cells.dims();
-            return Ok(Along {
-                density: Some(Arc::new(GridDensity::from_cells(cells, stored.region))),
-                row: Some(format!(
-                    "σt = density × μt along each leg, density from the capture's own grid ({nx} × {ny} × {nz} cells)"
-                )),
-                warnings: Vec::new(),
-            });
-        }
-        let what = match (&stored.shape, mu_t_given) {
-            (StoredShape::Homogeneous, _) => return Ok(Along::default()),
-            (&StoredShape::Height { scale_m }, true) => {
+        match modelled(cap) {
+            Some(Modelled::Grid { cells }) => {
+                let [nx, ny, nz] = cells.dims();
+                return Ok(Along {
+                    density: Some(Arc::new(GridDensity::from_cells(&cells, stored.region))),
+                    row: Some(format!(
+                        "σt = density × μt along each leg, density from the capture's own grid ({nx} × {ny} × {nz} cells)"
+                    )),
+                    warnings: Vec::new(),
+                });
+            }
+            Some(Modelled::Height { scale_m }) => {
                 return Ok(height(stored.region, scale_m, "the capture's scene"))
             }
-            (shape, _) => shape.describe().unwrap_or_default(),
+            None => {}
+        }
+        let Some(what) = stored.shape.describe() else {
+            return Ok(Along::default());
         };
-        let (why, give) = match (&stored.shape, mu_t_given) {
-            (StoredShape::Grid { .. }, true) => (
-                "whose cells the capture does not hold (rendered before murk stored them)",
-                format!("{} FILE.npy", flag(Opt::MediumDensity)),
-            ),
-            (StoredShape::Grid { .. }, false) => (
-                "and μt was estimated as one homogeneous value",
-                format!(
-                    "{} and {} FILE.npy",
-                    flag(Opt::MuT),
-                    flag(Opt::MediumDensity)
-                ),
-            ),
-            _ => (
-                "and μt was estimated as one homogeneous value",
-                format!("{} (σt on the fog's floor)", flag(Opt::MuT)),
+        // Only a grid without its cells is left: an estimated μt was then fitted as homogeneous.
+        let give = match mu_t_given {
+            true => format!("{} FILE.npy", flag(Opt::MediumDensity)),
+            false => format!(
+                "{} and {} FILE.npy",
+                flag(Opt::MuT),
+                flag(Opt::MediumDensity)
             ),
         };
         Ok(Along {
             warnings: vec![format!(
-                "the capture's medium is {what}, {why}: the compensation assumes a homogeneous medium of μt; give {give} to integrate σt along each leg"
+                "the capture's medium is {what}, whose cells the capture does not hold (rendered before murk stored them): the compensation assumes a homogeneous medium of μt; give {give} to integrate σt along each leg"
             )],
             ..Along::default()
         })

@@ -79,6 +79,9 @@ pub struct Estimate {
     pub residual_rms: f64,
     pub signature: Signature,
     pub table_nodes: (usize, usize, usize),
+    /// What μt means where the capture's medium is heterogeneous and the forward model kept its
+    /// shape ([`crate::scene::Modelled::describe`]); `None` for a homogeneous model.
+    pub density: Option<String>,
 }
 
 impl Estimate {
@@ -93,8 +96,13 @@ impl Estimate {
                 q.constrained
             )
         };
+        // Only a heterogeneous model names its density: homogeneous estimates keep their bytes.
+        let density = self
+            .density
+            .as_ref()
+            .map_or_else(String::new, |d| format!(", \"density\": \"{d}\""));
         format!(
-            "{{\"medium\": true, {}, {}, {}, \"amplitude\": \"{}\", \"bins_from_m\": {}, \"bins_until_m\": {}, \"values_used\": {}, \"rings\": {}, \"residual_rms_ln\": {}, \"forward_model\": \"murk render, medium only, {}×{}×{} (μt × g × albedo) nodes\"}}",
+            "{{\"medium\": true, {}, {}, {}{density}, \"amplitude\": \"{}\", \"bins_from_m\": {}, \"bins_until_m\": {}, \"values_used\": {}, \"rings\": {}, \"residual_rms_ln\": {}, \"forward_model\": \"murk render, medium only, {}×{}×{} (μt × g × albedo) nodes\"}}",
             p("mu_t_per_m", &self.mu_t_per_m),
             p("albedo", &self.albedo),
             p("g", &self.g),
@@ -125,10 +133,13 @@ impl Estimate {
                 murk_core::short(q.uncertainty)
             ),
         };
-        vec![
+        let mut rows = vec![
             ("mu_t_per_m".into(), p(&self.mu_t_per_m)),
             ("albedo".into(), p(&self.albedo)),
             ("g".into(), p(&self.g)),
+        ];
+        rows.extend(self.density.iter().map(|d| ("density".into(), d.clone())));
+        rows.extend([
             (
                 "bins".into(),
                 format!(
@@ -152,7 +163,8 @@ impl Estimate {
                 ),
             ),
             ("medium detected".into(), self.signature.describe()),
-        ]
+        ]);
+        rows
     }
 }
 
@@ -362,6 +374,7 @@ pub fn fit(
         residual_rms: (min / used.len() as f64).sqrt(),
         signature,
         table_nodes: (table.mu_t_per_m.len(), table.g.len(), table.albedos.len()),
+        density: crate::scene::modelled(cap).map(|m| m.describe()),
     })
 }
 

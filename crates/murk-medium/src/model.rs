@@ -1,5 +1,6 @@
 //! The medium's response predicted for given parameters, for `--medium-removal model`: the capture's
-//! own geometry with every object removed but the medium's room ([`crate::scene::medium_only`]), rendered by murk's renderer on a coarse grid at the
+//! own geometry with every object removed but the medium's room, its heterogeneous density kept
+//! where murk knows its shape ([`crate::scene::medium_only`]), rendered by murk's renderer on a coarse grid at the
 //! capture's full time resolution, one curve per laser–sensor separation. The reconstruction
 //! subtracts it from each histogram at that histogram's separation
 //! ([`murk_recon::medium::removal::subtract_predicted`]).
@@ -108,13 +109,14 @@ pub fn predict(cap: &Capture, medium: &Fixed, spec: &ModelSpec) -> Result<Predic
         separations_m,
         curves,
         source: format!(
-            "rendered for μt {} /m, albedo {}, g {} ({}² points, {} spp, smoothed over {:.0} % of the path)",
+            "rendered for μt {} /m, albedo {}, g {} ({}² points, {} spp, smoothed over {:.0} % of the path){}",
             short(medium.mu_t_per_m),
             short(medium.albedo),
             short(medium.g),
             spec.grid,
             spec.spp,
-            100.0 * spec.smooth_share
+            100.0 * spec.smooth_share,
+            crate::scene::modelled(cap).map_or_else(String::new, |m| format!("; {}", m.describe()))
         ),
     })
 }

@@ -1,15 +1,16 @@
 //! The capture's own scene with every object removed but the medium's room: what the renderer draws
 //! as the medium's response alone.
 
-use murk_core::{Capture, DVec3, Error, Result};
-use murk_render::{Aabb, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M};
+use murk_core::{Capture, DVec3, DensityCells, Error, Result};
+use murk_render::{density_fingerprint, Aabb, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M};
+use std::sync::Arc;
 
 /// The resolved scene TOML that `murk render` stored in the capture's `scene_info`, without its
 /// `[[object]]` tables but those that enclose the medium ([`encloses`]: a room's walls, which return
 /// the medium's light as the medium itself does). The medium's values in it are replaced by the
-/// table's; only the geometry (relay, capture layout, time axis, the medium's extent and enclosure)
-/// is used. The model is homogeneous: a heterogeneous medium's kind and density are dropped, and its
-/// box is fitted by one μt, α and g.
+/// table's; the geometry (relay, capture layout, time axis, the medium's extent and enclosure) and
+/// the medium's shape where murk knows it ([`Modelled`]) are kept. A medium of unknown shape (a
+/// grid without its cells) is dropped to a homogeneous one, fitted by one μt, α and g over its box.
 pub fn medium_only(cap: &Capture) -> Result<String> {
     let mut table = stored_table(cap)?;
     // Without a box the medium has no walls to find (the fit then fails on the box, not here).
@@ -30,8 +31,23 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
     medium.insert("mu_t".into(), toml::Value::Float(1.0));
     medium.insert("albedo".into(), toml::Value::Float(0.5));
     medium.insert("g".into(), toml::Value::Float(0.0));
-    for key in ["kind", "density", "height_scale"] {
-        medium.remove(key);
+    match modelled(cap) {
+        // The stored kind and height_scale stay as they are.
+        Some(Modelled::Height { .. }) => {}
+        // The table renders the capture's own cells ([`crate::table`]); the name carries their hash,
+        // so that a table is kept for one grid only.
+        Some(Modelled::Grid { cells }) => {
+            let name = format!(
+                "the capture's own cells, fnv1a {:016x}",
+                density_fingerprint(&cells)
+            );
+            medium.insert("density".into(), toml::Value::String(name));
+        }
+        None => {
+            for key in ["kind", "density", "height_scale"] {
+                medium.remove(key);
+            }
+        }
     }
     toml::to_string(&table).map_err(|e| Error::param(format!("scene_info.scene: {e}")))
 }
@@ -157,12 +173,56 @@ pub fn stored_medium(cap: &Capture) -> Result<StoredMedium> {
     Ok(StoredMedium { region, shape })
 }
 
+/// A heterogeneous medium whose shape the forward model keeps: the fitted μt is then σt where the
+/// density is 1, the scene file's own `mu_t`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Modelled {
+    /// The stored scene's exponential height fog: μt is σt on the box's floor.
+    Height { scale_m: f64 },
+    /// The stored scene's density grid, with the cells that the capture holds.
+    Grid { cells: Arc<DensityCells> },
+}
+
+impl Modelled {
+    /// What the estimate and the model removal say of it.
+    pub fn describe(&self) -> String {
+        let shape = match self {
+            Modelled::Height { scale_m } => format!(
+                "the capture's height fog, height_scale {} m",
+                murk_core::short(*scale_m)
+            ),
+            Modelled::Grid { cells } => {
+                let [nx, ny, nz] = cells.dims();
+                format!("the capture's density grid, {nx} × {ny} × {nz} cells")
+            }
+        };
+        format!("μt is σt where the density is 1 ({shape})")
+    }
+}
+
+/// The stored scene's heterogeneous medium where the forward model keeps its shape: a height fog,
+/// or a density grid whose cells the capture holds; `None` for a homogeneous medium, none stored,
+/// or a grid without its cells.
+pub fn modelled(cap: &Capture) -> Option<Modelled> {
+    match stored_medium(cap).ok()?.shape {
+        StoredShape::Homogeneous => None,
+        StoredShape::Height { scale_m } => Some(Modelled::Height { scale_m }),
+        StoredShape::Grid { .. } => cap
+            .medium_density
+            .clone()
+            .map(|cells| Modelled::Grid { cells }),
+    }
+}
+
 /// The warning that `step` fits one homogeneous medium where the capture's stored scene has a
-/// heterogeneous one; `None` for a homogeneous medium or none stored.
+/// heterogeneous one whose shape is unknown (a grid without its cells); `None` otherwise.
 pub fn homogeneous_assumed(cap: &Capture, step: &str) -> Option<String> {
+    if modelled(cap).is_some() {
+        return None;
+    }
     let what = stored_medium(cap).ok()?.shape.describe()?;
     Some(format!(
-        "the capture's medium is {what}: {step} assumes one homogeneous medium (one μt, albedo and g) over its box"
+        "the capture's medium is {what} whose cells the capture does not hold (rendered before murk stored them): {step} assumes one homogeneous medium (one μt, albedo and g) over its box"
     ))
 }
 
@@ -231,7 +291,7 @@ mod tests {
         let cap = capture_with_info(info);
         let only = medium_only(&cap).unwrap();
         assert!(only.contains("[medium]") && only.contains("[relay]") && !only.contains("object"));
-        // The model is homogeneous: the grid and its file are gone.
+        // A grid whose cells the capture does not hold is modelled homogeneous: the grid is gone.
         assert!(
             !only.contains("grid") && !only.contains("density"),
             "{only}"
@@ -274,22 +334,52 @@ mod tests {
         assert!(!only.contains("object"), "{only}");
     }
 
-    /// A step that fits one homogeneous medium says so on a heterogeneous capture, naming its kind;
-    /// on a homogeneous one, or a capture without a stored scene, it says nothing.
+    /// The medium-only scene keeps a height fog and a grid whose cells the capture holds, and says
+    /// what μt then means; a step that fits one homogeneous medium says so only for a grid without
+    /// its cells, naming it, and says nothing on a homogeneous capture or one without a stored scene.
     #[test]
-    fn a_heterogeneous_capture_is_named_where_one_medium_is_fitted() {
+    fn a_known_shape_is_kept_and_an_unknown_one_named() {
         let info = |medium: &str| {
             format!("generator: murk render\nscene: |\n  [medium]\n{medium}  mu_t = 1.0\n  min = [-1, -1, 0]\n  max = [1, 1, 2]\n")
         };
         let height = capture_with_info(&info("  kind = \"height\"\n  height_scale = 0.5\n"));
-        let w = homogeneous_assumed(&height, "the estimate").unwrap();
+        assert_eq!(homogeneous_assumed(&height, "the estimate"), None);
+        let only = medium_only(&height).unwrap();
         assert!(
-            w.contains("height fog (height_scale = 0.5 m): the estimate assumes one homogeneous"),
-            "{w}"
+            only.contains("kind = \"height\"") && only.contains("height_scale = 0.5"),
+            "{only}"
+        );
+        assert_eq!(
+            modelled(&height).unwrap().describe(),
+            "μt is σt where the density is 1 (the capture's height fog, height_scale 0.5 m)"
         );
         let grid = capture_with_info(&info("  kind = \"grid\"\n  density = \"p.npy\"\n"));
         let w = homogeneous_assumed(&grid, "x").unwrap();
-        assert!(w.contains("a density grid (density = \"p.npy\")"), "{w}");
+        assert!(
+            w.contains(
+                "a density grid (density = \"p.npy\") whose cells the capture does not hold"
+            ),
+            "{w}"
+        );
+        let cells = DensityCells::new(&[1, 2, 1], vec![0.5, 2.0]).unwrap();
+        let own = Capture {
+            medium_density: Some(Arc::new(cells.clone())),
+            ..grid
+        };
+        assert_eq!(homogeneous_assumed(&own, "x"), None);
+        let only = medium_only(&own).unwrap();
+        let name = format!(
+            "density = \"the capture's own cells, fnv1a {:016x}\"",
+            density_fingerprint(&cells)
+        );
+        assert!(
+            only.contains("kind = \"grid\"") && only.contains(&name),
+            "{only}"
+        );
+        assert!(modelled(&own)
+            .unwrap()
+            .describe()
+            .contains("density grid, 1 × 2 × 1 cells"));
         assert_eq!(
             homogeneous_assumed(&capture_with_info(&info("")), "x"),
             None

@@ -395,6 +395,7 @@ pub(crate) fn render_medium_only(
     let top = albedos.iter().copied().fold(0.0, f64::max);
     let scene = table_scene(
         scene_text,
+        cap,
         spec,
         vec![
             format!("medium.mu_t={mu_t}"),
@@ -418,13 +419,21 @@ pub(crate) fn render_medium_only(
     plan.render_all_until(&opt, &|_, _| {}, &AtomicBool::new(false))
 }
 
-/// `scene_text` on `spec`'s grid, with the scene overrides `set`.
-fn table_scene(scene_text: &str, spec: &TableSpec, set: Vec<String>) -> Result<Scene> {
+/// `scene_text` (a medium-only scene of `cap`'s geometry) on `spec`'s grid, with the scene
+/// overrides `set`. A density grid is the capture's own cells, held in memory: the scene's `density`
+/// only names them ([`crate::scene::medium_only`]).
+fn table_scene(
+    scene_text: &str,
+    cap: &Capture,
+    spec: &TableSpec,
+    set: Vec<String>,
+) -> Result<Scene> {
     let ov = Overrides {
         grid: Some(spec.grid),
         bins: None,
         set,
         ..Overrides::default()
     };
-    Scene::from_str(scene_text, Path::new("scene_info.scene"), &ov)
+    let path = Path::new("scene_info.scene");
+    Scene::from_str_with_density(scene_text, path, &ov, cap.medium_density.as_deref())
 }

@@ -66,8 +66,8 @@ mod truth;
 pub use geometry::{Aabb, Geometry, Object, Shape};
 pub use integrator::{Endpoint, Sampler, Tracer};
 pub use medium::{
-    Grid, Height, Homogeneous, Kind as MediumKind, Medium, Phase, Segment, MAX_HEIGHT_SCALE_M,
-    MIN_HEIGHT_SCALE_M,
+    density_fingerprint, Grid, Height, Homogeneous, Kind as MediumKind, Medium, Phase, Segment,
+    MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M,
 };
 pub use overrides::{Overrides, Spelling};
 pub use render::{

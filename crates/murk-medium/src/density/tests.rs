@@ -236,8 +236,8 @@ fn height_fog_compensation_matches_its_fine_grid() {
     assert!(worst > 0.0);
 }
 
-/// Which density the compensation reads, in order: the one given, the stored height fog (with a
-/// given μt only), else homogeneous; a stored grid or an estimated μt warns, naming what to give.
+/// Which density the compensation reads, in order: the one given, the stored height fog (with μt
+/// given or estimated), else homogeneous; a stored grid without its cells warns, naming what to give.
 #[test]
 fn the_density_given_comes_before_the_stored_one() {
     let height = stored("kind = \"height\"\nheight_scale = 0.4");
@@ -259,24 +259,25 @@ fn the_density_given_comes_before_the_stored_one() {
     // No compensation: nothing is read and nothing is said.
     let off = none.along(&height, false, false, CLI).unwrap();
     assert!(off.density.is_none() && off.row.is_none() && off.warnings.is_empty());
-    // An estimated μt is one homogeneous value.
+    // An estimated μt is σt on the fog's floor too (the estimate keeps the fog's shape).
     let estimated = none.along(&height, true, false, Spelling::Python).unwrap();
-    assert!(estimated.density.is_none());
-    assert!(
-        estimated.warnings[0].contains("height fog (height_scale = 0.4 m)")
-            && estimated.warnings[0].contains("give mu_t"),
-        "{:?}",
-        estimated.warnings
-    );
+    assert!((level(&estimated) - (-0.8f64 / 0.4).exp()).abs() < 1e-12);
+    assert!(estimated.warnings.is_empty());
+    // A stored grid without its cells: homogeneous, naming what to give.
     let grid = stored("kind = \"grid\"\ndensity = \"plume.npy\"");
-    let stored_grid = none.along(&grid, true, true, CLI).unwrap();
-    assert!(stored_grid.density.is_none());
-    assert!(
-        stored_grid.warnings[0].contains("density grid (density = \"plume.npy\")")
-            && stored_grid.warnings[0].contains("give --medium-density FILE.npy"),
-        "{:?}",
-        stored_grid.warnings
-    );
+    for (mu_t_given, give) in [
+        (true, "give --medium-density FILE.npy"),
+        (false, "give --mu-t and --medium-density FILE.npy"),
+    ] {
+        let stored_grid = none.along(&grid, true, mu_t_given, CLI).unwrap();
+        assert!(stored_grid.density.is_none());
+        assert!(
+            stored_grid.warnings[0].contains("density grid (density = \"plume.npy\")")
+                && stored_grid.warnings[0].contains(give),
+            "{:?}",
+            stored_grid.warnings
+        );
+    }
     let homogeneous = none.along(&stored(""), true, true, CLI).unwrap();
     assert!(homogeneous.density.is_none() && homogeneous.warnings.is_empty());
     // Refused: both densities, one without μt, a scale out of range.

@@ -43,7 +43,8 @@ pub fn load_or_build(
 
 /// The key of the table that serves `cap`, and its file in `dir`. The key holds what the renders
 /// depend on (the renderer's key of the medium-only scene, spp and seed, with its estimator's
-/// revision and murk's version), the nodes, and what the reduction depends on (the capture's
+/// revision and murk's version; the scene's key names the medium's kind, a height fog's scale and a
+/// grid's cells by their hash), the nodes, and what the reduction depends on (the capture's
 /// separations and time axis).
 fn file_for(
     dir: &Path,
@@ -52,7 +53,7 @@ fn file_for(
     opt: &EstimateOptions,
 ) -> Result<(u64, PathBuf)> {
     let spec = &opt.table;
-    let scene = table_scene(scene_text, spec, Vec::new())?;
+    let scene = table_scene(scene_text, cap, spec, Vec::new())?;
     let text = format!(
         "{}\nnodes = {:?}\nreduction = {:?}\ntime = {:?}",
         murk_render::render_key(&scene, spec.spp, spec.seed, None),
@@ -97,4 +98,49 @@ fn write(path: &Path, key: u64, values: &[f64]) -> Result<()> {
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{capture_with_info, medium_only};
+    use murk_core::DensityCells;
+    use std::sync::Arc;
+
+    /// A table is kept for one medium shape: homogeneous, each height fog's scale and each grid's
+    /// cells have their own key. A grid whose cells the capture does not hold is modelled, and
+    /// keyed, as the homogeneous medium.
+    #[test]
+    fn the_key_names_the_medium_shape() {
+        let info = |medium: &str| {
+            format!("generator: murk render\nscene: |\n  [relay]\n  kind = \"wall\"\n  size = [1.0, 1.0]\n  [capture]\n  kind = \"confocal\"\n  grid = [2, 2]\n  bins = 4\n  bin_width = 0.01\n  [medium]\n{medium}  mu_t = 1.0\n  min = [-1.0, -1.0, 0.001]\n  max = [1.0, 1.0, 2.0]\n")
+        };
+        let stored_grid = info("  kind = \"grid\"\n  density = \"p.npy\"\n");
+        let grid = |top: f32| Capture {
+            medium_density: Some(Arc::new(
+                DensityCells::new(&[1, 2, 1], vec![0.5, top]).unwrap(),
+            )),
+            ..capture_with_info(&stored_grid)
+        };
+        let key = |cap: &Capture| {
+            let text = medium_only(cap).unwrap();
+            file_for(Path::new("tables"), &text, cap, &EstimateOptions::default())
+                .unwrap()
+                .0
+        };
+        let keys: Vec<u64> = [
+            capture_with_info(&info("")),
+            capture_with_info(&info("  kind = \"height\"\n  height_scale = 0.5\n")),
+            capture_with_info(&info("  kind = \"height\"\n  height_scale = 1.0\n")),
+            grid(2.0),
+            grid(3.0),
+        ]
+        .iter()
+        .map(key)
+        .collect();
+        for (i, a) in keys.iter().enumerate() {
+            assert!(!keys[i + 1..].contains(a), "{keys:x?}");
+        }
+        assert_eq!(key(&capture_with_info(&stored_grid)), keys[0]);
+    }
 }

@@ -10,6 +10,17 @@ use std::path::Path;
 /// The most cells a density grid may have (256³: 64 MiB of f32).
 pub const MAX_CELLS: u64 = murk_core::MAX_DENSITY_CELLS;
 
+/// FNV-1a of the cell counts and densities: a short name for a density grid (a scene's key records
+/// it; the medium's estimate names a capture's own cells by it).
+pub fn density_fingerprint(cells: &DensityCells) -> u64 {
+    let dims = cells
+        .dims()
+        .into_iter()
+        .flat_map(|d| (d as u64).to_le_bytes());
+    let values = cells.values().iter().flat_map(|v| v.to_le_bytes());
+    crate::hash::fnv1a(dims.chain(values))
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
     /// Cell counts along x, y, z.
@@ -52,11 +63,9 @@ impl Grid {
         &self.cells
     }
 
-    /// FNV-1a of the cell counts and densities: what the scene's key records of the file.
+    /// What the scene's key records of the file: [`density_fingerprint`] of its cells.
     pub fn fingerprint(&self) -> u64 {
-        let dims = self.dims.into_iter().flat_map(|d| (d as u64).to_le_bytes());
-        let cells = self.cells.values().iter().flat_map(|v| v.to_le_bytes());
-        crate::hash::fnv1a(dims.chain(cells))
+        density_fingerprint(&self.cells)
     }
 
     /// The cell holding `p` along each axis (points on or past the box's faces in its outer cells).

@@ -11,7 +11,7 @@ mod tracking;
 use crate::geometry::Aabb;
 use murk_core::DVec3;
 
-pub use grid::Grid;
+pub use grid::{density_fingerprint, Grid};
 pub use height::{Height, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M};
 pub use homogeneous::Homogeneous;
 pub use phase::Phase;

@@ -4,7 +4,7 @@
 use crate::geometry::Geometry;
 use crate::medium::Medium;
 use crate::overrides::{apply, canonical, Overrides, Spelling};
-use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
+use murk_core::{short, DVec3, DensityCells, Error, Pairing, PointSet, Result, TimeAxis};
 use std::path::{Path, PathBuf};
 
 mod file;
@@ -77,6 +77,17 @@ impl Scene {
 
     /// Parses and validates `text`; `path` names the file in errors and anchors relative mesh paths.
     pub fn from_str(text: &str, path: &Path, ov: &Overrides) -> Result<Scene> {
+        Scene::from_str_with_density(text, path, ov, None)
+    }
+
+    /// As [`Scene::from_str`], with a density grid's cells held in memory (`cells`, a capture's own)
+    /// in place of the file that the scene's `density` names, which is then not read.
+    pub fn from_str_with_density(
+        text: &str,
+        path: &Path,
+        ov: &Overrides,
+        cells: Option<&DensityCells>,
+    ) -> Result<Scene> {
         // The file alone first, so that its own mistakes are reported with their line.
         let mut f: SceneFile = toml::from_str(text).map_err(|e| {
             let line = e
@@ -126,7 +137,7 @@ impl Scene {
         s.check(&bad)?;
         let medium = match &f.medium {
             None => None,
-            Some(m) => m.resolve(dir, &bad)?,
+            Some(m) => m.resolve(dir, cells, &bad)?,
         };
         if let Some(p) = s
             .hidden_geometry_sampling
@@ -226,6 +237,7 @@ impl Scene {
                     f.medium
                         .as_ref()
                         .and_then(|m| m.density.as_ref())
+                        .filter(|_| cells.is_none())
                         .map(|d| dir.join(d)),
                 )
                 .collect(),

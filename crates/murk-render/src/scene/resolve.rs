@@ -9,7 +9,7 @@ use crate::geometry::{triangulate, Aabb, Object, Shape};
 use crate::medium::{
     Grid, Height, Homogeneous, Kind, Medium, Phase, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCALE_M,
 };
-use murk_core::{short, DVec3, Error, Pairing, PointSet, Result, TimeAxis};
+use murk_core::{short, DVec3, DensityCells, Error, Pairing, PointSet, Result, TimeAxis};
 use std::path::Path;
 
 impl RelayDef {
@@ -290,8 +290,14 @@ impl RenderDef {
 const MAX_ABS_G: f64 = 0.9999;
 
 impl MediumDef {
-    /// The medium, or `None` where it does not attenuate (μt = 0); a density grid is read from `dir`.
-    pub(super) fn resolve(&self, dir: &Path, bad: Bad) -> Result<Option<Medium>> {
+    /// The medium, or `None` where it does not attenuate (μt = 0); a density grid is read from `dir`
+    /// unless its `cells` are given.
+    pub(super) fn resolve(
+        &self,
+        dir: &Path,
+        cells: Option<&DensityCells>,
+        bad: Bad,
+    ) -> Result<Option<Medium>> {
         let m = self;
         murk_core::Limits::extinction(m.mu_t_per_m).map_err(|e| bad("medium.mu_t", e))?;
         check_albedo(m.albedo, "medium.albedo", bad)?;
@@ -337,7 +343,7 @@ impl MediumDef {
             min: v3(m.min_m),
             max: v3(m.max_m),
         };
-        let kind = self.kind(dir, &region, bad)?;
+        let kind = self.kind(dir, cells, &region, bad)?;
         Ok(kind.map(|kind| Medium {
             kind,
             albedo: m.albedo,
@@ -348,7 +354,13 @@ impl MediumDef {
     }
 
     /// How σt varies over `region`, each kind with its own fields and no other's; `None` where μt = 0.
-    fn kind(&self, dir: &Path, region: &Aabb, bad: Bad) -> Result<Option<Kind>> {
+    fn kind(
+        &self,
+        dir: &Path,
+        cells: Option<&DensityCells>,
+        region: &Aabb,
+        bad: Bad,
+    ) -> Result<Option<Kind>> {
         let only = |field: &str, kind: &str| {
             bad(
                 &format!("medium.{field}"),
@@ -379,7 +391,10 @@ impl MediumDef {
                         "kind = \"grid\" needs a density grid (.npy, shape (nx, ny, nz))".into(),
                     ));
                 };
-                let grid = Grid::load(&dir.join(file), mu_t, region)?;
+                let grid = match cells {
+                    Some(cells) => Grid::from_cells(cells.clone(), mu_t, region),
+                    None => Grid::load(&dir.join(file), mu_t, region)?,
+                };
                 murk_core::Limits::extinction(grid.majorant_per_m)
                     .map_err(|e| bad("medium.mu_t × the largest density", e))?;
                 Kind::Grid(grid)
