@@ -60,6 +60,11 @@ pub struct BenchArgs {
     /// the plain reconstruction, the default one, and the medium's estimate.
     #[arg(long, value_name = "CAPTURE")]
     pub medium: Option<PathBuf>,
+    /// With --medium: keep the medium's tables in this folder (one there for the capture's geometry
+    /// is read back, else written) and leave out the estimate that renders its table: what follows
+    /// the table, timed without rendering one per run.
+    #[arg(long, value_name = "DIR", requires = "medium")]
+    pub medium_tables: Option<PathBuf>,
     /// Where the renderer benchmark finds its scene files.
     #[arg(long, default_value = "scenes")]
     pub scenes: PathBuf,
@@ -196,7 +201,7 @@ fn run(a: &BenchArgs) -> anyhow::Result<()> {
         return crate::real::run(dir, a.runs, quiet);
     }
     if let Some(cap) = &a.medium {
-        return crate::medium::run(cap, a.runs, quiet);
+        return crate::medium::run(cap, a.medium_tables.as_deref(), a.runs, quiet);
     }
     if a.render {
         let mit = match (&a.mitransient_python, &a.mitransient_bench) {

@@ -13,7 +13,9 @@ use murk_recon::medium::{DepthSearch, MediumAware, MediumRemoval};
 use std::path::Path;
 use std::time::Instant;
 
-pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
+/// `tables`: a folder that keeps the tables (`--medium-tables`); the estimate that renders one is
+/// then not timed.
+pub fn run(path: &Path, tables: Option<&Path>, runs: usize, quiet: bool) -> anyhow::Result<()> {
     let ctx = || path.display().to_string();
     let cap = murk_io::read_capture(path)?;
     let method = Method::named("pf", &Options::default()).with_context(ctx)?;
@@ -28,7 +30,10 @@ pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
     let estimate = murk_medium::EstimateOptions::default();
     // The estimate once more with its table kept in a folder (`--table-cache`): written by the first
     // run, read back by the others, so its median is what a capture of a known geometry costs.
-    let cache = std::env::temp_dir().join(format!("murk-bench-tables-{}", std::process::id()));
+    let cache = tables.map_or_else(
+        || std::env::temp_dir().join(format!("murk-bench-tables-{}", std::process::id())),
+        Path::to_path_buf,
+    );
     let cached = murk_medium::EstimateOptions {
         table_cache: Some(cache.clone()),
         ..murk_medium::EstimateOptions::default()
@@ -58,10 +63,12 @@ pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
             &mut || Ok(murk_methods::run(cap.clone(), &aware, &NoProgress).map(drop)?),
             &mut t_aware,
         )?;
-        time(
-            &mut || Ok(murk_medium::estimate(&cap, &estimate, &|_, _| {}).map(drop)?),
-            &mut t_estimate,
-        )?;
+        if tables.is_none() {
+            time(
+                &mut || Ok(murk_medium::estimate(&cap, &estimate, &|_, _| {}).map(drop)?),
+                &mut t_estimate,
+            )?;
+        }
         time(
             &mut || Ok(murk_medium::estimate(&cap, &cached, &|_, _| {}).map(drop)?),
             &mut t_cached,
@@ -71,7 +78,9 @@ pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
             &mut t_until,
         )?;
     }
-    std::fs::remove_dir_all(&cache).ok();
+    if tables.is_none() {
+        std::fs::remove_dir_all(&cache).ok();
+    }
     let (p, m, e, c, u) = (
         crate::median(&t_plain),
         crate::median(&t_aware),
@@ -91,13 +100,15 @@ pub fn run(path: &Path, runs: usize, quiet: bool) -> anyhow::Result<()> {
             100.0 * (m / p - 1.0)
         ),
     );
-    say(
-        quiet,
-        format!(
-            "  the medium's estimate (table and fit): {e:.3} s ({:.1}× the plain reconstruction)",
-            e / p
-        ),
-    );
+    if tables.is_none() {
+        say(
+            quiet,
+            format!(
+                "  the medium's estimate (table and fit): {e:.3} s ({:.1}× the plain reconstruction)",
+                e / p
+            ),
+        );
+    }
     say(
         quiet,
         format!(

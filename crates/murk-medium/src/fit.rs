@@ -5,10 +5,13 @@ use crate::posterior;
 use crate::single::Angles;
 use crate::table::ResponseTable;
 use crate::Fixed;
+use interpolate::{Interpolation, Phase};
 use murk_core::{Capture, Error, Result};
 use murk_methods::{Method, Options, Request};
 use murk_recon::medium::detect::Signature;
 use rayon::prelude::*;
+
+mod interpolate;
 
 /// Which parameters are fitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -272,21 +275,27 @@ pub fn fit(
     };
     let phase = Phase::new(&Angles::new(red, cap, &used), &table.g, &gs);
     let paths_m: Vec<f64> = used.iter().map(|&i| red.path_m(cap, i % n)).collect();
-    // Sum of squares at every candidate, [mu][albedo][g].
-    let ssr: Vec<f64> = mus
-        .par_iter()
-        .flat_map_iter(|&mu| {
-            let mut row = Vec::with_capacity(albedos.len() * gs.len());
-            for &a in &albedos {
-                for (k, &g) in gs.iter().enumerate() {
-                    let model = interpolate(table, mu, a, g, &used, &paths_m, &phase.at(k));
-                    row.push(sum_of_squares(&ln_data, &model, absolute));
-                }
+    let grid = Interpolation::new(table, &used, &paths_m, &phase, (&mus, &albedos, &gs));
+    let (nm, na, ng) = grid.shape();
+    // Sum of squares at every candidate, [albedo][mu][g]: a worker's candidates then share its
+    // albedo, so the table's nodes there and their ln are taken once per worker and albedo.
+    let mut by_albedo = vec![0.0; na * nm * ng];
+    by_albedo.par_chunks_mut(ng).enumerate().for_each_init(
+        || (grid.corners(), vec![0.0; used.len()]),
+        |(corners, model), (j, out)| {
+            for (k, s) in out.iter_mut().enumerate() {
+                grid.model(corners, (j % nm, j / nm, k), model);
+                *s = sum_of_squares(&ln_data, model, absolute);
             }
-            row
+        },
+    );
+    // … and [mu][albedo][g].
+    let ssr: Vec<f64> = (0..nm * na)
+        .flat_map(|j| {
+            let (mu, a) = (j / na, j % na);
+            by_albedo[(a * nm + mu) * ng..][..ng].iter().copied()
         })
         .collect();
-    let (na, ng) = (albedos.len(), gs.len());
     let (best, &min) = ssr
         .iter()
         .enumerate()
@@ -301,15 +310,8 @@ pub fn fit(
     // The residuals of neighbouring bins are correlated (the table's Monte Carlo noise is smooth over
     // a few bins, and so are model errors): the likelihood counts the effective number of
     // independent values, N·(1 − ρ)/(1 + ρ) for a lag-one correlation ρ.
-    let best_model = interpolate(
-        table,
-        mus[bm],
-        albedos[ba],
-        gs[bg],
-        &used,
-        &paths_m,
-        &phase.at(bg),
-    );
+    let mut best_model = vec![0.0; used.len()];
+    grid.model(&mut grid.corners(), (bm, ba, bg), &mut best_model);
     let residual = residuals(&ln_data, &best_model, absolute);
     let rho = posterior::lag_one_correlation(&residual, |k| {
         used[k] == used[k - 1] + 1 && !used[k].is_multiple_of(n)
@@ -418,197 +420,9 @@ fn sum_of_squares(ln_data: &[f64], model: &[f64], absolute: bool) -> f64 {
     diff.map(|x| (x - offset).powi(2)).sum()
 }
 
-/// The once-scattered light's phase factor (ln, per used value) at the table's g nodes and at the
-/// searched g values; empty when g is not fitted (one node, nothing to interpolate).
-struct Phase {
-    nodes: Vec<Vec<f64>>,
-    searched: Vec<Vec<f64>>,
-}
-
-impl Phase {
-    fn new(angles: &Angles, nodes: &[f64], searched: &[f64]) -> Phase {
-        if nodes.len() < 2 {
-            return Phase {
-                nodes: Vec::new(),
-                searched: Vec::new(),
-            };
-        }
-        let ln = |gs: &[f64]| gs.par_iter().map(|&g| angles.ln_phase(g)).collect();
-        Phase {
-            nodes: ln(nodes),
-            searched: ln(searched),
-        }
-    }
-
-    /// At the `k`-th searched g.
-    fn at(&self, k: usize) -> PhaseAt<'_> {
-        PhaseAt {
-            nodes: &self.nodes,
-            here: self.searched.get(k).map_or(&[], Vec::as_slice),
-        }
-    }
-}
-
-/// [`Phase`] at one searched g.
-struct PhaseAt<'a> {
-    nodes: &'a [Vec<f64>],
-    here: &'a [f64],
-}
-
-/// The table's response at (mu, albedo, g) for the reduced values `used` (of paths `paths_m`): linear
-/// in albedo (a polynomial of low order there); between μt and g nodes, ln of the response divided by
-/// the once-scattered light's μt·exp(−μt·L)·phase factor ([`Angles`]) bilinear in ln μt and g, times
-/// that factor at (μt, g). Once-scattered light, the part that tells g from α, is then exact between
-/// the nodes, value by value, at the angles each ring and path sees: HG varies with g differently at
-/// each angle, so weights taken from backscatter alone would bend α between the g nodes. Linear
-/// where a corner is not positive.
-fn interpolate(
-    table: &ResponseTable,
-    mu: f64,
-    albedo: f64,
-    g: f64,
-    used: &[usize],
-    paths_m: &[f64],
-    phase: &PhaseAt,
-) -> Vec<f64> {
-    let (m0, m1, wm) = bracket(&table.mu_t_per_m, mu, true);
-    let (a0, a1, wa) = bracket(&table.albedos, albedo, false);
-    let (g0, g1, wg) = bracket(&table.g, g, false);
-    // The once-scattered light's factors that the nodes' bracket does not interpolate exactly: its
-    // attenuation exp(−μt·L) (not linear in ln μt, so the bracket's weights miss it on long paths
-    // between widely spaced nodes) and its phase factor.
-    let (mu0, mu1) = (table.mu_t_per_m[m0], table.mu_t_per_m[m1]);
-    let attenuation_ln = |k: usize| -paths_m[k] * (mu - (1.0 - wm) * mu0 - wm * mu1);
-    let phase_ln = |k: usize| {
-        if phase.here.is_empty() {
-            0.0
-        } else {
-            phase.here[k] - (1.0 - wg) * phase.nodes[g0][k] - wg * phase.nodes[g1][k]
-        }
-    };
-    let at = |m: usize, g: usize| -> Vec<f64> {
-        let (lo, hi) = (table.node(m, g, a0), table.node(m, g, a1));
-        used.iter()
-            .map(|&i| (1.0 - wa) * lo[i] + wa * hi[i])
-            .collect()
-    };
-    let corners = [
-        (at(m0, g0), (1.0 - wm) * (1.0 - wg)),
-        (at(m0, g1), (1.0 - wm) * wg),
-        (at(m1, g0), wm * (1.0 - wg)),
-        (at(m1, g1), wm * wg),
-    ];
-    (0..used.len())
-        .map(|k| {
-            let blend = if corners.iter().all(|(v, _)| v[k] > 0.0) {
-                corners
-                    .iter()
-                    .map(|(v, w)| w * v[k].ln())
-                    .sum::<f64>()
-                    .exp()
-            } else {
-                corners.iter().map(|(v, w)| w * v[k]).sum()
-            };
-            (attenuation_ln(k) + phase_ln(k)).exp() * blend
-        })
-        .collect()
-}
-
-/// The nodes around `x` (clamped to the range) and the weight of the upper one; `log`: in ln x.
-fn bracket(nodes: &[f64], x: f64, log: bool) -> (usize, usize, f64) {
-    if nodes.len() == 1 {
-        return (0, 0, 0.0);
-    }
-    let k = nodes
-        .iter()
-        .position(|&v| v > x)
-        .unwrap_or(nodes.len())
-        .clamp(1, nodes.len() - 1);
-    let (a, b) = (nodes[k - 1], nodes[k]);
-    let f = |v: f64| if log { v.ln() } else { v };
-    let w = ((f(x) - f(a)) / (f(b) - f(a))).clamp(0.0, 1.0);
-    (k - 1, k, w)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn bracket_finds_neighbours_and_weights() {
-        let n = [1.0, 2.0, 4.0];
-        assert_eq!(bracket(&n, 3.0, false), (1, 2, 0.5));
-        let (a, b, w) = bracket(&n, 2.0f64.sqrt() * 2.0, true);
-        assert_eq!((a, b), (1, 2));
-        assert!((w - 0.5).abs() < 1e-12);
-        assert_eq!(bracket(&n, 9.0, false), (1, 2, 1.0));
-        assert_eq!(bracket(&n, 0.1, false), (0, 1, 0.0));
-        assert_eq!(bracket(&[0.5], 3.0, false), (0, 0, 0.0));
-    }
-
-    /// A table of once-scattered light alone, α·μt·exp(−μt·L)·phase factor, interpolated between
-    /// its nodes: exact at any (μt, α, g). Weights by the phase at backscatter alone are not: the
-    /// outer ring's phase factor differs from HG at backscatter by more than a third.
-    #[test]
-    fn once_scattered_light_is_exact_between_nodes() {
-        use murk_synth::{CaptureLayout, LayoutKind};
-        let layout = CaptureLayout {
-            kind: LayoutKind::LaserGridSinglePoint,
-            wall_size_m: 2.0,
-            grid: 16,
-            point: murk_core::DVec3::ZERO,
-            time: murk_core::TimeAxis {
-                start_m: 2.0,
-                bin_width_m: 0.05,
-                bins: 40,
-            },
-            laser_xyz: None,
-            sensor_xyz: None,
-        };
-        let cap = layout.empty_capture().unwrap();
-        let red = crate::table::Reduction::of(&cap, 4);
-        let n = red.coarse_bins;
-        let all: Vec<usize> = (0..red.rings() * n).collect();
-        let paths: Vec<f64> = all.iter().map(|&i| red.path_m(&cap, i % n)).collect();
-        let angles = Angles::new(&red, &cap, &all);
-        let (mus, gs, albedos) = (
-            vec![1.0, 1.35, 1.8225],
-            vec![-0.8, -0.4, 0.0, 0.4, 0.8],
-            vec![0.1, 0.9],
-        );
-        let model = |mu: f64, a: f64, g: f64| -> Vec<f64> {
-            let phase = angles.ln_phase(g);
-            (0..all.len())
-                .map(|k| a * mu * (-mu * paths[k] + phase[k]).exp())
-                .collect()
-        };
-        let mut values = Vec::new();
-        for &mu in &mus {
-            for &g in &gs {
-                for &a in &albedos {
-                    values.extend(model(mu, a, g));
-                }
-            }
-        }
-        let table = ResponseTable::from_values(mus, gs.clone(), albedos, red, values);
-        let (mu, a, g) = (1.6, 0.37, 0.7);
-        let phase = Phase::new(&angles, &gs, &[g]);
-        let got = interpolate(&table, mu, a, g, &all, &paths, &phase.at(0));
-        let want = model(mu, a, g);
-        let worst = got
-            .iter()
-            .zip(&want)
-            .map(|(x, y)| (x / y - 1.0).abs())
-            .fold(0.0, f64::max);
-        assert!(worst < 1e-9, "worst relative error {worst}");
-        // The outer ring's angles differ from backscatter: its phase factor is not HG at π.
-        let outer = angles.ln_phase(0.7)[3 * n + 5] - angles.ln_phase(0.0)[3 * n + 5];
-        let back = ((1.0f64 - 0.7) / 1.7 / 1.7).ln();
-        assert!(
-            outer - back > 0.3,
-            "outer ring {outer} vs backscatter {back}"
-        );
-    }
 
     #[test]
     fn fit_params_parse() {
