@@ -6,7 +6,7 @@ use murk_render::{density_fingerprint, Aabb, MAX_HEIGHT_SCALE_M, MIN_HEIGHT_SCAL
 use std::sync::Arc;
 
 /// The resolved scene TOML that `murk render` stored in the capture's `scene_info`, without its
-/// `[[object]]` tables but those that enclose the medium ([`encloses`]: a room's walls, which return
+/// `[[object]]` tables but those that enclose the medium (`encloses`: a room's walls, which return
 /// the medium's light as the medium itself does). The medium's values in it are replaced by the
 /// table's; the geometry (relay, capture layout, time axis, the medium's extent and enclosure) and
 /// the medium's shape where murk knows it ([`Modelled`]) are kept. A medium of unknown shape (a

@@ -239,7 +239,7 @@ pub struct ResponseTable {
 }
 
 impl ResponseTable {
-    /// Renders `scene_text` (a medium-only scene of `cap`'s geometry) at every node ([`node_values`]).
+    /// Renders `scene_text` (a medium-only scene of `cap`'s geometry) at every node (`node_values`).
     pub fn build(
         scene_text: &str,
         cap: &Capture,
