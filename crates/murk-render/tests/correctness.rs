@@ -547,6 +547,24 @@ fn surface_lobe_keeps_the_expectation() {
     );
 }
 
+/// Vertices drawn around the line from each medium vertex to the target (`spindle_draws`) keep every
+/// histogram's expectation: the fog T at g = 0.9 and at g = −0.7 (where the line is the phase
+/// function's trough), none against two draws per vertex; as `phase_distances_keep_the_expectation`.
+#[test]
+fn spindle_draws_keep_the_expectation() {
+    for (g, seed) in [(0.9, 121), (-0.7, 131)] {
+        assert_setting_keeps_the_expectation(
+            "grid = [2, 2]",
+            |n| format!("spindle_draws = {n}"),
+            &format!("{FOG}\ng = {g}"),
+            (0, 2),
+            (240_000, seed),
+            0.05,
+            ("without spindle draws", "with them"),
+        );
+    }
+}
+
 /// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 64 000-spp reference
 /// (expected 3.9 with the reference's own noise; accepted: 3.2–5.0).
 #[test]

@@ -265,6 +265,10 @@ impl TargetDistance {
     }
 }
 
+/// The spindle draws' radius as a share of the line's length: at g 0.7 the phase function falls to
+/// half its peak 0.28 rad off forward, which at the line's middle is 0.07 of its length off the line.
+const SPINDLE_WIDTH: f64 = 0.1;
+
 impl Tracer<'_> {
     /// The path side's distance samplers toward `tgt` on the medium part `[m0, m1]` of the segment
     /// `x + t·d` that starts at optical path `opl`; `first`: the segment leaves the traced point.
@@ -397,7 +401,78 @@ impl Tracer<'_> {
             for _ in 0..n {
                 self.draw_from_target(m, from, (k, tgt), n, s, out);
             }
+            if matches!(from.v, Vertex::Medium { .. }) {
+                for _ in 0..self.spindle_draws {
+                    self.draw_spindle(m, from, (k, tgt), n, s, out);
+                }
+            }
         }
+    }
+
+    /// Volume density of the spindle draws from the medium vertex `from` toward `tgt` at `y`: uniform
+    /// along the line x → target, and ∝ 1/ρ in the distance ρ < `SPINDLE_WIDTH`·|x − target| from it.
+    /// 0 where they do not run (other vertices, or no draws).
+    pub(super) fn spindle_pdf(&self, from: &Start, tgt: &Endpoint, y: DVec3) -> f64 {
+        if self.spindle_draws == 0 || !matches!(from.v, Vertex::Medium { .. }) {
+            return 0.0;
+        }
+        let v = tgt.p - from.x;
+        let len = v.length();
+        let u = v / len;
+        let q = y - from.x;
+        let z = q.dot(u);
+        let rho = (q - u * z).length();
+        let width = SPINDLE_WIDTH * len;
+        if !(z >= 0.0 && z <= len && rho > 0.0 && rho < width) {
+            return 0.0;
+        }
+        self.spindle_draws as f64 / (len * 2.0 * PI * rho * width)
+    }
+
+    /// One spindle draw: a vertex y uniform along the line from the medium vertex `from` to the target
+    /// and at a distance ρ from it with density ∝ 1/ρ (`spindle_pdf`), joined to both. Where the phase
+    /// function peaks forward, the join's integrand stays near its peak close to that line, while the
+    /// path side's density there (a phase direction, then distances toward the target) and the target
+    /// side's (a direction, then distances toward `from`) both fall off ∝ ρ: their balance weight
+    /// leaves values ∝ 1/ρ, the fog's fireflies after the object window (docs/renderer-sampling.md).
+    /// `n`: the target-side draws from `from`.
+    fn draw_spindle(
+        &self,
+        m: &Medium,
+        from: &Start,
+        (k, tgt): (usize, &Endpoint),
+        n: u32,
+        s: &mut Sampler,
+        out: &mut Sink,
+    ) {
+        let v = tgt.p - from.x;
+        let len = v.length();
+        let u = v / len;
+        let (z, rho, phi) = (
+            len * s.next(),
+            SPINDLE_WIDTH * len * s.next(),
+            2.0 * PI * s.next(),
+        );
+        let (e1, e2) = u.any_orthonormal_pair();
+        let y = from.x + u * z + (e1 * phi.cos() + e2 * phi.sin()) * rho;
+        let lv = y - tgt.p;
+        let tl = lv.length();
+        if tl <= 0.0 {
+            return;
+        }
+        let wl = lv / tl;
+        if tgt.n.dot(wl) <= 0.0 {
+            return;
+        }
+        let hit_l = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
+        let Some((a, b)) = m.clip(tgt.p, wl, hit_l) else {
+            return;
+        };
+        if !(tl >= a && tl <= b) {
+            return;
+        }
+        let p_l = n as f64 * self.target_pdf(m, tgt, from.x, y);
+        self.join_target(m, from, (k, tgt), (wl, tl, a, p_l), s, out);
     }
 
     /// How many target-side draws a segment starting at `x` (the traced point when `origin`) gets
@@ -450,6 +525,22 @@ impl Tracer<'_> {
         if !(tl >= a && tl <= b && peq > 0.0) {
             return;
         }
+        let p_l = n as f64 * (p_dir * peq / (tl * tl));
+        self.join_target(m, from, (k, tgt), (wl, tl, a, p_l), s, out);
+    }
+
+    /// Joins the medium vertex y = target + `wl`·`tl` (its medium starting `a` along `wl`) to `from`
+    /// and to target `k`, `tgt`, weighted by the balance heuristic over the target-side draws' density
+    /// `p_l` at y, the spindle draws' and the path side's.
+    fn join_target(
+        &self,
+        m: &Medium,
+        from: &Start,
+        (k, tgt): (usize, &Endpoint),
+        (wl, tl, a, p_l): (DVec3, f64, f64, f64),
+        s: &mut Sampler,
+        out: &mut Sink,
+    ) {
         let y = tgt.p + wl * tl;
         let v = y - from.x;
         let t2 = v.length_squared();
@@ -483,7 +574,6 @@ impl Tracer<'_> {
                     .pdf(t))
             / t2;
         let cos_l = tgt.n.dot(wl);
-        let p_l = p_dir * peq / (tl * tl);
         // Integrand (volume measure) over the sum of densities: the balance-weighted estimate.
         let legs = [
             leg,
@@ -499,7 +589,7 @@ impl Tracer<'_> {
             * m.phase.eval(-w.dot(wl))
             * cos_l
             / (PI * tl * tl)
-            / (n as f64 * p_l + p_path);
+            / (p_l + p_path + self.spindle_pdf(from, tgt, y));
         let opl = from.opl + t + tl + m.extra_path_m((t - m0) + (tl - a)) + tgt.extra_m;
         // The target-side vertex scatters once more than the path that reached `from`.
         self.splat(out, k, opl, (value, from.scat + 1), s);

@@ -10,7 +10,7 @@
 //!
 //! The sampling techniques (first directions, survival past the first vertex, no roulette in a
 //! medium, time-window distances, target-side draws, object draws and connections, shared tails, the
-//! phase lobe out of the hidden geometry) and the
+//! phase lobe out of the hidden geometry, spindle draws between a medium vertex and a target) and the
 //! measurements that chose their defaults are in `docs/renderer-sampling.md`.
 
 use crate::geometry::{Geometry, Hit, Shape, EPS};
@@ -84,6 +84,8 @@ pub struct Tracer<'a> {
     target_phase_distances: f64,
     /// Share of directions leaving a hidden-geometry vertex in the phase lobe toward the one target.
     surface_lobe: f64,
+    /// Vertices drawn around the line from each medium vertex to each target (`draw_spindle`).
+    spindle_draws: u32,
     /// The hidden geometry's bounds, grown by a margin: a leg outside them meets nothing.
     hidden_bounds: crate::geometry::Aabb,
     /// The last (spp, lattice generator) pair `trace` used.
@@ -161,6 +163,12 @@ impl<'a> Tracer<'a> {
                     .medium
                     .as_ref()
                     .map_or(0.0, Medium::default_surface_lobe)
+            }),
+            spindle_draws: set.spindle_draws.unwrap_or_else(|| {
+                scene
+                    .medium
+                    .as_ref()
+                    .map_or(0, Medium::default_spindle_draws)
             }),
             hidden_bounds: {
                 let b = scene.geometry.bounds();
@@ -476,7 +484,8 @@ impl<'a> Tracer<'a> {
             if out.at_first {
                 out.w = d;
             }
-            // Target-side density of a path-side vertex y at distance t, per unit length along d.
+            // Target-side and spindle density of a path-side vertex y at distance t, per unit length
+            // along d.
             let pd = if scattering.is_some() {
                 self.dir_pdf(&from, d)
             } else {
@@ -484,7 +493,11 @@ impl<'a> Tracer<'a> {
             };
             let target_pdf = |m: &Medium, seg: &Toward, k: usize, y: DVec3, t: f64| {
                 if scattering.is_some() && pd > 0.0 {
-                    seg.target_draws * self.target_pdf(m, &targets[k], from.x, y) * t * t / pd
+                    (seg.target_draws * self.target_pdf(m, &targets[k], from.x, y)
+                        + self.spindle_pdf(&from, &targets[k], y))
+                        * t
+                        * t
+                        / pd
                 } else {
                     0.0
                 }

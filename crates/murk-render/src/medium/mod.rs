@@ -125,6 +125,17 @@ impl Medium {
         }
     }
 
+    /// Spindle draws per medium vertex and target (`Tracer::draw_spindle`) where a scene does not set
+    /// them: in strongly forward media a fog path's connection through a vertex y between a medium
+    /// vertex x and the target peaks where x, y and the target line up, and the path side's and the
+    /// target side's densities there both vanish in proportion to y's distance from that line.
+    pub fn default_spindle_draws(&self) -> u32 {
+        match self.phase {
+            Phase::HenyeyGreenstein { g } if g >= 0.6 && self.scatters() => 1,
+            _ => 0,
+        }
+    }
+
     /// The optical depth ∫σt along all of `segs`, exactly.
     #[inline]
     fn optical_depth(&self, segs: &[Segment]) -> f64 {

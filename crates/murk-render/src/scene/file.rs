@@ -165,6 +165,10 @@ pub struct RenderDef {
     /// the light that returns to a wall point leaves the object heading for it. Default: 0.5 where g ≥
     /// 0.6, else 0.
     pub surface_lobe: Option<f64>,
+    /// Medium vertices per medium vertex and target drawn around the line between them (the forward
+    /// "spindle" where both connections' phase values peak), MIS-combined with the path side and the
+    /// target side. Default: 1 where g ≥ 0.6, else 0.
+    pub spindle_draws: Option<u32>,
     /// Side (in grid points) of the tiles of traced points that share their paths past the first hidden
     /// vertex, where a medium scatters and every traced point has the same targets (see the integrator);
     /// at most 16. 0 or 1: off.
@@ -193,6 +197,7 @@ impl Default for RenderDef {
             phase_distances: None,
             target_phase_distances: None,
             surface_lobe: None,
+            spindle_draws: None,
             share_tile: 4,
             trace_from: TraceFrom::Auto,
         }

@@ -198,6 +198,10 @@ impl Scene {
         if f.render.surface_lobe.is_none() && lobe > 0.0 {
             resolved.push_str(&format!("\nrender.surface_lobe_default = {lobe}"));
         }
+        let spindle = medium.as_ref().map_or(0, Medium::default_spindle_draws);
+        if f.render.spindle_draws.is_none() && spindle > 0 {
+            resolved.push_str(&format!("\nrender.spindle_draws_default = {spindle}"));
+        }
         let geometry = Geometry::new(objects);
         if geometry.is_empty() && !medium.as_ref().is_some_and(Medium::scatters) {
             return Err(bad(

@@ -238,6 +238,7 @@ impl RenderDef {
             ("render.target_split", s.target_split),
             ("render.object_draws", s.object_draws),
             ("render.phase_distances", s.phase_distances.unwrap_or(0)),
+            ("render.spindle_draws", s.spindle_draws.unwrap_or(0)),
         ] {
             if n > 4096 {
                 return Err(bad(field, format!("must be at most 4096, got {n}")));
