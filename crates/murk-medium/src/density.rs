@@ -8,7 +8,7 @@ mod height;
 pub use grid::GridDensity;
 pub use height::HeightDensity;
 
-use crate::scene::{check_height_scale, modelled, stored_medium, Modelled};
+use crate::scene::{check_height_scale, stored_medium, Modelled};
 use murk_core::Opt;
 use murk_core::{Capture, DVec3, Error, Result};
 use murk_recon::PathDensity;
@@ -97,7 +97,7 @@ impl DensityGiven {
             Ok(s) if compensates => s,
             _ => return Ok(Along::default()),
         };
-        match modelled(cap) {
+        match stored.shape.modelled(cap) {
             Some(Modelled::Grid { cells }) => {
                 let [nx, ny, nz] = cells.dims();
                 return Ok(Along {

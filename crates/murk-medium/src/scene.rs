@@ -14,7 +14,8 @@ use std::sync::Arc;
 pub fn medium_only(cap: &Capture) -> Result<String> {
     let mut table = stored_table(cap)?;
     // Without a box the medium has no walls to find (the fit then fails on the box, not here).
-    let region = stored_medium(cap).ok().map(|m| m.region);
+    let stored = medium_of(&table).ok();
+    let region = stored.as_ref().map(|m| m.region);
     let enclosure: Vec<toml::Value> = match (table.remove("object"), region) {
         (Some(toml::Value::Array(objects)), Some(region)) => objects
             .into_iter()
@@ -31,7 +32,7 @@ pub fn medium_only(cap: &Capture) -> Result<String> {
     medium.insert("mu_t".into(), toml::Value::Float(1.0));
     medium.insert("albedo".into(), toml::Value::Float(0.5));
     medium.insert("g".into(), toml::Value::Float(0.0));
-    match modelled(cap) {
+    match stored.and_then(|m| m.shape.modelled(cap)) {
         // The stored kind and height_scale stay as they are.
         Some(Modelled::Height { .. }) => {}
         // The table renders the capture's own cells ([`crate::table`]); the name carries their hash,
@@ -110,6 +111,19 @@ pub enum StoredShape {
 }
 
 impl StoredShape {
+    /// The shape the forward model keeps: a height fog, or a grid whose cells `cap` holds; `None`
+    /// for a homogeneous medium or a grid without its cells.
+    pub fn modelled(&self, cap: &Capture) -> Option<Modelled> {
+        match self {
+            StoredShape::Homogeneous => None,
+            StoredShape::Height { scale_m } => Some(Modelled::Height { scale_m: *scale_m }),
+            StoredShape::Grid { .. } => cap
+                .medium_density
+                .clone()
+                .map(|cells| Modelled::Grid { cells }),
+        }
+    }
+
     /// What it is, for a warning that a step assumes a homogeneous medium instead.
     pub fn describe(&self) -> Option<String> {
         match self {
@@ -125,8 +139,14 @@ impl StoredShape {
 
 /// The stored scene's medium; errors name what it lacks (no scene, no `[medium]`, no box).
 pub fn stored_medium(cap: &Capture) -> Result<StoredMedium> {
-    let mut table = stored_table(cap)?;
-    let medium = medium_table(&mut table)?;
+    medium_of(&stored_table(cap)?)
+}
+
+/// The medium of a parsed stored scene (see [`stored_medium`]).
+fn medium_of(table: &toml::Table) -> Result<StoredMedium> {
+    let Some(toml::Value::Table(medium)) = table.get("medium") else {
+        return Err(no_medium_table());
+    };
     let number = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64));
     let corner = |key: &str| -> Result<DVec3> {
         let v: Option<Vec<f64>> = medium
@@ -204,23 +224,17 @@ impl Modelled {
 /// or a density grid whose cells the capture holds; `None` for a homogeneous medium, none stored,
 /// or a grid without its cells.
 pub fn modelled(cap: &Capture) -> Option<Modelled> {
-    match stored_medium(cap).ok()?.shape {
-        StoredShape::Homogeneous => None,
-        StoredShape::Height { scale_m } => Some(Modelled::Height { scale_m }),
-        StoredShape::Grid { .. } => cap
-            .medium_density
-            .clone()
-            .map(|cells| Modelled::Grid { cells }),
-    }
+    stored_medium(cap).ok()?.shape.modelled(cap)
 }
 
 /// The warning that `step` fits one homogeneous medium where the capture's stored scene has a
 /// heterogeneous one whose shape is unknown (a grid without its cells); `None` otherwise.
 pub fn homogeneous_assumed(cap: &Capture, step: &str) -> Option<String> {
-    if modelled(cap).is_some() {
+    let shape = stored_medium(cap).ok()?.shape;
+    if shape.modelled(cap).is_some() {
         return None;
     }
-    let what = stored_medium(cap).ok()?.shape.describe()?;
+    let what = shape.describe()?;
     Some(format!(
         "the capture's medium is {what} whose cells the capture does not hold (rendered before murk stored them): {step} assumes one homogeneous medium (one μt, albedo and g) over its box"
     ))
@@ -241,10 +255,12 @@ pub(crate) fn check_height_scale(scale_m: Option<f64>, what: &str) -> Result<f64
 pub(crate) fn medium_table(table: &mut toml::Table) -> Result<&mut toml::Table> {
     match table.get_mut("medium") {
         Some(toml::Value::Table(medium)) => Ok(medium),
-        _ => Err(Error::param(
-            "scene_info.scene has no [medium] table: the extent of the medium is unknown",
-        )),
+        _ => Err(no_medium_table()),
     }
+}
+
+fn no_medium_table() -> Error {
+    Error::param("scene_info.scene has no [medium] table: the extent of the medium is unknown")
 }
 
 /// The block under `scene: |` in `scene_info` (YAML literal block, indented by two spaces).
