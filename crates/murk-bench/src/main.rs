@@ -4,6 +4,7 @@
 
 mod confocal;
 mod medium;
+mod paper_cells;
 mod real;
 mod render;
 
@@ -28,6 +29,7 @@ cargo run --release -p murk-bench -- --runs 9 --skip-z\n  \
 cargo run --release -p murk-bench -- --paper-only shelf          # the shelf's 142³ volume alone\n  \
 cargo run --release -p murk-bench -- --render --only z-letter   # the renderer on the paper's format\n  \
 cargo run --release -p murk-bench -- --render --only anisotropy --set render.target_lobe=0.9   # forward scattering's cost\n  \
+cargo run --release -p murk-bench -- --render --only 'paper cells' --runs 3   # the paper-scale study's CPU at 6 % error\n  \
 cargo run --release -p murk-bench -- --real ../shared/data/real/cdt_lindell2020\n  \
 cargo run --release -p murk-bench -- --medium fog.h5 --runs 3      # the medium-aware path's cost\n  \
 cargo run --release -p murk-bench -- --confocal-vs-tal --tal-bench ../shared/reference/tal_bench.py"
@@ -73,7 +75,8 @@ pub struct BenchArgs {
     #[arg(long, value_name = "KEY=VALUE")]
     pub set: Vec<String>,
     /// With --render: only the cases whose scene file name contains this (e.g. t-wall-single;
-    /// z-letter for the paper format).
+    /// z-letter for the paper format; 'paper cells', run only when named, for every capture of the
+    /// paper-scale study at 6 % error, without --set).
     #[arg(long)]
     pub only: Option<String>,
     /// Only f-k and LCT next to y-tal's fk and lct on a 64 × 64 × 512 confocal capture: speed and

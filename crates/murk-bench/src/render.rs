@@ -91,6 +91,9 @@ const CASES: [Case; 3] = [
 /// name leaves it out of `--only z-letter`, the paper format).
 const ANISOTROPY: &str = "t-wall-medium.toml anisotropy";
 const ANISOTROPY_Z: &str = "z quick anisotropy";
+/// Every capture of the paper-scale study, to 6 % ([`crate::paper_cells`]); only by name (hours of
+/// CPU at the study's spp, minutes at the measured one).
+const PAPER_CELLS: &str = "paper cells";
 
 /// `only`: run just the cases whose name contains it; `set`: scene overrides for every case. `mit`:
 /// render each T case with mitransient in this run too, instead of quoting its recorded figures.
@@ -105,7 +108,7 @@ pub fn run(
     let names: Vec<&str> = CASES
         .iter()
         .map(|c| c.file)
-        .chain([ANISOTROPY, ANISOTROPY_Z, "z-letter.toml"])
+        .chain([ANISOTROPY, ANISOTROPY_Z, "z-letter.toml", PAPER_CELLS])
         .collect();
     if !names.iter().any(|n| wanted(n)) {
         bail!(
@@ -126,6 +129,9 @@ pub fn run(
     }
     if wanted("z-letter.toml") {
         paper_format(&scenes, runs, quiet)?;
+    }
+    if only.is_some() && wanted(PAPER_CELLS) {
+        crate::paper_cells::paper_cells(scenes.dir, runs, quiet)?;
     }
     Ok(())
 }
