@@ -104,8 +104,9 @@ fn find(
         volume: VolumeSpec::Given(coarse),
         ..*req
     };
-    let whole =
-        ReconPlan::given(searched, &whole_req, given, progress)?.run(searched.clone(), progress)?;
+    let plan = ReconPlan::given(searched, &whole_req, given, progress)?;
+    // The binned capture serves only this run: moved into it, not copied.
+    let whole = plan.run(binned.unwrap_or_else(|| cap.clone()), progress)?;
     // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
     // planes it leaves fully open are searched.
     let open_m = match req.gate {
