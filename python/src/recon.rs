@@ -6,7 +6,7 @@ use murk_baselines::{BmmParams, SlabParams};
 use murk_core::{Error, Named, Result};
 use murk_medium::density::{Along, DensityGiven};
 use murk_medium::scene::homogeneous_assumed;
-use murk_methods::{Gate, MediumGiven, Request, RequestArgs};
+use murk_methods::{Gate, MediumGiven, Request, RequestArgs, Searched};
 use murk_recon::medium::removal::Predicted;
 use murk_recon::medium::MediumRemoval;
 use murk_render::Spelling;
@@ -110,10 +110,11 @@ impl Args {
     }
 
     /// The medium response that medium_removal='model' subtracts: for mu_t and albedo as given, what
-    /// is not given estimated from `cap` as `murk.estimate_medium` does.
-    fn predicted(&self, cap: &murk_core::Capture) -> Result<Option<Predicted>> {
+    /// is not given estimated from `cap` as `murk.estimate_medium` does; with the estimate's depth
+    /// search, which the reconstruction then takes instead of searching again.
+    fn predicted(&self, cap: &murk_core::Capture) -> Result<(Option<Predicted>, Option<Searched>)> {
         if !self.model()? {
-            return Ok(None);
+            return Ok((None, None));
         }
         let estimate = match (self.mu_t, self.albedo) {
             (Some(_), Some(_)) => None,
@@ -127,7 +128,9 @@ impl Args {
                 }
             },
         };
-        murk_medium::model::for_removal(cap, self.mu_t, self.albedo, estimate.as_deref()).map(Some)
+        let predicted =
+            murk_medium::model::for_removal(cap, self.mu_t, self.albedo, estimate.as_deref())?;
+        Ok((Some(predicted), estimate.and_then(|e| e.searched)))
     }
 }
 
@@ -158,9 +161,11 @@ pub fn reconstruct<'py>(
         let cap = source.owned()?;
         let req = args.request()?;
         let mut along = args.along(&cap)?;
+        let (predicted, searched) = args.predicted(&cap)?;
         let given = MediumGiven {
-            predicted: args.predicted(&cap)?,
+            predicted,
             density: along.density.take(),
+            searched,
         };
         let assumed = match args.model()? {
             true => homogeneous_assumed(&cap, "medium_removal='model'"),

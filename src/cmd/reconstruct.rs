@@ -341,6 +341,7 @@ pub fn run(mut a: ReconstructArgs, quiet: bool) -> anyhow::Result<()> {
     let given = murk_methods::MediumGiven {
         predicted,
         density: along.density.take(),
+        searched: estimate.and_then(|e| e.searched),
     };
     let mut out = murk_methods::run_given(cap, &req, &given, &bar)
         .with_context(|| a.file.display().to_string())?;

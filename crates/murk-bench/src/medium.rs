@@ -1,9 +1,10 @@
 //! `murk-bench --medium CAPTURE`: what the medium-aware path costs on a capture in a medium, as
 //! `murk reconstruct` runs it (plan and run together, the default volume): the plain path (removal and
 //! depth search off), the default path (detection, the fitted removal, the depth search and the band
-//! it keeps) and the medium's estimate (`murk medium`: its table of renders and the fit; and again with
-//! its table read back from a `--table-cache` folder), alternated run by run so that the machine's
-//! drift meets each alike.
+//! it keeps), the medium's estimate (`murk medium`: its table of renders and the fit; and again with
+//! its table read back from a `--table-cache` folder) and `--medium-removal model` (that estimate, the
+//! prediction it makes and the reconstruction that subtracts it), alternated run by run so that the
+//! machine's drift meets each alike.
 
 use crate::say;
 use anyhow::Context;
@@ -27,6 +28,13 @@ pub fn run(path: &Path, tables: Option<&Path>, runs: usize, quiet: bool) -> anyh
         },
         ..aware
     };
+    let model = Request {
+        medium: MediumAware {
+            removal: MediumRemoval::Model,
+            ..aware.medium
+        },
+        ..aware
+    };
     let estimate = murk_medium::EstimateOptions::default();
     // The estimate once more with its table kept in a folder (`--table-cache`): written by the first
     // run, read back by the others, so its median is what a capture of a known geometry costs.
@@ -43,11 +51,29 @@ pub fn run(path: &Path, tables: Option<&Path>, runs: usize, quiet: bool) -> anyh
     let first = t0.elapsed().as_secs_f64();
     // … and with the medium-only bins' end given (`--until`): no depth search, the fit alone.
     let until = murk_medium::EstimateOptions {
-        until_m: Some(murk_medium::fit::scene_onset_m(&cap)?),
+        until_m: Some(murk_medium::fit::scene_onset_m(
+            &cap,
+            &murk_medium::fit::onset_search(&cap)?,
+        )?),
         ..cached.clone()
     };
     let (mut t_plain, mut t_aware, mut t_estimate) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut t_cached, mut t_until) = (Vec::new(), Vec::new());
+    let (mut t_cached, mut t_until, mut t_model) = (Vec::new(), Vec::new(), Vec::new());
+    // `murk reconstruct --medium-removal model` with the table kept: the estimate, its prediction and
+    // the reconstruction that subtracts it (and takes the estimate's depth search).
+    let removal_model = || -> anyhow::Result<()> {
+        let murk_medium::Outcome::Fitted(e) = murk_medium::estimate(&cap, &cached, &|_, _| {})?
+        else {
+            anyhow::bail!("{}: no medium detected", ctx());
+        };
+        let given = murk_methods::MediumGiven {
+            predicted: Some(murk_medium::model::for_removal(&cap, None, None, Some(&e))?),
+            density: None,
+            searched: e.searched,
+        };
+        murk_methods::run_given(cap.clone(), &model, &given, &NoProgress)?;
+        Ok(())
+    };
     let time = |f: &mut dyn FnMut() -> anyhow::Result<()>, out: &mut Vec<f64>| {
         let t0 = Instant::now();
         f()?;
@@ -77,6 +103,7 @@ pub fn run(path: &Path, tables: Option<&Path>, runs: usize, quiet: bool) -> anyh
             &mut || Ok(murk_medium::estimate(&cap, &until, &|_, _| {}).map(drop)?),
             &mut t_until,
         )?;
+        time(&mut || removal_model(), &mut t_model)?;
     }
     if tables.is_none() {
         std::fs::remove_dir_all(&cache).ok();
@@ -88,6 +115,7 @@ pub fn run(path: &Path, tables: Option<&Path>, runs: usize, quiet: bool) -> anyh
         crate::median(&t_cached),
         crate::median(&t_until),
     );
+    let r = crate::median(&t_model);
     say(quiet, format!("medium-aware path on {}:", path.display()));
     say(
         quiet,
@@ -121,6 +149,13 @@ pub fn run(path: &Path, tables: Option<&Path>, runs: usize, quiet: bool) -> anyh
         format!(
             "  … and the medium-only bins' end given (--until: no depth search): {u:.3} s ({:.0} % of the plain reconstruction)",
             100.0 * u / p
+        ),
+    );
+    say(
+        quiet,
+        format!(
+            "  --medium-removal model, the table read back (estimate, prediction, reconstruction): {r:.3} s ({:.0} % of the plain reconstruction)",
+            100.0 * r / p
         ),
     );
     Ok(())

@@ -7,7 +7,7 @@ use crate::table::ResponseTable;
 use crate::Fixed;
 use interpolate::{Interpolation, Phase};
 use murk_core::{Capture, Error, Result};
-use murk_methods::{Method, Options, Request};
+use murk_methods::{Method, Options, Request, Searched};
 use murk_recon::medium::detect::Signature;
 use rayon::prelude::*;
 
@@ -85,6 +85,9 @@ pub struct Estimate {
     /// What μt means where the capture's medium is heterogeneous and the forward model kept its
     /// shape ([`crate::scene::Modelled::describe`]); `None` for a homogeneous model.
     pub density: Option<String>,
+    /// The depth search that found where the scene's signal begins (`None` where the medium-only
+    /// bins' end was given): a reconstruction of the capture takes it instead of searching again.
+    pub searched: Option<Searched>,
 }
 
 impl Estimate {
@@ -179,20 +182,21 @@ fn num(v: f64) -> String {
     }
 }
 
-/// Where the scene's own signal begins: the shortest path to the plane where the medium-aware depth
-/// search finds the signal focused, less three pulse widths (as `--gate auto` opens before a volume),
-/// but no earlier than a fifth into the window: in dense media the search can stop at an artefact
-/// near the wall, and a fit needs the bins. Without a plane, 30 % into the window.
-pub fn scene_onset_m(cap: &Capture) -> Result<f64> {
+/// The medium-aware depth search that [`scene_onset_m`] reads: `murk reconstruct`'s with no flags.
+pub fn onset_search(cap: &Capture) -> Result<Searched> {
     let method = Method::named("pf", &Options::default())?;
-    let (_, found) = murk_methods::search_depth(
-        cap,
-        &Request::new(method),
-        &murk_methods::MediumGiven::default(),
-        &murk_core::NoProgress,
-    )?;
+    Searched::new(cap, &Request::new(method), &murk_core::NoProgress)
+}
+
+/// Where the scene's own signal begins: the shortest path to the plane where the medium-aware depth
+/// search ([`onset_search`]) finds the signal focused, less three pulse widths (as `--gate auto` opens
+/// before a volume), but no earlier than a fifth into the window: in dense media the search can stop
+/// at an artefact near the wall, and a fit needs the bins. Without a plane, 30 % into the window.
+pub fn scene_onset_m(cap: &Capture, searched: &Searched) -> Result<f64> {
+    let method = Method::named("pf", &Options::default())?;
     let (start, span) = (cap.time.start_m, cap.time.end_m() - cap.time.start_m);
-    let plane = found.filter(|(f, _)| f.volume.is_some()).map(|(f, _)| {
+    let found = searched.found().filter(|(f, _)| f.volume.is_some());
+    let plane = found.map(|(f, _)| {
         let v = murk_methods::default_volume(cap).map(|v| murk_core::Volume {
             z: murk_core::Axis::new(f.z_m, f.z_m, 1),
             ..v
@@ -282,10 +286,10 @@ pub fn fit(
     let mut by_albedo = vec![0.0; na * nm * ng];
     by_albedo.par_chunks_mut(ng).enumerate().for_each_init(
         || (grid.corners(), vec![0.0; used.len()]),
-        |(corners, model), (j, out)| {
+        |(corners, ln_model), (j, out)| {
             for (k, s) in out.iter_mut().enumerate() {
-                grid.model(corners, (j % nm, j / nm, k), model);
-                *s = sum_of_squares(&ln_data, model, absolute);
+                grid.ln_model(corners, (j % nm, j / nm, k), ln_model);
+                *s = sum_of_squares(&ln_data, ln_model, absolute);
             }
         },
     );
@@ -311,7 +315,7 @@ pub fn fit(
     // a few bins, and so are model errors): the likelihood counts the effective number of
     // independent values, N·(1 − ρ)/(1 + ρ) for a lag-one correlation ρ.
     let mut best_model = vec![0.0; used.len()];
-    grid.model(&mut grid.corners(), (bm, ba, bg), &mut best_model);
+    grid.ln_model(&mut grid.corners(), (bm, ba, bg), &mut best_model);
     let residual = residuals(&ln_data, &best_model, absolute);
     let rho = posterior::lag_one_correlation(&residual, |k| {
         used[k] == used[k - 1] + 1 && !used[k].is_multiple_of(n)
@@ -377,17 +381,19 @@ pub fn fit(
         signature,
         table_nodes: (table.mu_t_per_m.len(), table.g.len(), table.albedos.len()),
         density: crate::scene::modelled(cap).map(|m| m.describe()),
+        searched: None,
     })
 }
 
-/// ln(data / model) per used value, less the best common offset when the scale is free.
-fn residuals(ln_data: &[f64], model: &[f64], absolute: bool) -> Vec<f64> {
+/// ln(data / model) per used value, less the best common offset when the scale is free; `ln_model`
+/// is the model's ln.
+fn residuals(ln_data: &[f64], ln_model: &[f64], absolute: bool) -> Vec<f64> {
     let diff: Vec<f64> = ln_data
         .iter()
-        .zip(model)
+        .zip(ln_model)
         .map(|(d, &m)| {
-            if m > 0.0 {
-                d - m.ln()
+            if m.is_finite() {
+                d - m
             } else {
                 NO_SIGNAL_RATIO.ln()
             }
@@ -403,15 +409,12 @@ fn residuals(ln_data: &[f64], model: &[f64], absolute: bool) -> Vec<f64> {
 
 /// Σ (ln data − ln model)², less the best common offset when the scale is free; a model without
 /// signal at a value counts as off by a factor of [`NO_SIGNAL_RATIO`] there.
-fn sum_of_squares(ln_data: &[f64], model: &[f64], absolute: bool) -> f64 {
+fn sum_of_squares(ln_data: &[f64], ln_model: &[f64], absolute: bool) -> f64 {
     let floor = NO_SIGNAL_RATIO.ln();
-    let diff = ln_data.iter().zip(model).map(|(d, &m)| {
-        if m > 0.0 && m.is_finite() {
-            d - m.ln()
-        } else {
-            floor
-        }
-    });
+    let diff = ln_data
+        .iter()
+        .zip(ln_model)
+        .map(|(d, &m)| if m.is_finite() { d - m } else { floor });
     let offset = if absolute {
         0.0
     } else {

@@ -169,9 +169,12 @@ pub fn estimate_with(
     if !signature.is_medium() {
         return Ok((Outcome::NoMedium(signature), table));
     }
-    let until_m = match opt.until_m {
-        Some(u) => u,
-        None => fit::scene_onset_m(cap)?,
+    let (until_m, searched) = match opt.until_m {
+        Some(u) => (u, None),
+        None => {
+            let searched = fit::onset_search(cap)?;
+            (fit::scene_onset_m(cap, &searched)?, Some(searched))
+        }
     };
     let scene_text = scene::medium_only(cap)?;
     let table = match (
@@ -182,6 +185,9 @@ pub fn estimate_with(
         (None, Some(dir)) => table::load_or_build(dir, &scene_text, cap, opt, progress)?,
         (None, None) => ResponseTable::build(&scene_text, cap, opt, progress)?,
     };
-    let fitted = fit::fit(cap, &table, until_m, &opt.fit, &opt.fixed, signature)?;
+    let fitted = fit::Estimate {
+        searched,
+        ..fit::fit(cap, &table, until_m, &opt.fit, &opt.fixed, signature)?
+    };
     Ok((Outcome::Fitted(Box::new(fitted)), Some(table)))
 }

@@ -8,6 +8,7 @@
 
 use crate::table::Reduction;
 use murk_core::Capture;
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Separations sampled per ring, and quadrature nodes over each ellipsoid (polar, azimuth).
@@ -29,7 +30,7 @@ impl Angles {
         let n = reduction.coarse_bins;
         let rings = reduction.ring_separations(SEPARATIONS);
         let per_value = used
-            .iter()
+            .par_iter()
             .map(|&i| {
                 let path_m = reduction.path_m(cap, i % n);
                 rings[i / n]
@@ -41,28 +42,34 @@ impl Angles {
         Angles { per_value }
     }
 
-    /// ln of the once-scattered response's phase factor per value at `g`: Σ weight · HG(cos θ, g),
-    /// HG relative to isotropic.
-    pub fn ln_phase(&self, g: f64) -> Vec<f64> {
-        self.per_value
-            .iter()
+    /// ln of the once-scattered response's phase factor per value at each of `gs`, `[g][value]`:
+    /// Σ weight · HG(cos θ, g), HG relative to isotropic (g > 0 forward). The fit takes it at every g
+    /// node and searched g: each value's angles are read once for all of them, and what HG takes
+    /// from g alone is computed once per g.
+    pub fn ln_phases(&self, gs: &[f64]) -> Vec<Vec<f64>> {
+        let numerator: Vec<f64> = gs.iter().map(|&g| 1.0 - g * g).collect();
+        let (base, slope): (Vec<f64>, Vec<f64>) =
+            gs.iter().map(|&g| (1.0 + g * g, 2.0 * g)).unzip();
+        let per_value: Vec<Vec<f64>> = self
+            .per_value
+            .par_iter()
             .map(|points| {
-                points
-                    .iter()
-                    .map(|&(w, cos)| w * hg(g, cos))
-                    .sum::<f64>()
-                    .ln()
+                let mut sum = vec![0.0f64; gs.len()];
+                for &(w, cos) in points {
+                    let terms = numerator.iter().zip(&base).zip(&slope);
+                    for (s, ((&n, &b), &k)) in sum.iter_mut().zip(terms) {
+                        // d^1.5 as d·√d: powf cost most of the phase factors.
+                        let d = b - k * cos;
+                        *s += w * (n / (d * d.sqrt()));
+                    }
+                }
+                sum.into_iter().map(f64::ln).collect()
             })
+            .collect();
+        (0..gs.len())
+            .map(|j| per_value.iter().map(|v| v[j]).collect())
             .collect()
     }
-}
-
-/// Henyey–Greenstein relative to isotropic, for the cosine between the directions before and after
-/// scattering (g > 0 forward).
-fn hg(g: f64, cos: f64) -> f64 {
-    // d^1.5 as d·√d: the fit takes this millions of times, and powf cost most of its phase factors.
-    let d = 1.0 + g * g - 2.0 * g * cos;
-    (1.0 - g * g) / (d * d.sqrt())
 }
 
 /// (weight, cos θ) on the half-ellipsoid of path `path_m` between two relay points `d` apart: the
@@ -121,7 +128,7 @@ mod tests {
         for g in [-0.7, 0.0, 0.4, 0.8] {
             let back = (1.0 - g) / (1.0 + g) / (1.0 + g);
             let total: f64 = angles.per_value[0].iter().map(|p| p.0).sum();
-            let got = angles.ln_phase(g)[0] - total.ln();
+            let got = angles.ln_phases(&[g])[0][0] - total.ln();
             assert!(
                 (got - back.ln()).abs() < 1e-9,
                 "g {g}: {got} vs {}",

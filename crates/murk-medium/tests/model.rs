@@ -1,5 +1,6 @@
 //! The predicted medium response (`--medium-removal model`) against a render of the medium alone:
 //! at the true parameters it removes the mean response, at wrong ones it leaves a clear residual.
+//! And the depth search that the estimate ran, taken by the reconstruction only where it serves.
 
 use murk_core::Capture;
 use murk_medium::model::{predict, ModelSpec};
@@ -7,9 +8,16 @@ use murk_medium::Fixed;
 use murk_recon::medium::removal::subtract_predicted;
 use murk_render::{Overrides, Plan, RenderOptions, Scene};
 use std::path::Path;
+use std::sync::OnceLock;
 
 /// The paper's Z scene in fog (μt = 1, α = 0.5, g = 0) with a black Z: only the medium returns light.
+/// Rendered once for all the tests.
 fn fog_only() -> Capture {
+    static FOG: OnceLock<Capture> = OnceLock::new();
+    FOG.get_or_init(render_fog_only).clone()
+}
+
+fn render_fog_only() -> Capture {
     let path = Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../scenes/z-letter.toml"
@@ -99,4 +107,43 @@ fn a_capture_without_a_scene_description_is_refused() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("no scene description"), "{e}");
+}
+
+/// A depth search run before (the estimate's, with the fitted removal) is taken by a reconstruction
+/// with the model's removal and otherwise the same request; another request searches again. Here a
+/// search that ran would fail (no predicted response is given for the model's removal), so success
+/// says it was taken.
+#[test]
+fn the_estimates_depth_search_is_taken_only_where_it_serves() {
+    use murk_core::NoProgress;
+    use murk_methods::{search_depth, Gate, MediumGiven, Method, Options, Request, Searched};
+    use murk_recon::medium::MediumRemoval;
+    let cap = fog_only();
+    let auto = Request::new(Method::named("pf", &Options::default()).unwrap());
+    let searched = Searched::new(&cap, &auto, &NoProgress).unwrap();
+    assert!(searched.found().is_some(), "a medium's capture is searched");
+    let mut model = auto;
+    model.medium.removal = MediumRemoval::Model;
+    let given = MediumGiven {
+        searched: Some(searched.clone()),
+        ..MediumGiven::default()
+    };
+    let (chosen, found) = search_depth(&cap, &model, &given, &NoProgress).unwrap();
+    assert_eq!(found.as_ref(), searched.found());
+    let (again, _) = search_depth(&cap, &auto, &MediumGiven::default(), &NoProgress).unwrap();
+    assert_eq!(chosen.volume, again.volume);
+    // Another gate: not the request searched, so it searches, and the model's removal needs its
+    // predicted response.
+    let gated = Request {
+        gate: Gate::At(1.0),
+        ..model
+    };
+    let e = search_depth(&cap, &gated, &given, &NoProgress).unwrap_err();
+    assert!(e.to_string().contains("predicted response"), "{e}");
+    // No removal: no search applies, whatever is given.
+    model.medium.removal = MediumRemoval::Off;
+    assert!(search_depth(&cap, &model, &given, &NoProgress)
+        .unwrap()
+        .1
+        .is_none());
 }

@@ -15,21 +15,75 @@ use murk_core::{
 };
 use murk_recon::medium::{self, detect::Signature, DepthSearch, MediumRemoval};
 
-/// `req` with the volume the depth search chose, and what it found with its line for the summary;
-/// `req` unchanged where no search applies.
+/// What a depth search found: the plane, and its line for the summary.
+pub type DepthFound = (medium::search::Found, String);
+
+/// `req` with the volume the depth search chose, and what it found; `req` unchanged where no search
+/// applies. A search that `given` holds for the request is taken instead of searching again.
 pub fn search_depth(
     cap: &Capture,
     req: &Request,
     given: &MediumGiven,
     progress: &dyn Progress,
-) -> Result<(Request, Option<(medium::search::Found, String)>)> {
+) -> Result<(Request, Option<DepthFound>)> {
+    let found = match given.searched.as_ref().filter(|s| s.serves(req, given)) {
+        Some(s) => s.found.clone(),
+        None => find(cap, req, given, progress)?,
+    };
+    let mut chosen = *req;
+    if let Some(v) = found.as_ref().and_then(|(f, _)| f.volume) {
+        chosen.volume = VolumeSpec::Given(v);
+    }
+    Ok((chosen, found))
+}
+
+/// A depth search run before the reconstruction, kept so that the reconstruction takes its answer
+/// instead of searching again: the medium's estimate searches to find where the scene's signal
+/// begins, and `--medium-removal model` then reconstructs the same capture. It serves the request it
+/// was run for with any removal: the plane where the signal focuses is the capture's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Searched {
+    request: Request,
+    found: Option<DepthFound>,
+}
+
+impl Searched {
+    /// Searches `cap` as [`search_depth`] does for `req`, with nothing else known of its medium.
+    pub fn new(cap: &Capture, req: &Request, progress: &dyn Progress) -> Result<Searched> {
+        Ok(Searched {
+            request: *req,
+            found: find(cap, req, &MediumGiven::default(), progress)?,
+        })
+    }
+
+    /// What the search found: `None` where no search applies.
+    pub fn found(&self) -> Option<&DepthFound> {
+        self.found.as_ref()
+    }
+
+    /// Whether the answer is `req`'s: the same request but for the removal (not off), and no density
+    /// for the reconstruction to integrate, which would change what the search reconstructs.
+    fn serves(&self, req: &Request, given: &MediumGiven) -> bool {
+        let mut same = *req;
+        same.medium.removal = self.request.medium.removal;
+        same == self.request && req.medium.removal != MediumRemoval::Off && given.density.is_none()
+    }
+}
+
+/// The depth search of [`search_depth`]: what it found, `None` where no search applies.
+fn find(
+    cap: &Capture,
+    req: &Request,
+    given: &MediumGiven,
+    progress: &dyn Progress,
+) -> Result<Option<DepthFound>> {
     let applies = req.volume == VolumeSpec::Default
         && req.medium.depth_search == DepthSearch::Auto
         && req.medium.removal != MediumRemoval::Off
         && !req.method.own_grid()
         && Signature::measure(cap).is_medium();
     if !applies {
-        return Ok((*req, None));
+        return Ok(None);
     }
     // The whole reach at no more than the search's planes, on the binned grid where the capture's is
     // finer; the depth range kept gets the capture's own lateral axes and the default volume's spacing.
@@ -50,8 +104,9 @@ pub fn search_depth(
         volume: VolumeSpec::Given(coarse),
         ..*req
     };
-    let whole =
-        ReconPlan::given(searched, &whole_req, given, progress)?.run(searched.clone(), progress)?;
+    let plan = ReconPlan::given(searched, &whole_req, given, progress)?;
+    // The binned capture serves only this run: moved into it, not copied.
+    let whole = plan.run(binned.unwrap_or_else(|| cap.clone()), progress)?;
     // A given gate's edge is a step in the signal that lights the planes its paths reach: only the
     // planes it leaves fully open are searched.
     let open_m = match req.gate {
@@ -66,7 +121,7 @@ pub fn search_depth(
         open_m.is_none_or(|open_m| shortest_path_m(cap, &plane) >= open_m)
     };
     let Some(mut found) = medium::search::choose(&whole, &usable, step_m) else {
-        return Ok((*req, None));
+        return Ok(None);
     };
     found.volume = found.volume.map(|v| Volume {
         x: full.x,
@@ -74,11 +129,7 @@ pub fn search_depth(
         ..v
     });
     let line = found.describe(&whole.volume);
-    let mut chosen = *req;
-    if let Some(v) = found.volume {
-        chosen.volume = VolumeSpec::Given(v);
-    }
-    Ok((chosen, Some((found, line))))
+    Ok(Some((found, line)))
 }
 
 /// The most wall points a side the depth search reconstructs: at 64 it costs an eighth of a 128²

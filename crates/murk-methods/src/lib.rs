@@ -45,7 +45,7 @@ mod request;
 mod table;
 
 pub use args::RequestArgs;
-pub use depth::{default_volume, search_depth};
+pub use depth::{default_volume, search_depth, DepthFound, Searched};
 pub use method::{Method, Options};
 pub use plan::{run, run_given, MediumGiven, ReconPlan};
 pub use request::{Gate, Request, TOffset, VolumeSpec};

@@ -1,7 +1,7 @@
 //! A [`Request`] planned once per capture geometry ([`ReconPlan`]) and run per capture: the time
 //! offset, the gate, the window's end and the medium's removal around the method's own plan.
 
-use crate::depth::{deepest_reach_m, default_volume, search_depth};
+use crate::depth::{deepest_reach_m, default_volume, search_depth, Searched};
 use crate::{Gate, Request, TOffset, VolumeSpec};
 use murk_baselines::Pulse;
 use murk_core::window::{
@@ -13,12 +13,14 @@ use murk_recon::PathDensity;
 use std::sync::Arc;
 
 /// What the caller knows of the capture's medium besides the request: the response that
-/// [`MediumRemoval::Model`] subtracts, and the density that the compensation integrates along each
-/// leg (murk-medium makes both).
+/// [`MediumRemoval::Model`] subtracts, the density that the compensation integrates along each leg,
+/// and a depth search already run on the capture (murk-medium makes all three: the search is its
+/// estimate's).
 #[derive(Clone, Default)]
 pub struct MediumGiven {
     pub predicted: Option<removal::Predicted>,
     pub density: Option<Arc<dyn PathDensity>>,
+    pub searched: Option<Searched>,
 }
 
 /// Ramp length (bins) at either end of the window for the methods without a pulse, chosen on a cut

@@ -25,10 +25,11 @@ impl Phase {
                 searched: Vec::new(),
             };
         }
-        let ln = |gs: &[f64]| gs.par_iter().map(|&g| angles.ln_phase(g)).collect();
+        let mut all = angles.ln_phases(&[nodes, searched].concat());
+        let searched = all.split_off(nodes.len());
         Phase {
-            nodes: ln(nodes),
-            searched: ln(searched),
+            nodes: all,
+            searched,
         }
     }
 }
@@ -36,18 +37,19 @@ impl Phase {
 /// The candidates' grid over the table for the reduced values `used`. What does not change from
 /// candidate to candidate is computed once: the brackets, and the once-scattered light's correction
 /// per (μt, g); the table's nodes at one albedo and their ln are kept per worker ([`Corners`]). A
-/// candidate then costs one exp per value and allocates nothing.
+/// candidate then costs no exp or ln where its corners are positive (the model comes as its ln, which
+/// the fit compares) and allocates nothing.
 pub(super) struct Interpolation<'a> {
     table: &'a ResponseTable,
     used: &'a [usize],
     mus: Vec<(usize, usize, f64)>,
     albedos: Vec<(usize, usize, f64)>,
     gs: Vec<(usize, usize, f64)>,
-    /// exp(the attenuation's and the phase factor's corrections) per `[mu][g][value]`: the factors
+    /// The attenuation's and the phase factor's corrections (ln) per `[mu][g][value]`: the factors
     /// of once-scattered light that the nodes' bracket does not interpolate exactly, exp(−μt·L) (not
     /// linear in ln μt, so the bracket's weights miss it on long paths between widely spaced nodes)
     /// and the phase factor.
-    factor: Vec<f64>,
+    ln_factor: Vec<f64>,
 }
 
 impl<'a> Interpolation<'a> {
@@ -64,8 +66,8 @@ impl<'a> Interpolation<'a> {
             .map(|&mu| bracket(&table.mu_t_per_m, mu, true))
             .collect();
         let g_brackets: Vec<_> = gs.iter().map(|&g| bracket(&table.g, g, false)).collect();
-        let mut factor = vec![0.0; mus.len() * gs.len() * used.len()];
-        factor
+        let mut ln_factor = vec![0.0; mus.len() * gs.len() * used.len()];
+        ln_factor
             .par_chunks_mut(gs.len() * used.len())
             .zip(mus.par_iter().zip(&mu_brackets))
             .for_each(|(row, (&mu, &(m0, m1, wm)))| {
@@ -80,7 +82,7 @@ impl<'a> Interpolation<'a> {
                                 at[k] - (1.0 - wg) * phase.nodes[g0][k] - wg * phase.nodes[g1][k]
                             }
                         };
-                        *f = (attenuation_ln + phase_ln).exp();
+                        *f = attenuation_ln + phase_ln;
                     }
                 }
             });
@@ -93,7 +95,7 @@ impl<'a> Interpolation<'a> {
                 .map(|&a| bracket(&table.albedos, a, false))
                 .collect(),
             gs: g_brackets,
-            factor,
+            ln_factor,
         }
     }
 
@@ -102,7 +104,7 @@ impl<'a> Interpolation<'a> {
         (self.mus.len(), self.albedos.len(), self.gs.len())
     }
 
-    /// A worker's scratch for [`Interpolation::model`].
+    /// A worker's scratch for [`Interpolation::ln_model`].
     pub(super) fn corners(&self) -> Corners {
         let len = self.table.mu_t_per_m.len() * self.table.g.len() * self.used.len();
         Corners {
@@ -113,9 +115,9 @@ impl<'a> Interpolation<'a> {
         }
     }
 
-    /// The model at candidate (`mu`, `albedo`, `g`) (indices of the searched values) into `out`, one
-    /// value per used value.
-    pub(super) fn model(
+    /// ln of the model at candidate (`mu`, `albedo`, `g`) (indices of the searched values) into
+    /// `out`, one value per used value; −∞ where the model has no signal.
+    pub(super) fn ln_model(
         &self,
         corners: &mut Corners,
         (mu, albedo, g): (usize, usize, usize),
@@ -134,17 +136,18 @@ impl<'a> Interpolation<'a> {
             wm * (1.0 - wg),
             wm * wg,
         ];
-        let factor = &self.factor[(mu * self.gs.len() + g) * nu..][..nu];
+        let ln_factor = &self.ln_factor[(mu * self.gs.len() + g) * nu..][..nu];
         let (value, ln) = (&corners.value, &corners.ln);
-        for (k, (o, f)) in out.iter_mut().zip(factor).enumerate() {
+        for (k, (o, f)) in out.iter_mut().zip(ln_factor).enumerate() {
             let v = offsets.map(|c| value[c + k]);
-            let blend = if v.iter().all(|&x| x > 0.0) {
+            let ln_blend = if v.iter().all(|&x| x > 0.0) {
                 let l = offsets.map(|c| ln[c + k]);
-                (w[0] * l[0] + w[1] * l[1] + w[2] * l[2] + w[3] * l[3]).exp()
+                w[0] * l[0] + w[1] * l[1] + w[2] * l[2] + w[3] * l[3]
             } else {
-                w[0] * v[0] + w[1] * v[1] + w[2] * v[2] + w[3] * v[3]
+                // ln of a value ≤ 0 is −∞ or NaN: no signal either way.
+                (w[0] * v[0] + w[1] * v[1] + w[2] * v[2] + w[3] * v[3]).ln()
             };
-            *o = f * blend;
+            *o = f + ln_blend;
         }
     }
 }
@@ -247,7 +250,7 @@ mod tests {
             vec![0.1, 0.9],
         );
         let model = |mu: f64, a: f64, g: f64| -> Vec<f64> {
-            let phase = angles.ln_phase(g);
+            let phase = angles.ln_phases(&[g]).remove(0);
             (0..all.len())
                 .map(|k| a * mu * (-mu * paths[k] + phase[k]).exp())
                 .collect()
@@ -276,19 +279,20 @@ mod tests {
         for (m, &mu) in searched_mu.iter().enumerate() {
             for (a, &albedo) in searched_a.iter().enumerate() {
                 for (k, &g) in searched_g.iter().enumerate() {
-                    grid.model(&mut corners, (m, a, k), &mut got);
+                    grid.ln_model(&mut corners, (m, a, k), &mut got);
                     let want = model(mu, albedo, g);
                     let worst = got
                         .iter()
                         .zip(&want)
-                        .map(|(x, y)| (x / y - 1.0).abs())
+                        .map(|(x, y)| (x.exp() / y - 1.0).abs())
                         .fold(0.0, f64::max);
                     assert!(worst < 1e-9, "({mu}, {albedo}, {g}): worst {worst}");
                 }
             }
         }
         // The outer ring's angles differ from backscatter: its phase factor is not HG at π.
-        let outer = angles.ln_phase(0.7)[3 * n + 5] - angles.ln_phase(0.0)[3 * n + 5];
+        let phase = angles.ln_phases(&[0.7, 0.0]);
+        let outer = phase[0][3 * n + 5] - phase[1][3 * n + 5];
         let back = ((1.0f64 - 0.7) / 1.7 / 1.7).ln();
         assert!(
             outer - back > 0.3,
