@@ -476,12 +476,13 @@ fn paths_past_the_window_stop_without_bias() {
 
 /// Target-side draws in the phase function's lobe toward the path vertex (`target_lobe`) keep every
 /// histogram's expectation: the fog T in forward-scattering fog (g = 0.7), none against 0.8 of the draws
-/// in the lobe; sums agree within 5 % (seed noise of one sum: ~1 %).
+/// in the lobe; sums agree within 5 % (seed noise of one sum: ~1 %). The medium lobe is off, so that
+/// only the target lobe differs between the two.
 #[test]
 fn target_lobe_keeps_the_expectation() {
     assert_setting_keeps_the_expectation(
         "grid = [2, 2]",
-        |tenths| format!("target_lobe = {}", tenths as f64 / 10.0),
+        |tenths| format!("medium_lobe = 0\ntarget_lobe = {}", tenths as f64 / 10.0),
         &format!("{FOG}\ng = 0.7"),
         (0, 8),
         (240_000, 41),
@@ -563,6 +564,36 @@ fn spindle_draws_keep_the_expectation() {
             ("without spindle draws", "with them"),
         );
     }
+}
+
+/// Directions leaving medium vertices in the phase function's lobe toward the target (`medium_lobe`)
+/// keep every histogram's expectation: the fog T at g = 0.9 and at g = −0.7 (the lobe around the target
+/// pointing away from most arriving directions), the phase lobe alone against half the directions
+/// toward the target, with shared tails (the tile's first vertex keeps the phase lobe alone) and object
+/// connections from medium vertices (their balance weight takes the mixture's density); as
+/// `phase_distances_keep_the_expectation`.
+#[test]
+fn medium_lobe_keeps_the_expectation() {
+    assert_share_keeps_the_expectation(
+        "medium_lobe",
+        [121, 131],
+        ("phase lobe", "phase lobe toward the target"),
+    );
+}
+
+/// `medium_lobe` without shared tails, where the first medium vertex draws from the mixture too: the
+/// fog T at g = 0.9, as `medium_lobe_keeps_the_expectation`.
+#[test]
+fn medium_lobe_keeps_the_expectation_unshared() {
+    assert_setting_keeps_the_expectation(
+        "grid = [2, 2]",
+        |tenths| format!("share_tile = 1\nmedium_lobe = {}", tenths as f64 / 10.0),
+        &format!("{FOG}\ng = 0.9"),
+        (0, 5),
+        (240_000, 141),
+        0.05,
+        ("phase lobe", "phase lobe toward the target"),
+    );
 }
 
 /// Error falls as spp^−½: 16× the paths gives 4× less relative L2 error against a 64 000-spp reference

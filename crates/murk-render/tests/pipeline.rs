@@ -580,7 +580,7 @@ fn overrides_are_named_recorded_and_guard_resume() {
     let resume = || opts(None, Some(ck.clone()));
     let e = refused(load(&set(&["medium.g=0.7"])).unwrap(), resume());
     assert!(
-        e.contains("different render (medium.g is unset there, 0.7 now; render.phase_distances_default is unset there, 2 now; render.spindle_draws_default is unset there, 1 now; render.surface_lobe_default is unset there, 0.5 now)"),
+        e.contains("different render (medium.g is unset there, 0.7 now; render.medium_lobe_default is unset there, 0.3 now; render.phase_distances_default is unset there, 2 now; render.spindle_draws_default is unset there, 1 now)"),
         "{e}"
     );
     let grid = Overrides {

@@ -40,12 +40,12 @@ impl Tracer<'_> {
     /// `dir` with throughput `beta`): a direction toward a uniform point of the hidden geometry, its first
     /// hit connected to the targets. The object return after a scattering event otherwise needs the phase
     /// function's direction to meet the object, and those rare hits carry much of the object window's
-    /// variance (docs/renderer-sampling.md). Balance heuristic against the phase direction
-    /// (`object_weight`).
+    /// variance (docs/renderer-sampling.md). Balance heuristic against the path's direction, drawn with
+    /// the phase function or its mixture with the lobe toward the target `lobe` (`object_weight`).
     pub(super) fn connect_object(
         &self,
         m: &Medium,
-        ray: Ray,
+        (ray, lobe): (Ray, Option<DVec3>),
         carry: Carry,
         targets: &[Endpoint],
         s: &mut Sampler,
@@ -70,7 +70,7 @@ impl Tracer<'_> {
         if p_h <= 0.0 || ph <= 0.0 {
             return;
         }
-        let beta = carry.beta * ph / (ph + p_h);
+        let beta = carry.beta * ph / (self.medium_dir_pdf(m, dir, lobe, w) + p_h);
         if out.at_first {
             out.w = w;
         }

@@ -86,6 +86,10 @@ pub struct Tracer<'a> {
     surface_lobe: f64,
     /// Vertices drawn around the line from each medium vertex to each target (`draw_spindle`).
     spindle_draws: u32,
+    /// Share of directions leaving a medium vertex (on the way back from the hidden geometry, past a
+    /// tile's shared first vertex) in the phase lobe toward the one target instead of around the arriving
+    /// direction.
+    medium_lobe: f64,
     /// The hidden geometry's bounds, grown by a margin: a leg outside them meets nothing.
     hidden_bounds: crate::geometry::Aabb,
     /// The last (spp, lattice generator) pair `trace` used.
@@ -111,8 +115,9 @@ struct Start {
     opl: f64,
     scat: i32,
     origin: bool,
-    /// The axis of the phase lobe that shares this surface vertex's directions with its cosine lobe
-    /// (`surface_lobe`).
+    /// The axis of the phase lobe toward the target that shares this vertex's directions with its
+    /// cosine lobe (`surface_lobe`) or, at a medium vertex, its phase lobe around the arriving
+    /// direction (`medium_lobe`).
     lobe: Option<DVec3>,
 }
 
@@ -169,6 +174,12 @@ impl<'a> Tracer<'a> {
                     .medium
                     .as_ref()
                     .map_or(0, Medium::default_spindle_draws)
+            }),
+            medium_lobe: set.medium_lobe.unwrap_or_else(|| {
+                scene
+                    .medium
+                    .as_ref()
+                    .map_or(0.0, Medium::default_medium_lobe)
             }),
             hidden_bounds: {
                 let b = scene.geometry.bounds();
@@ -331,7 +342,9 @@ impl<'a> Tracer<'a> {
     /// Solid-angle density with which the path leaves `from` in direction `w`.
     fn dir_pdf(&self, from: &Start, w: DVec3) -> f64 {
         match from.v {
-            Vertex::Medium { dir } => self.medium().map_or(0.0, |m| m.phase.eval(dir.dot(w))),
+            Vertex::Medium { dir } => self
+                .medium()
+                .map_or(0.0, |m| self.medium_dir_pdf(m, dir, from.lobe, w)),
             Vertex::Surface { n, .. } => {
                 let c = n.dot(w);
                 if c <= 0.0 {
@@ -348,6 +361,20 @@ impl<'a> Tracer<'a> {
                     }
                 }
             }
+        }
+    }
+
+    /// Solid-angle density of a direction `w` leaving a medium vertex reached along `dir`: the phase
+    /// function around `dir`, mixed (`medium_lobe`) with the phase function around `lobe`, the direction
+    /// to the target, where that lobe is on.
+    fn medium_dir_pdf(&self, m: &Medium, dir: DVec3, lobe: Option<DVec3>, w: DVec3) -> f64 {
+        let p = m.phase.eval(dir.dot(w));
+        match lobe {
+            Some(a) => {
+                let q = self.medium_lobe;
+                (1.0 - q) * p + q * m.phase.eval(a.dot(w))
+            }
+            None => p,
         }
     }
 
@@ -372,7 +399,7 @@ impl<'a> Tracer<'a> {
         match (from.v, self.medium()) {
             _ if from.origin => first,
             (Vertex::Medium { dir }, Some(m)) if self.medium_objects => {
-                let ph = m.phase.eval(dir.dot(d));
+                let ph = self.medium_dir_pdf(m, dir, from.lobe, d);
                 let (p_h, _) = self.hidden.pdf(&self.scene.geometry, from.x, d);
                 ph / (ph + p_h)
             }
@@ -465,6 +492,9 @@ impl<'a> Tracer<'a> {
         let mut opl = origin.extra_m;
         let mut depth = 0u32;
         let mut scat = 0;
+        // Whether the path has left the hidden geometry: only then does it head back for the target
+        // (`medium_lobe`); before, the object is what it heads for.
+        let mut returning = false;
         loop {
             // Fog paths wander on long after the window has closed for them: in a 1/m medium each
             // vertex adds about a metre of path.
@@ -614,8 +644,16 @@ impl<'a> Tracer<'a> {
                                 out.recording = out.share;
                                 out.at_first = out.share;
                             }
+                            // Only on the way back from the hidden geometry; the first vertex of a shared
+                            // tail keeps the phase lobe alone (the tile's weights there are each point's
+                            // own phase density, `share_tail`).
+                            let lobe = if !returning || (out.share && depth == 1) {
+                                None
+                            } else {
+                                self.lobe_axis_to_target(pos, self.medium_lobe, targets)
+                            };
                             let ray = Ray { o: pos, d };
-                            self.connect_object(m, ray, carry, targets, s, out);
+                            self.connect_object(m, (ray, lobe), carry, targets, s, out);
                             if !self.roulette(&mut beta, depth, s) {
                                 return;
                             }
@@ -626,9 +664,22 @@ impl<'a> Tracer<'a> {
                                 opl,
                                 scat,
                                 origin: false,
-                                lobe: None,
+                                lobe,
                             };
-                            d = m.phase.sample(d, s.next(), s.next());
+                            d = match lobe {
+                                Some(a) => {
+                                    // As for the surface lobe: one more number where the lobe is on;
+                                    // weight: the phase function over the mixture's density.
+                                    let w = if s.next() < self.medium_lobe {
+                                        m.phase.sample(a, s.next(), s.next())
+                                    } else {
+                                        m.phase.sample(d, s.next(), s.next())
+                                    };
+                                    beta *= m.phase.eval(d.dot(w)) / self.dir_pdf(&from, w);
+                                    w
+                                }
+                                None => m.phase.sample(d, s.next(), s.next()),
+                            };
                             continue;
                         }
                     } else {
@@ -652,6 +703,7 @@ impl<'a> Tracer<'a> {
                 n: h.n,
                 albedo: h.albedo,
             };
+            returning |= !on_relay;
             if !on_relay && !connected {
                 let b = beta * self.object_weight(&from, d, first_object_weight);
                 let at = At {
@@ -679,7 +731,11 @@ impl<'a> Tracer<'a> {
                 opl,
                 scat,
                 origin: false,
-                lobe: self.surface_lobe_axis(pos, on_relay, targets),
+                lobe: if on_relay {
+                    None
+                } else {
+                    self.lobe_axis_to_target(pos, self.surface_lobe, targets)
+                },
             };
             d = match (from.lobe, self.medium()) {
                 (Some(a), Some(m)) => {
@@ -702,12 +758,12 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// The axis of a hidden-geometry vertex's phase lobe at `x` (`surface_lobe`): the direction to the
-    /// one target. None on the relay (coplanar with the targets), with several targets, or where the lobe
-    /// is off.
-    fn surface_lobe_axis(&self, x: DVec3, on_relay: bool, targets: &[Endpoint]) -> Option<DVec3> {
+    /// The axis of a vertex's phase lobe at `x` (`surface_lobe`, `medium_lobe`): the direction to the
+    /// one target. None with several targets or where the lobe's `share` is 0 (the relay, coplanar with
+    /// the targets, never gets one).
+    fn lobe_axis_to_target(&self, x: DVec3, share: f64, targets: &[Endpoint]) -> Option<DVec3> {
         match targets {
-            [t] if !on_relay && self.surface_lobe > 0.0 => (t.p - x).try_normalize(),
+            [t] if share > 0.0 => (t.p - x).try_normalize(),
             _ => None,
         }
     }

@@ -136,6 +136,18 @@ impl Medium {
         }
     }
 
+    /// The share of directions leaving a medium vertex, on a path's way back from the hidden geometry, in
+    /// the phase function's lobe toward the target where a scene leaves `render.medium_lobe` unset: in
+    /// strongly forward media a deep connection's phase value is large only where the segment before it
+    /// heads for the target, which the phase lobe around the arriving direction finds rarely
+    /// (docs/renderer-sampling.md).
+    pub fn default_medium_lobe(&self) -> f64 {
+        match self.phase {
+            Phase::HenyeyGreenstein { g } if g >= 0.6 && self.scatters() => 0.3,
+            _ => 0.0,
+        }
+    }
+
     /// The optical depth ∫σt along all of `segs`, exactly.
     #[inline]
     fn optical_depth(&self, segs: &[Segment]) -> f64 {

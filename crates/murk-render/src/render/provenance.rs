@@ -103,8 +103,8 @@ pub fn render_key(scene: &Scene, spp: u64, seed: u64, shard: Option<(usize, usiz
 /// anisotropic fog's shared-tail weights and target lobe), so that checkpoints and the study's finished
 /// renders made before are refused or rendered again rather than mixed in. A change that moves only
 /// some scenes' bytes names itself in those scenes' resolved key instead, so the others keep theirs
-/// (the forward lobes' default shares: `render.target_lobe_default`, `render.surface_lobe_default`, set in
-/// `Scene::load`).
+/// (the forward lobes' default shares: `render.target_lobe_default`, `render.surface_lobe_default`,
+/// `render.medium_lobe_default`, set in `Scene::load`).
 pub const ESTIMATOR_REVISION: u32 = 2;
 
 /// FNV-1a, 64 bits: a short name for a render key.

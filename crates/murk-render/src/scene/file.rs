@@ -169,6 +169,11 @@ pub struct RenderDef {
     /// "spindle" where both connections' phase values peak), MIS-combined with the path side and the
     /// target side. Default: 1 where g ≥ 0.6, else 0.
     pub spindle_draws: Option<u32>,
+    /// Probability that a path on its way back from the hidden geometry leaves a medium vertex in the
+    /// phase function's lobe around the direction to the target instead of around its arriving direction
+    /// (one target only; not at a tile's shared first vertex): in forward fog a connection's phase value
+    /// is large only where the segment heads for the target. Default: 0.3 where g ≥ 0.6, else 0.
+    pub medium_lobe: Option<f64>,
     /// Side (in grid points) of the tiles of traced points that share their paths past the first hidden
     /// vertex, where a medium scatters and every traced point has the same targets (see the integrator);
     /// at most 16. 0 or 1: off.
@@ -198,6 +203,7 @@ impl Default for RenderDef {
             target_phase_distances: None,
             surface_lobe: None,
             spindle_draws: None,
+            medium_lobe: None,
             share_tile: 4,
             trace_from: TraceFrom::Auto,
         }

@@ -202,6 +202,10 @@ impl Scene {
         if f.render.spindle_draws.is_none() && spindle > 0 {
             resolved.push_str(&format!("\nrender.spindle_draws_default = {spindle}"));
         }
+        let lobe = medium.as_ref().map_or(0.0, Medium::default_medium_lobe);
+        if f.render.medium_lobe.is_none() && lobe > 0.0 {
+            resolved.push_str(&format!("\nrender.medium_lobe_default = {lobe}"));
+        }
         let geometry = Geometry::new(objects);
         if geometry.is_empty() && !medium.as_ref().is_some_and(Medium::scatters) {
             return Err(bad(

@@ -268,6 +268,12 @@ impl RenderDef {
                 format!("must be in [0, 1), got {p}"),
             ));
         }
+        if let Some(p) = s.medium_lobe.filter(|p| !(0.0..1.0).contains(p)) {
+            return Err(bad(
+                "render.medium_lobe",
+                format!("must be in [0, 1), got {p}"),
+            ));
+        }
         if let Some(p) = s
             .target_phase_distances
             .filter(|p| !(0.0..=1.0).contains(p))
