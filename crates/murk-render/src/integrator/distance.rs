@@ -325,8 +325,7 @@ impl Tracer<'_> {
         if p_dir <= 0.0 {
             return 0.0;
         }
-        let hit = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
-        match m.clip(tgt.p, wl, hit) {
+        match self.target_leg(m, tgt, wl) {
             Some((a, b)) if tl >= a && tl <= b => self
                 .target_distance(m, (tgt.p, wl), x, (a, b))
                 .map_or(0.0, |e| p_dir * e.pdf(tl) / tl2),
@@ -464,8 +463,7 @@ impl Tracer<'_> {
         if tgt.n.dot(wl) <= 0.0 {
             return;
         }
-        let hit_l = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
-        let Some((a, b)) = m.clip(tgt.p, wl, hit_l) else {
+        let Some((a, b)) = self.target_leg(m, tgt, wl) else {
             return;
         };
         if !(tl >= a && tl <= b) {
@@ -514,8 +512,7 @@ impl Tracer<'_> {
             return;
         }
         let u = s.next();
-        let hit_l = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
-        let Some((a, b)) = m.clip(tgt.p, wl, hit_l) else {
+        let Some((a, b)) = self.target_leg(m, tgt, wl) else {
             return;
         };
         let Some(dist) = self.target_distance(m, (tgt.p, wl), from.x, (a, b)) else {
@@ -527,6 +524,13 @@ impl Tracer<'_> {
         }
         let p_l = n as f64 * (p_dir * peq / (tl * tl));
         self.join_target(m, from, (k, tgt), (wl, tl, a, p_l), s, out);
+    }
+
+    /// The stretch (a, b) of the ray from the target along `wl` that lies in the medium before the
+    /// first surface: where a target-side vertex can be.
+    fn target_leg(&self, m: &Medium, tgt: &Endpoint, wl: DVec3) -> Option<(f64, f64)> {
+        let hit = self.intersect(tgt.p, wl).map_or(f64::INFINITY, |h| h.0.t);
+        m.clip(tgt.p, wl, hit)
     }
 
     /// Joins the medium vertex y = target + `wl`·`tl` (its medium starting `a` along `wl`) to `from`
