@@ -1,8 +1,9 @@
 //! Estimates the medium of several captures of one geometry from one table, and prints a Markdown
 //! table of the estimates against the truth that each capture's scene_info records (the table in
 //! docs/medium.md): `cargo run --release -p murk-medium --example sweep -- [--given-g] [--rings N]
-//! [--spp N] [--grid N] [--table-cache DIR] CAPTURE.h5 …`. With `--given-g` (first) each capture's
-//! true g is given and μt and α are fitted; the others set the table's reduction and renders.
+//! [--spp N] [--forward-spp N] [--grid N] [--seed N] [--g-nodes G,G,…] [--table-cache DIR] CAPTURE.h5 …`. With
+//! `--given-g` (first) each capture's true g is given and μt and α are fitted; the others set the
+//! table's reduction, renders and g nodes.
 
 use murk_medium::{estimate_with, EstimateOptions, Outcome, ResponseTable};
 
@@ -30,16 +31,28 @@ fn main() -> murk_core::Result<()> {
         files.remove(0);
     }
     let mut spec = murk_medium::TableSpec::default();
-    // `--rings N`, `--spp N`, `--grid N`: the table's reduction and renders (what their accuracy
-    // costs); `--table-cache DIR`: where the table is kept between runs.
+    // `--rings N`, `--spp N`, `--forward-spp N`, `--grid N`, `--seed N`, `--g-nodes`: the table's reduction, renders and
+    // nodes (what their accuracy costs); `--table-cache DIR`: where the table is kept between runs.
     let mut table_cache = None;
     while let Some(flag) = files.first().filter(|f| f.starts_with("--")).cloned() {
         let value = files[1].clone();
-        let n = || value.parse::<usize>().expect("--rings, --spp or --grid N");
+        let n = || {
+            value
+                .parse::<usize>()
+                .expect("--rings, --spp, --grid or --seed N")
+        };
         match flag.as_str() {
             "--rings" => spec.rings = n(),
             "--spp" => spec.spp = n() as u64,
             "--grid" => spec.grid = n(),
+            "--seed" => spec.seed = n() as u64,
+            "--forward-spp" => spec.forward_spp = n() as u64,
+            "--g-nodes" => {
+                spec.g = value
+                    .split(',')
+                    .map(|g| g.parse().expect("--g-nodes G,G,…"))
+                    .collect()
+            }
             "--table-cache" => table_cache = Some(std::path::PathBuf::from(&value)),
             other => panic!("unknown flag {other}"),
         }

@@ -12,6 +12,7 @@ use murk_recon::medium::detect::Signature;
 use rayon::prelude::*;
 
 mod interpolate;
+mod noise;
 
 /// Which parameters are fitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -281,49 +282,70 @@ pub fn fit(
     let paths_m: Vec<f64> = used.iter().map(|&i| red.path_m(cap, i % n)).collect();
     let grid = Interpolation::new(table, &used, &paths_m, &phase, (&mus, &albedos, &gs));
     let (nm, na, ng) = grid.shape();
-    // Sum of squares at every candidate, [albedo][mu][g]: a worker's candidates then share its
-    // albedo, so the table's nodes there and their ln are taken once per worker and albedo.
-    let mut by_albedo = vec![0.0; na * nm * ng];
-    by_albedo.par_chunks_mut(ng).enumerate().for_each_init(
-        || (grid.corners(), vec![0.0; used.len()]),
-        |(corners, ln_model), (j, out)| {
-            for (k, s) in out.iter_mut().enumerate() {
-                grid.ln_model(corners, (j % nm, j / nm, k), ln_model);
-                *s = sum_of_squares(&ln_data, ln_model, absolute);
-            }
-        },
+    // Sum of squares at every candidate, [mu][albedo][g], each value weighed by `weight`.
+    let search = |weight: &[f64]| -> Vec<f64> {
+        // [albedo][mu][g] first: a worker's candidates then share its albedo, so the table's nodes
+        // there and their ln are taken once per worker and albedo.
+        let mut by_albedo = vec![0.0; na * nm * ng];
+        by_albedo.par_chunks_mut(ng).enumerate().for_each_init(
+            || (grid.corners(), vec![0.0; used.len()]),
+            |(corners, ln_model), (j, out)| {
+                for (k, s) in out.iter_mut().enumerate() {
+                    grid.ln_model(corners, (j % nm, j / nm, k), ln_model);
+                    *s = sum_of_squares(&ln_data, ln_model, weight, absolute);
+                }
+            },
+        );
+        (0..nm * na)
+            .flat_map(|j| {
+                let (mu, a) = (j / na, j % na);
+                by_albedo[(a * nm + mu) * ng..][..ng].iter().copied()
+            })
+            .collect()
+    };
+    let best_of = |ssr: &[f64]| -> Result<usize> {
+        let (best, &min) = ssr
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(b.1))
+            .ok_or_else(|| Error::param("no candidate to fit"))?;
+        if !min.is_finite() {
+            return Err(Error::param(
+                "the medium's model has no signal where the capture has: no fit (is the medium inside the scene's extent?)",
+            ));
+        }
+        Ok(best)
+    };
+    // Uniform weights first; then each value weighed by its noise, the table's taken where that fit
+    // landed (the table's noise changes slowly from node to node).
+    let first = best_of(&search(&vec![1.0; used.len()]))?;
+    let weight = noise::weights(
+        table,
+        &data,
+        &used,
+        n,
+        (
+            mus[first / (na * ng)],
+            albedos[(first / ng) % na],
+            gs[first % ng],
+        ),
     );
-    // … and [mu][albedo][g].
-    let ssr: Vec<f64> = (0..nm * na)
-        .flat_map(|j| {
-            let (mu, a) = (j / na, j % na);
-            by_albedo[(a * nm + mu) * ng..][..ng].iter().copied()
-        })
-        .collect();
-    let (best, &min) = ssr
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.total_cmp(b.1))
-        .ok_or_else(|| Error::param("no candidate to fit"))?;
-    if !min.is_finite() {
-        return Err(Error::param(
-            "the medium's model has no signal where the capture has: no fit (is the medium inside the scene's extent?)",
-        ));
-    }
+    let ssr = search(&weight);
+    let best = best_of(&ssr)?;
     let (bm, ba, bg) = (best / (na * ng), (best / ng) % na, best % ng);
     // The residuals of neighbouring bins are correlated (the table's Monte Carlo noise is smooth over
     // a few bins, and so are model errors): the likelihood counts the effective number of
     // independent values, N·(1 − ρ)/(1 + ρ) for a lag-one correlation ρ.
     let mut best_model = vec![0.0; used.len()];
     grid.ln_model(&mut grid.corners(), (bm, ba, bg), &mut best_model);
-    let residual = residuals(&ln_data, &best_model, absolute);
+    let residual = residuals(&ln_data, &best_model, &weight, absolute);
     let rho = posterior::lag_one_correlation(&residual, |k| {
         used[k] == used[k - 1] + 1 && !used[k].is_multiple_of(n)
     });
     // The posterior over the candidate grid (flat in ln μt, α and g): its mean and standard
     // deviation, which follow a valley of equally good fits instead of the noise's choice in it.
-    let weight = posterior::weights(&ssr, posterior::effective_count(used.len(), rho))?;
-    let moments = |value: &dyn Fn(usize) -> f64| posterior::moments(&weight, value);
+    let posterior = posterior::weights(&ssr, posterior::effective_count(used.len(), rho))?;
+    let moments = |value: &dyn Fn(usize) -> f64| posterior::moments(&posterior, value);
     let parameter = |fitted: bool, values: &[f64], axis: usize, log: bool| -> Parameter {
         if !fitted {
             return Parameter {
@@ -377,7 +399,12 @@ pub fn fit(
         until_m: until_m.min(cap.time.end_m()),
         values_used: used.len(),
         rings: red.rings(),
-        residual_rms: (min / used.len() as f64).sqrt(),
+        residual_rms: (residuals(&ln_data, &best_model, &vec![1.0; used.len()], absolute)
+            .iter()
+            .map(|r| r * r)
+            .sum::<f64>()
+            / used.len() as f64)
+            .sqrt(),
         signature,
         table_nodes: (table.mu_t_per_m.len(), table.g.len(), table.albedos.len()),
         density: crate::scene::modelled(cap).map(|m| m.describe()),
@@ -385,9 +412,9 @@ pub fn fit(
     })
 }
 
-/// ln(data / model) per used value, less the best common offset when the scale is free; `ln_model`
-/// is the model's ln.
-fn residuals(ln_data: &[f64], ln_model: &[f64], absolute: bool) -> Vec<f64> {
+/// ln(data / model) per used value, less the best (weighted) common offset when the scale is free,
+/// times the square root of its weight; `ln_model` is the model's ln.
+fn residuals(ln_data: &[f64], ln_model: &[f64], weight: &[f64], absolute: bool) -> Vec<f64> {
     let diff: Vec<f64> = ln_data
         .iter()
         .zip(ln_model)
@@ -402,14 +429,17 @@ fn residuals(ln_data: &[f64], ln_model: &[f64], absolute: bool) -> Vec<f64> {
     let offset = if absolute {
         0.0
     } else {
-        diff.iter().sum::<f64>() / diff.len() as f64
+        diff.iter().zip(weight).map(|(x, w)| w * x).sum::<f64>() / weight.iter().sum::<f64>()
     };
-    diff.iter().map(|x| x - offset).collect()
+    diff.iter()
+        .zip(weight)
+        .map(|(x, w)| w.sqrt() * (x - offset))
+        .collect()
 }
 
-/// Σ (ln data − ln model)², less the best common offset when the scale is free; a model without
-/// signal at a value counts as off by a factor of [`NO_SIGNAL_RATIO`] there.
-fn sum_of_squares(ln_data: &[f64], ln_model: &[f64], absolute: bool) -> f64 {
+/// Σ weight·(ln data − ln model)², less the best (weighted) common offset when the scale is free; a
+/// model without signal at a value counts as off by a factor of [`NO_SIGNAL_RATIO`] there.
+fn sum_of_squares(ln_data: &[f64], ln_model: &[f64], weight: &[f64], absolute: bool) -> f64 {
     let floor = NO_SIGNAL_RATIO.ln();
     let diff = ln_data
         .iter()
@@ -418,9 +448,11 @@ fn sum_of_squares(ln_data: &[f64], ln_model: &[f64], absolute: bool) -> f64 {
     let offset = if absolute {
         0.0
     } else {
-        diff.clone().sum::<f64>() / ln_data.len() as f64
+        diff.clone().zip(weight).map(|(x, w)| w * x).sum::<f64>() / weight.iter().sum::<f64>()
     };
-    diff.map(|x| (x - offset).powi(2)).sum()
+    diff.zip(weight)
+        .map(|(x, w)| w * (x - offset).powi(2))
+        .sum()
 }
 
 #[cfg(test)]

@@ -18,6 +18,9 @@ pub struct TableSpec {
     /// The render's grid side (the capture's own extent, fewer points: rings average them).
     pub grid: usize,
     pub spp: u64,
+    /// Samples per point of the nodes at g ≥ [`FORWARD_G`]: forward fog's renders are the noisiest
+    /// (its late bins), and the table's noise there decides a free g.
+    pub forward_spp: u64,
     pub seed: u64,
     /// μt nodes (1/m), ascending; the fit interpolates ln(response) linearly in ln μt.
     pub mu_t_per_m: Vec<f64>,
@@ -35,6 +38,7 @@ impl Default for TableSpec {
         TableSpec {
             grid: 8,
             spp: 256,
+            forward_spp: 1024,
             seed: 0,
             mu_t_per_m: (0..12).map(|i| 0.25 * 1.35f64.powi(i)).collect(),
             g: vec![-0.8, -0.4, 0.0, 0.4, 0.8],
@@ -54,6 +58,20 @@ pub struct Reduction {
     pub coarse_bins: usize,
     /// The capture's laser–sensor separation (m) per histogram.
     separations: Vec<f64>,
+}
+
+/// The g from which a node is rendered at [`TableSpec::forward_spp`].
+pub const FORWARD_G: f64 = 0.6;
+
+impl TableSpec {
+    /// The samples per point of a node at `g`.
+    pub fn spp_at(&self, g: f64) -> u64 {
+        if g >= FORWARD_G {
+            self.forward_spp
+        } else {
+            self.spp
+        }
+    }
 }
 
 /// Rings of separation by default, and the path (m) a coarse bin spans at least.
@@ -375,7 +393,11 @@ fn render_node(
     g: f64,
     reduction: &Reduction,
 ) -> Result<Vec<f64>> {
-    let caps = render_medium_only(scene_text, cap, spec, albedos, mu_t, g)?;
+    let spec = TableSpec {
+        spp: spec.spp_at(g),
+        ..spec.clone()
+    };
+    let caps = render_medium_only(scene_text, cap, &spec, albedos, mu_t, g)?;
     Ok(caps
         .iter()
         .flat_map(|c| reduction.reduce_model(c))

@@ -35,6 +35,7 @@ fn options(dir: &Path, spp: u64) -> EstimateOptions {
         table: TableSpec {
             grid: 2,
             spp,
+            forward_spp: spp,
             seed: 0,
             mu_t_per_m: vec![0.5, 1.0],
             g: vec![-0.4, 0.4],

@@ -188,7 +188,7 @@ impl Corners {
 }
 
 /// The nodes around `x` (clamped to the range) and the weight of the upper one; `log`: in ln x.
-fn bracket(nodes: &[f64], x: f64, log: bool) -> (usize, usize, f64) {
+pub(super) fn bracket(nodes: &[f64], x: f64, log: bool) -> (usize, usize, f64) {
     if nodes.len() == 1 {
         return (0, 0, 0.0);
     }

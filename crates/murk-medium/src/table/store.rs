@@ -42,7 +42,7 @@ pub fn load_or_build(
 }
 
 /// The key of the table that serves `cap`, and its file in `dir`. The key holds what the renders
-/// depend on (the renderer's key of the medium-only scene, spp and seed, with its estimator's
+/// depend on (the renderer's key of the medium-only scene, spp, forward fog's spp and seed, with its estimator's
 /// revision and murk's version; the scene's key names the medium's kind, a height fog's scale and a
 /// grid's cells by their hash), the nodes, and what the reduction depends on (the capture's
 /// separations and time axis).
@@ -55,8 +55,14 @@ fn file_for(
     let spec = &opt.table;
     let scene = table_scene(scene_text, cap, spec, Vec::new())?;
     let text = format!(
-        "{}\nnodes = {:?}\nreduction = {:?}\ntime = {:?}",
+        "{}{}\nnodes = {:?}\nreduction = {:?}\ntime = {:?}",
         murk_render::render_key(&scene, spec.spp, spec.seed, None),
+        // Named only where it differs: tables of one spp keep their files.
+        if spec.forward_spp == spec.spp {
+            String::new()
+        } else {
+            format!("\nforward_spp = {}", spec.forward_spp)
+        },
         node_values(opt),
         Reduction::of(cap, opt.table.rings),
         (
